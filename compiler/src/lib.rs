@@ -1,0 +1,7 @@
+//! The Scion compiler.
+//!
+//! Pipeline: `syntax` (source → AST) → `sema` (names, types, well-formedness) → `irgen`
+//! (typed AST → `tree` dialect) → passes → backends. Each stage lives in its own module and
+//! sees only the stage before it.
+
+pub mod syntax;
