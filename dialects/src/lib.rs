@@ -1,8 +1,20 @@
 //! `scion-ir`: the intermediate representation shared by every level of the Scion compiler.
-//!
-//! This crate depends on nothing else of Scion's and on neither LLVM nor Cranelift. It holds
-//! source positions and diagnostics ([`diag`]), and the IR core with its dialects.
 
 #![warn(missing_docs)]
 
+pub mod attr;
+pub mod builder;
 pub mod diag;
+pub mod entity;
+pub mod module;
+pub mod op;
+pub mod parse;
+pub mod print;
+pub mod rewrite;
+pub mod tree;
+pub mod types;
+pub mod verify;
+pub mod walk;
+
+pub use builder::{Builder, InsertPoint, OpSpec};
+pub use module::Module;
