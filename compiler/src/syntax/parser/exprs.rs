@@ -101,7 +101,12 @@ impl Parser<'_> {
     }
 
     fn expr_prec(&mut self, min_prec: u8) -> PResult<Expr> {
-        self.nested(|p| {
+        self.nested(|p| p.chained(|p| p.binary_chain(min_prec)))
+    }
+
+    fn binary_chain(&mut self, min_prec: u8) -> PResult<Expr> {
+        {
+            let p = self;
             let mut lhs = p.unary()?;
             // The span of the comparison just built at this level, to reject `a < b < c`.
             let mut last_comparison: Option<Span> = None;
@@ -111,6 +116,7 @@ impl Parser<'_> {
                     break;
                 }
                 let op_span = p.span();
+                p.deepen()?;
                 p.bump();
                 if is_comparison(op) {
                     if let Some(first) = last_comparison {
@@ -134,7 +140,7 @@ impl Parser<'_> {
                 lhs = p.mk_expr(kind, span);
             }
             Ok(lhs)
-        })
+        }
     }
 
     fn unary(&mut self) -> PResult<Expr> {
@@ -158,6 +164,10 @@ impl Parser<'_> {
     }
 
     fn cast(&mut self) -> PResult<Expr> {
+        self.chained(|p| p.cast_chain())
+    }
+
+    fn cast_chain(&mut self) -> PResult<Expr> {
         let mut e = self.postfix()?;
         loop {
             let bitcast = if self.at_kw(Keyword::As) {
@@ -167,6 +177,7 @@ impl Parser<'_> {
             } else {
                 break;
             };
+            self.deepen()?;
             self.bump();
             let ty = self.ty()?;
             let span = e.span.to(ty.span);
@@ -189,6 +200,9 @@ impl Parser<'_> {
     fn postfix(&mut self) -> PResult<Expr> {
         let mut e = self.primary()?;
         loop {
+            if matches!(self.peek(), TokenKind::Dot | TokenKind::LBracket) {
+                self.deepen()?;
+            }
             match self.peek() {
                 TokenKind::Dot => {
                     self.bump();

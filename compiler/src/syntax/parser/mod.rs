@@ -22,7 +22,7 @@ mod types;
 
 pub(crate) use exprs::{binary_prec, is_comparison};
 
-use super::ast::{Ident, NodeId, Program};
+use super::ast::{Ident, Item, NodeId, Program};
 use super::errors::SyntaxError;
 use super::lexer::lex;
 use super::token::{Keyword, Token, TokenKind};
@@ -35,13 +35,40 @@ pub const MAX_DEPTH: usize = 256;
 /// `program.node_count`, which is advanced past the last id handed out. Returns the lexical and
 /// syntax errors of the file (empty when the file is well formed).
 pub fn parse_file(sources: &SourceMap, file: FileId, program: &mut Program) -> Diagnostics {
+    // Recursive descent on unoptimized builds takes several KiB of stack per nesting level, so
+    // [`MAX_DEPTH`] levels need more than a test thread's 2 MiB: parse on a thread of our own
+    // with a large stack (only the pages touched are committed), as rustc does. If no thread
+    // can be started, parse here.
+    let first_id = program.node_count;
+    let parsed = std::thread::scope(|scope| {
+        let worker = std::thread::Builder::new()
+            .name("scion-parser".to_string())
+            .stack_size(PARSER_STACK_BYTES)
+            .spawn_scoped(scope, || parse_tokens(sources, file, first_id));
+        match worker {
+            Ok(handle) => handle
+                .join()
+                .unwrap_or_else(|panic| std::panic::resume_unwind(panic)),
+            Err(_) => parse_tokens(sources, file, first_id),
+        }
+    });
+    let (items, node_count, diags) = parsed;
+    program.items.extend(items);
+    program.node_count = node_count;
+    diags
+}
+
+/// The stack of the parser's thread: ample for [`MAX_DEPTH`] levels in a debug build.
+const PARSER_STACK_BYTES: usize = 64 << 20;
+
+/// Lexes and parses one file: its items, the next free NodeId, and its diagnostics.
+fn parse_tokens(sources: &SourceMap, file: FileId, first_id: u32) -> (Vec<Item>, u32, Diagnostics) {
     let mut diags = Diagnostics::new();
     let tokens = lex(&sources.file(file).text, file, &mut diags);
-    let mut parser = Parser::new(tokens, file, program.node_count, &mut diags);
+    let mut parser = Parser::new(tokens, file, first_id, &mut diags);
     let items = parser.items();
-    program.node_count = parser.next_id;
-    program.items.extend(items);
-    diags
+    let next_id = parser.next_id;
+    (items, next_id, diags)
 }
 
 /// Parses `files` in order into one program (the prelude, when wanted, is the caller's first
@@ -281,6 +308,23 @@ impl<'d> Parser<'d> {
         let result = f(self);
         self.depth -= 1;
         result
+    }
+
+    /// Runs `f`, then drops the levels that [`Parser::deepen`] added meanwhile. Used around
+    /// loops that build left-deep trees (`a + b + c`, `x[0][1]`, `T[2][3]`), so that the depth
+    /// of every tree the parser returns is bounded, not only the depth of its recursion.
+    pub(crate) fn chained<T>(&mut self, f: impl FnOnce(&mut Self) -> PResult<T>) -> PResult<T> {
+        let base = self.depth;
+        let result = f(self);
+        self.depth = base;
+        result
+    }
+
+    /// Counts one more level of a left-deep chain (see [`Parser::chained`]).
+    pub(crate) fn deepen(&mut self) -> PResult<()> {
+        self.nested(|_| Ok(()))?;
+        self.depth += 1;
+        Ok(())
     }
 
     /// Runs `f` with the match-arm restriction on `|` set to `no_bar`.

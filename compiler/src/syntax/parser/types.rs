@@ -9,9 +9,15 @@ use crate::syntax::token::TokenKind;
 impl Parser<'_> {
     /// `T`, followed by any number of array suffixes `[n]` / `[x]`.
     pub(crate) fn ty(&mut self) -> PResult<TypeExpr> {
-        self.nested(|p| {
+        self.nested(|p| p.chained(|p| p.array_chain()))
+    }
+
+    fn array_chain(&mut self) -> PResult<TypeExpr> {
+        {
+            let p = self;
             let mut ty = p.type_atom()?;
             while p.at(&TokenKind::LBracket) {
+                p.deepen()?;
                 p.bump();
                 let len = match p.peek().clone() {
                     TokenKind::Int(v) => {
@@ -33,7 +39,7 @@ impl Parser<'_> {
                 };
             }
             Ok(ty)
-        })
+        }
     }
 
     fn type_atom(&mut self) -> PResult<TypeExpr> {
