@@ -1,7 +1,7 @@
 //! The AST printer behind `scionc --emit=ast`: prints a [`Program`] back as Scion source in one
-//! canonical form (two-space indentation, every layout member, split arm, build entry and item
-//! followed by `;`, parentheses only where precedence or the match-arm rule on `|` needs them,
-//! integers in decimal, floats in their shortest round-trip form).
+//! canonical form: two-space indentation; every layout member (but `---`), split arm, build
+//! entry and item followed by `;`; parentheses only where precedence or the match-arm rule on
+//! `|` needs them; integers in decimal; floats in their shortest round-trip form.
 //!
 //! Invariant (tested on every library file): parsing the printed text gives back the same tree
 //! up to spans and node ids, so printing it again gives the same text.
@@ -115,7 +115,9 @@ impl Printer {
             Item::Type(d) => {
                 self.w("type ");
                 self.w(&d.name.name);
-                self.fields(&d.fields);
+                if d.variants.is_none() || !d.fields.is_empty() {
+                    self.fields(&d.fields);
+                }
                 if let Some(variants) = &d.variants {
                     self.w(" = ");
                     for (i, v) in variants.iter().enumerate() {
@@ -123,7 +125,9 @@ impl Printer {
                             self.w(" | ");
                         }
                         self.w(&v.name.name);
-                        self.fields(&v.fields);
+                        if !v.fields.is_empty() {
+                            self.fields(&v.fields);
+                        }
                     }
                 }
                 self.w(";\n");
@@ -264,10 +268,15 @@ impl Printer {
                     self.w("| ");
                     self.pattern(&arm.pattern);
                     self.w(" ->");
-                    self.indent += 1;
-                    self.newline();
-                    self.stmt(&arm.body, true);
-                    self.indent -= 1;
+                    if matches!(arm.body.kind, StmtKind::Block(_)) {
+                        self.w(" ");
+                        self.stmt(&arm.body, true);
+                    } else {
+                        self.indent += 1;
+                        self.newline();
+                        self.stmt(&arm.body, true);
+                        self.indent -= 1;
+                    }
                 }
                 self.indent -= 1;
                 self.newline();
@@ -326,6 +335,10 @@ impl Printer {
     }
 
     fn block(&mut self, stmts: &[Stmt]) {
+        if stmts.is_empty() {
+            self.w("{}");
+            return;
+        }
         self.w("{");
         self.indent += 1;
         for s in stmts {
@@ -464,12 +477,18 @@ impl Printer {
     }
 
     fn members(&mut self, members: &[Member]) {
+        if members.is_empty() {
+            self.w("{}");
+            return;
+        }
         self.w("{");
         self.indent += 1;
         for m in members {
             self.newline();
             self.member(m);
-            self.w(";");
+            if m.kind != MemberKind::Separator {
+                self.w(";");
+            }
         }
         self.indent -= 1;
         self.newline();
@@ -595,7 +614,9 @@ impl Printer {
             self.newline();
             self.w("build ");
             self.w(&v.name.name);
-            self.fields(&v.params);
+            if !v.params.is_empty() {
+                self.fields(&v.params);
+            }
             self.w(" ");
             self.block(&v.body);
             self.w(";");

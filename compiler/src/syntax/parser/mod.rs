@@ -370,7 +370,7 @@ impl<'d> Parser<'d> {
     }
 
     /// Parses `{ entry ; entry ; ... }` (the `{` already consumed) up to and including `}`.
-    /// Entries are separated by `;`; one that ends in `}` needs none. A failed entry skips to
+    /// Entries are separated by `;`; one that ends in `}` (or a `---` separator) needs none. A failed entry skips to
     /// the next `;` or `}` of this level. Used for blocks, layout members, split arms and build
     /// entries.
     pub(crate) fn braced_list<T>(
@@ -392,8 +392,10 @@ impl<'d> Parser<'d> {
             match entry(p) {
                 Ok(v) => {
                     out.push(v);
-                    let ended_in_brace = p.prev_is(&TokenKind::RBrace);
-                    if !(p.at(&TokenKind::Semi) || p.at(&TokenKind::RBrace) || ended_in_brace) {
+                    // `}` and `---` end an entry by themselves.
+                    let self_ended =
+                        p.prev_is(&TokenKind::RBrace) || p.prev_is(&TokenKind::Separator);
+                    if !(p.at(&TokenKind::Semi) || p.at(&TokenKind::RBrace) || self_ended) {
                         p.expected("`;` or `}`");
                         p.skip_until(&[TokenKind::Semi]);
                     }
