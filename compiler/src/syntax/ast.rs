@@ -36,6 +36,8 @@ pub struct Program {
 }
 
 /// A top-level declaration.
+// Items are few (one per declaration), so boxing the larger variants would buy nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq)]
 pub enum Item {
     /// `type ...;`

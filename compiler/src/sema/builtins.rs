@@ -1,0 +1,164 @@
+//! Typing of builtin functions (`docs/language.md`, "Builtins").
+//!
+//! Input: a builtin and its argument types. Output: its result type, or a diagnostic naming
+//! the argument it cannot take. Builtins are generic over a small class of types (numbers,
+//! floats, float vectors), so they are typed here rather than given one signature each.
+
+use super::errors::SemaError;
+use super::infer::Checker;
+use super::ops::{Class, Progress};
+use super::typed::Builtin;
+use super::types::{Prim, Ty};
+use scion_ir::diag::Span;
+
+/// The class of types a builtin argument must belong to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Want {
+    /// Integers, floats and numeric vectors.
+    Numeric,
+    /// Floats and float vectors.
+    Float,
+    /// Float vectors.
+    FloatVec,
+    /// 3-lane float vectors.
+    FloatVec3,
+    /// Any vector.
+    Vector,
+    /// Arrays, slices and sets.
+    Collection,
+}
+
+impl Want {
+    fn describe(self) -> &'static str {
+        match self {
+            Want::Numeric => "a number or a numeric vector",
+            Want::Float => "a float or a float vector",
+            Want::FloatVec => "a float vector",
+            Want::FloatVec3 => "a 3-lane float vector",
+            Want::Vector => "a vector",
+            Want::Collection => "an array, slice or set",
+        }
+    }
+}
+
+impl Checker<'_> {
+    /// `Some(ok)` once `t` is known enough to tell whether it belongs to `want`.
+    fn belongs(&self, t: &Ty, want: Want) -> Option<bool> {
+        let s = self.shallow(t);
+        if s == Ty::Error {
+            return Some(true);
+        }
+        let class = self.class(&s);
+        if class == Class::Unknown {
+            return None;
+        }
+        Some(match want {
+            Want::Numeric => {
+                matches!(class, Class::Int | Class::Float)
+                    || matches!(s, Ty::Vector(p, _) if p.is_numeric())
+            }
+            Want::Float => class == Class::Float || matches!(s, Ty::Vector(p, _) if p.is_float()),
+            Want::FloatVec => matches!(s, Ty::Vector(p, _) if p.is_float()),
+            Want::FloatVec3 => matches!(s, Ty::Vector(p, 3) if p.is_float()),
+            Want::Vector => matches!(s, Ty::Vector(..)),
+            Want::Collection => matches!(s, Ty::Array(..) | Ty::Slice(_) | Ty::Set(_)),
+        })
+    }
+
+    pub(super) fn solve_builtin(
+        &mut self,
+        kind: Builtin,
+        args: &[(Ty, Span)],
+        result: &Ty,
+        span: Span,
+        force: bool,
+    ) -> Progress {
+        use Builtin::*;
+        let name = kind.name();
+        // Builtins whose arguments all share one type.
+        let (want, uniform) = match kind {
+            Min | Max | Clamp | Abs => (Want::Numeric, true),
+            Sqrt | Floor | Ceil | Fma | FaddRd | FaddRu | FsubRd | FsubRu | FmulRd | FmulRu => {
+                (Want::Float, true)
+            }
+            Dot | Length | Normalize => (Want::FloatVec, true),
+            Cross => (Want::FloatVec3, true),
+            WithAxis => (Want::Vector, false),
+            Len | Append => (Want::Collection, false),
+        };
+        let Some((first, first_span)) = args.first().cloned() else {
+            return Progress::Done;
+        };
+        if uniform {
+            for (t, s) in &args[1..] {
+                self.expect(t, &first, *s, "the builtin's other arguments");
+            }
+        }
+        match self.belongs(&first, want) {
+            None if !force => return Progress::Wait,
+            None => {
+                self.error(SemaError::CannotInfer {
+                    what: "builtin's argument",
+                    span,
+                });
+                self.unify(result, &Ty::Error).ok();
+                return Progress::Done;
+            }
+            Some(false) => {
+                let ty = self.show(&first);
+                self.error(SemaError::BuiltinArg {
+                    name: name.to_string(),
+                    ty,
+                    expected: want.describe(),
+                    span: first_span,
+                });
+                self.unify(result, &Ty::Error).ok();
+                return Progress::Done;
+            }
+            Some(true) => {}
+        }
+        if kind == Abs && matches!(self.shallow(&first), Ty::Prim(p) if p.is_unsigned_int()) {
+            let ty = self.show(&first);
+            self.error(SemaError::BuiltinArg {
+                name: name.to_string(),
+                ty,
+                expected: "a signed number",
+                span: first_span,
+            });
+        }
+        let elem = match self.shallow(&first) {
+            Ty::Vector(p, _) => Ty::Prim(p),
+            Ty::Array(e, _) | Ty::Slice(e) | Ty::Set(e) => *e,
+            _ => Ty::Error,
+        };
+        let out = match kind {
+            Dot | Length => elem,
+            Len => Ty::Prim(Prim::U32),
+            WithAxis => {
+                let (k, ks) = args[1].clone();
+                let (x, xs) = args[2].clone();
+                match self.class(&k) {
+                    Class::Unknown if !force => return Progress::Wait,
+                    Class::Int | Class::Unknown => {
+                        let v = self.fresh(super::unify::VarKind::Int);
+                        self.unify(&k, &v).ok();
+                    }
+                    _ => {
+                        let ty = self.show(&k);
+                        self.error(SemaError::BuiltinArg {
+                            name: name.to_string(),
+                            ty,
+                            expected: "an integer lane index",
+                            span: ks,
+                        });
+                    }
+                }
+                self.expect(&x, &elem, xs, "the vector's element type");
+                first
+            }
+            _ => first,
+        };
+        self.unify(result, &out).ok();
+        Progress::Done
+    }
+}

@@ -1,0 +1,531 @@
+//! Typing of layouts (paper §4, Figure 6): the type of every member, which sum type a layout
+//! realizes, and the rule that physical types preserve logical types.
+//!
+//! Input: a `layout` declaration (and the `build` of the same name, which names the variants).
+//! Output: a [`LayoutInfo`] (reference type, members with types, split arms with variants) and
+//! side-table entries for member expressions. Scopes: the reference components and globals
+//! (top-level members) everywhere; every name of a group in the whole group (so a split's
+//! discriminant may be declared after the split); the members of a split arm in that arm; a
+//! `let` from its definition on. Split discriminants and `from` keys must be integers, group
+//! sizes integers, `by` indices integers or `ptr`. A stored or derived field named like a logical
+//! field of the variant must have the logical field's type, where a recursive field is realized
+//! by the layout's reference type and a dependent array `T[x]` by a slice of `T`.
+
+use super::errors::SemaError;
+use super::infer::{Binding, Checker, Ctx};
+use super::ops::{IntCheck, Obligation};
+use super::resolve::LenScope;
+use super::typed::{ArmInfo, LayoutInfo, MemberId, MemberInfo, MemberKindInfo};
+use super::types::{AdtId, Ty};
+use super::unify::VarKind;
+use crate::syntax::ast::{
+    GroupAttrKind, Item, LayoutDecl, Member, MemberKind, Program, SplitArmBody,
+};
+use rustc_hash::FxHashMap;
+use scion_ir::diag::Span;
+
+/// Per-layout state while its members are typed.
+struct Walk {
+    ids: FxHashMap<usize, MemberId>,
+    arm: usize,
+}
+
+fn key(m: &Member) -> usize {
+    m as *const Member as usize
+}
+
+fn member_name(m: &Member) -> Option<(&str, Span)> {
+    match &m.kind {
+        MemberKind::Field { name, .. }
+        | MemberKind::Derived { name, .. }
+        | MemberKind::Let { name, .. } => Some((&name.name, name.span)),
+        MemberKind::Group(g) => Some((&g.name.name, g.name.span)),
+        _ => None,
+    }
+}
+
+impl Checker<'_> {
+    /// Types layout item `item`.
+    pub(super) fn check_layout(&mut self, item: usize, decl: &LayoutDecl) {
+        let layout_idx = self.out.layouts.len();
+        let param_names: Vec<String> = decl.params.iter().map(|p| p.name.name.clone()).collect();
+        let params: Vec<(String, Ty)> = decl
+            .params
+            .iter()
+            .map(|p| {
+                (
+                    p.name.name.clone(),
+                    self.lower_type(&p.ty, &LenScope::Names(&param_names)),
+                )
+            })
+            .collect();
+        let ref_ty = match params.as_slice() {
+            [(_, t)] => t.clone(),
+            _ => Ty::Tuple(params.iter().map(|p| p.1.clone()).collect()),
+        };
+        self.out.layouts.push(LayoutInfo {
+            item,
+            name: decl.name.name.clone(),
+            adt: None,
+            params,
+            ref_ty,
+            members: Vec::new(),
+            arms: Vec::new(),
+        });
+        // Every member name, for array lengths `T[P]`.
+        let mut all_names = param_names.clone();
+        collect_names(&decl.members, &mut all_names);
+        let mut walk = Walk {
+            ids: FxHashMap::default(),
+            arm: 0,
+        };
+        self.collect_members(layout_idx, &decl.members, None, None, &all_names, &mut walk);
+        let adt = self.layout_adt(decl);
+        self.out.layouts[layout_idx].adt = adt;
+        if let Some(adt) = adt {
+            self.resolve_arm_variants(layout_idx, adt, &decl.members, &mut 0);
+        }
+        self.ctx = Ctx::Layout { layout: layout_idx };
+        self.scopes.clear();
+        self.push_scope();
+        for (i, p) in decl.params.iter().enumerate() {
+            self.define(&p.name.name, Binding::LayoutParam(i as u32));
+        }
+        for (i, p) in decl.params.iter().enumerate() {
+            if let Some(d) = &p.default {
+                let t = self.infer_expr(d);
+                let want = self.out.layouts[layout_idx].params[i].1.clone();
+                self.expect(&t, &want, d.span, "the reference component's type");
+            }
+        }
+        walk.arm = 0;
+        self.type_members(layout_idx, &decl.members, &walk.ids, &mut walk.arm);
+        self.scopes.clear();
+        self.ctx = Ctx::Const;
+    }
+
+    /// First pass: one [`MemberInfo`] per named member, in pre-order.
+    fn collect_members(
+        &mut self,
+        layout: usize,
+        members: &[Member],
+        group: Option<MemberId>,
+        variant: Option<u32>,
+        names: &[String],
+        walk: &mut Walk,
+    ) {
+        let mut seen: FxHashMap<String, Span> = FxHashMap::default();
+        for m in members {
+            if let Some((n, span)) = member_name(m) {
+                if let Some(prev) = seen.insert(n.to_string(), span) {
+                    self.error(SemaError::DuplicateMember {
+                        name: n.to_string(),
+                        span,
+                        previous: prev,
+                    });
+                }
+            }
+            let (name, kind, ty) = match &m.kind {
+                MemberKind::Field { name, ty } => (
+                    name,
+                    MemberKindInfo::Stored,
+                    self.lower_type(ty, &LenScope::Layout(names)),
+                ),
+                MemberKind::Derived { name, .. } => {
+                    (name, MemberKindInfo::Derived, self.fresh(VarKind::General))
+                }
+                MemberKind::Let { name, ty, .. } => {
+                    let t = match ty {
+                        Some(t) => self.lower_type(t, &LenScope::Layout(names)),
+                        None => self.fresh(VarKind::General),
+                    };
+                    (name, MemberKindInfo::Let, t)
+                }
+                MemberKind::Group(g) => {
+                    let kind = if g.indirect {
+                        MemberKindInfo::IndirectGroup
+                    } else {
+                        MemberKindInfo::Group
+                    };
+                    (&g.name, kind, Ty::unit())
+                }
+                MemberKind::Split { arms, .. } => {
+                    for arm in arms {
+                        let from_group = None;
+                        self.out.layouts[layout].arms.push(ArmInfo {
+                            span: arm.span,
+                            variant: None,
+                            from_group,
+                        });
+                        if let SplitArmBody::Members { members, .. } = &arm.body {
+                            // The arm's variant index is filled in once the ADT is known; members
+                            // record it through `resolve_arm_variants`.
+                            self.collect_members(layout, members, group, variant, names, walk);
+                        }
+                    }
+                    continue;
+                }
+                MemberKind::Padding { .. } | MemberKind::Separator => continue,
+            };
+            let id = MemberId(self.out.layouts[layout].members.len() as u32);
+            self.out.layouts[layout].members.push(MemberInfo {
+                name: name.name.clone(),
+                kind,
+                ty,
+                group,
+                variant,
+                span: name.span,
+            });
+            walk.ids.insert(key(m), id);
+            if let MemberKind::Group(g) = &m.kind {
+                self.collect_members(layout, &g.members, Some(id), variant, names, walk);
+            }
+        }
+    }
+
+    /// The sum type a layout realizes: the one whose variants include every variant named by the
+    /// layout's split arms and its build, preferring the one whose fields match the build's
+    /// parameter names.
+    fn layout_adt(&mut self, decl: &LayoutDecl) -> Option<AdtId> {
+        let mut used: Vec<String> = Vec::new();
+        arm_variant_names(&decl.members, &mut used);
+        let build = self.program.items.iter().find_map(|i| match i {
+            Item::Build(b) if b.name.name == decl.name.name => Some(b),
+            _ => None,
+        });
+        if let Some(b) = build {
+            used.extend(b.variants.iter().map(|v| v.name.name.clone()));
+        }
+        let mut cands: Vec<AdtId> = (0..self.adts.adts.len() as u32)
+            .map(AdtId)
+            .filter(|a| {
+                let d = &self.adts.adts[a.0 as usize];
+                d.is_sum() && !used.is_empty() && used.iter().all(|u| d.variant_index(u).is_some())
+            })
+            .collect();
+        if cands.len() > 1 {
+            if let Some(b) = build {
+                let matching: Vec<AdtId> = cands
+                    .iter()
+                    .copied()
+                    .filter(|a| {
+                        let d = &self.adts.adts[a.0 as usize];
+                        b.variants.iter().all(|v| {
+                            d.variant_index(&v.name.name).is_some_and(|vi| {
+                                let fs = d.variant_fields(vi);
+                                fs.len() == v.params.len()
+                                    && fs
+                                        .iter()
+                                        .zip(v.params.iter())
+                                        .all(|(f, p)| f.name == p.name.name)
+                            })
+                        })
+                    })
+                    .collect();
+                if !matching.is_empty() {
+                    cands = matching;
+                }
+            }
+        }
+        match cands.len() {
+            1 => Some(cands[0]),
+            0 => {
+                if !used.is_empty() {
+                    self.error(SemaError::LayoutAdtUnknown {
+                        layout: decl.name.name.clone(),
+                        span: decl.name.span,
+                    });
+                }
+                None
+            }
+            _ => {
+                let candidates = cands
+                    .iter()
+                    .map(|a| self.adts.adts[a.0 as usize].name.clone())
+                    .collect();
+                self.error(SemaError::LayoutAdtAmbiguous {
+                    layout: decl.name.name.clone(),
+                    candidates,
+                    span: decl.name.span,
+                });
+                None
+            }
+        }
+    }
+
+    /// Fills in the variant of every split arm and of the members inside arms.
+    fn resolve_arm_variants(
+        &mut self,
+        layout: usize,
+        adt: AdtId,
+        members: &[Member],
+        arm_ix: &mut usize,
+    ) {
+        for m in members {
+            match &m.kind {
+                MemberKind::Group(g) => self.resolve_arm_variants(layout, adt, &g.members, arm_ix),
+                MemberKind::Split { arms, .. } => {
+                    for arm in arms {
+                        let (vname, inner) = match &arm.body {
+                            SplitArmBody::Members { variant, members } => (variant, Some(members)),
+                            SplitArmBody::From { variant, .. } => (variant, None),
+                        };
+                        let def = &self.adts.adts[adt.0 as usize];
+                        let v = def.variant_index(&vname.name).map(|v| v as u32);
+                        if v.is_none() {
+                            let adt_name = def.name.clone();
+                            self.error(SemaError::SplitUnknownVariant {
+                                name: vname.name.clone(),
+                                adt: adt_name,
+                                span: vname.span,
+                            });
+                        }
+                        if let Some(a) = self.out.layouts[layout].arms.get_mut(*arm_ix) {
+                            a.variant = v;
+                        }
+                        *arm_ix += 1;
+                        if let Some(inner) = inner {
+                            let mut names: Vec<(String, Span)> = Vec::new();
+                            collect_spans(inner, &mut names);
+                            for mi in self.out.layouts[layout].members.iter_mut() {
+                                if mi.variant.is_none()
+                                    && names.iter().any(|(n, s)| &mi.name == n && mi.span == *s)
+                                {
+                                    mi.variant = v;
+                                }
+                            }
+                            self.resolve_arm_variants(layout, adt, inner, arm_ix);
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+
+    /// Defines the non-`let` names of one container.
+    fn define_container(&mut self, members: &[Member], ids: &FxHashMap<usize, MemberId>) {
+        for m in members {
+            if matches!(m.kind, MemberKind::Let { .. }) {
+                continue;
+            }
+            if let (Some((n, _)), Some(id)) = (member_name(m), ids.get(&key(m))) {
+                self.define(n, Binding::Member(*id));
+            }
+        }
+    }
+
+    /// Second pass: types the expressions of the members.
+    fn type_members(
+        &mut self,
+        layout: usize,
+        members: &[Member],
+        ids: &FxHashMap<usize, MemberId>,
+        arm_ix: &mut usize,
+    ) {
+        self.push_scope();
+        self.define_container(members, ids);
+        for m in members {
+            match &m.kind {
+                MemberKind::Derived { value, .. } => {
+                    let t = self.infer_expr(value);
+                    if let Some(id) = ids.get(&key(m)) {
+                        let want = self.out.layouts[layout].members[id.0 as usize].ty.clone();
+                        self.expect(&t, &want, value.span, "the derived field's other uses");
+                    }
+                }
+                MemberKind::Let { value, name, .. } => {
+                    let t = self.infer_expr(value);
+                    if let Some(id) = ids.get(&key(m)) {
+                        let want = self.out.layouts[layout].members[id.0 as usize].ty.clone();
+                        self.expect(&t, &want, value.span, "the `let`'s declared type");
+                        self.define(&name.name, Binding::Member(*id));
+                    }
+                }
+                MemberKind::Group(g) => {
+                    for a in &g.attrs {
+                        if let GroupAttrKind::Size(e) = &a.kind {
+                            let t = self.infer_expr(e);
+                            self.solve_or_defer(Obligation::Int {
+                                ty: t,
+                                check: IntCheck::GroupSize,
+                                span: e.span,
+                            });
+                        }
+                    }
+                    if let Some(by) = &g.by {
+                        let t = self.infer_expr(by);
+                        self.solve_or_defer(Obligation::Int {
+                            ty: t,
+                            check: IntCheck::GroupBy,
+                            span: by.span,
+                        });
+                    }
+                    self.type_members(layout, &g.members, ids, arm_ix);
+                }
+                MemberKind::Split { discriminant, arms } => {
+                    let t = self.infer_expr(discriminant);
+                    self.solve_or_defer(Obligation::Int {
+                        ty: t,
+                        check: IntCheck::Discriminant,
+                        span: discriminant.span,
+                    });
+                    for arm in arms {
+                        let this_arm = *arm_ix;
+                        *arm_ix += 1;
+                        match &arm.body {
+                            SplitArmBody::Members { members, .. } => {
+                                self.type_members(layout, members, ids, arm_ix)
+                            }
+                            SplitArmBody::From { group, key: k, .. } => {
+                                let g = self.out.layouts[layout].members.iter().position(|mi| {
+                                    mi.name == group.name
+                                        && mi.kind == MemberKindInfo::IndirectGroup
+                                });
+                                match g {
+                                    Some(g) => {
+                                        if let Some(a) =
+                                            self.out.layouts[layout].arms.get_mut(this_arm)
+                                        {
+                                            a.from_group = Some(MemberId(g as u32));
+                                        }
+                                    }
+                                    None => self.error(SemaError::UnknownIndirectGroup {
+                                        name: group.name.clone(),
+                                        span: group.span,
+                                    }),
+                                }
+                                let t = self.infer_expr(k);
+                                self.solve_or_defer(Obligation::Int {
+                                    ty: t,
+                                    check: IntCheck::FromKey,
+                                    span: k.span,
+                                });
+                            }
+                        }
+                    }
+                }
+                MemberKind::Field { .. } | MemberKind::Padding { .. } | MemberKind::Separator => {}
+            }
+        }
+        self.pop_scope();
+    }
+
+    /// The physical type that realizes a logical type in a layout of `adt` with reference
+    /// type `ref_ty`.
+    pub(super) fn physical_of(&self, logical: &Ty, adt: AdtId, ref_ty: &Ty) -> Ty {
+        match logical {
+            Ty::Adt(a) if *a == adt => ref_ty.clone(),
+            Ty::Array(e, n) => Ty::Array(Box::new(self.physical_of(e, adt, ref_ty)), *n),
+            Ty::Slice(e) => Ty::Slice(Box::new(self.physical_of(e, adt, ref_ty))),
+            Ty::Tuple(ts) => Ty::Tuple(
+                ts.iter()
+                    .map(|t| self.physical_of(t, adt, ref_ty))
+                    .collect(),
+            ),
+            t => t.clone(),
+        }
+    }
+
+    /// Checks "physical types preserve logical types" on every typed layout (after inference).
+    pub(super) fn check_physical_types(&mut self) {
+        for li in 0..self.out.layouts.len() {
+            let layout = self.out.layouts[li].clone();
+            let Some(adt) = layout.adt else { continue };
+            let Some(def) = self.adts.get(adt).cloned() else {
+                continue;
+            };
+            for m in &layout.members {
+                if !matches!(m.kind, MemberKindInfo::Stored | MemberKindInfo::Derived) {
+                    continue;
+                }
+                let variants: Vec<usize> = match m.variant {
+                    Some(v) => vec![v as usize],
+                    None => (0..def.variants().len()).collect(),
+                };
+                let logical = variants.iter().find_map(|v| {
+                    def.variant_fields(*v)
+                        .into_iter()
+                        .find(|f| f.name == m.name)
+                        .cloned()
+                });
+                let Some(f) = logical else { continue };
+                let expected = self.physical_of(&f.ty, adt, &layout.ref_ty);
+                let found = self.zonk(&m.ty);
+                if found.has_error() || expected.has_error() || found == expected {
+                    continue;
+                }
+                let show = |t: &Ty| t.display(&self.adts).to_string();
+                self.error(SemaError::PhysicalType {
+                    field: m.name.clone(),
+                    logical: show(&f.ty),
+                    expected: show(&expected),
+                    found: show(&found),
+                    span: m.span,
+                });
+            }
+        }
+    }
+}
+
+fn collect_names(members: &[Member], out: &mut Vec<String>) {
+    for m in members {
+        if let Some((n, _)) = member_name(m) {
+            out.push(n.to_string());
+        }
+        match &m.kind {
+            MemberKind::Group(g) => collect_names(&g.members, out),
+            MemberKind::Split { arms, .. } => {
+                for a in arms {
+                    if let SplitArmBody::Members { members, .. } = &a.body {
+                        collect_names(members, out);
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+fn collect_spans(members: &[Member], out: &mut Vec<(String, Span)>) {
+    for m in members {
+        if let Some((n, s)) = member_name(m) {
+            out.push((n.to_string(), s));
+        }
+        if let MemberKind::Group(g) = &m.kind {
+            collect_spans(&g.members, out);
+        }
+    }
+}
+
+fn arm_variant_names(members: &[Member], out: &mut Vec<String>) {
+    for m in members {
+        match &m.kind {
+            MemberKind::Group(g) => arm_variant_names(&g.members, out),
+            MemberKind::Split { arms, .. } => {
+                for a in arms {
+                    match &a.body {
+                        SplitArmBody::Members { variant, members } => {
+                            out.push(variant.name.clone());
+                            arm_variant_names(members, out);
+                        }
+                        SplitArmBody::From { variant, .. } => out.push(variant.name.clone()),
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+/// The layouts in `program` (helper for callers that only have the AST).
+pub(super) fn layout_items(program: &Program) -> impl Iterator<Item = (usize, &LayoutDecl)> {
+    program
+        .items
+        .iter()
+        .enumerate()
+        .filter_map(|(i, it)| match it {
+            Item::Layout(l) => Some((i, l)),
+            _ => None,
+        })
+}

@@ -1,0 +1,85 @@
+//! Helpers shared by the parser's integration tests.
+#![allow(dead_code)]
+
+use scion_compiler::syntax::ast::Program;
+use scion_compiler::syntax::parse_file;
+use scion_ir::diag::{Diagnostics, SourceMap};
+use std::path::{Path, PathBuf};
+
+/// The repository's `library/` folder.
+pub fn library_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../library")
+}
+
+/// `(path, text)` of `library/*.scion` and `library/*/*.scion`, sorted by path.
+pub fn library_files() -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    let mut dirs = vec![library_dir()];
+    let mut depth = 0;
+    while !dirs.is_empty() && depth < 2 {
+        let mut next = Vec::new();
+        for dir in dirs {
+            let Ok(entries) = std::fs::read_dir(&dir) else {
+                continue;
+            };
+            for entry in entries.flatten() {
+                let path = entry.path();
+                if path.is_dir() {
+                    next.push(path);
+                } else if path.extension().is_some_and(|e| e == "scion") {
+                    let text = std::fs::read_to_string(&path).expect("readable library file");
+                    out.push((path.display().to_string(), text));
+                }
+            }
+        }
+        dirs = next;
+        depth += 1;
+    }
+    out.sort();
+    out
+}
+
+/// Parses `text` as one file named `name`.
+pub fn parse_str(name: &str, text: &str) -> (Program, Diagnostics, SourceMap) {
+    let mut sources = SourceMap::new();
+    let file = sources.add(name, text);
+    let mut program = Program::default();
+    let diags = parse_file(&sources, file, &mut program);
+    (program, diags, sources)
+}
+
+/// Removes `Span { .. }` and `NodeId(..)` from a Debug rendering, so two trees that differ
+/// only in positions and ids compare equal.
+pub fn strip_positions(debug: &str) -> String {
+    let mut out = String::with_capacity(debug.len());
+    let mut rest = debug;
+    loop {
+        let span = rest.find("Span {");
+        let id = rest.find("NodeId(");
+        let (at, open, close) = match (span, id) {
+            (Some(s), Some(i)) if i < s => (i, '(', ')'),
+            (Some(s), _) => (s, '{', '}'),
+            (None, Some(i)) => (i, '(', ')'),
+            (None, None) => break,
+        };
+        out.push_str(&rest[..at]);
+        let after = &rest[at..];
+        let start = after.find(open).expect("opener");
+        let mut depth = 0usize;
+        let mut end = after.len();
+        for (i, c) in after[start..].char_indices() {
+            if c == open {
+                depth += 1;
+            } else if c == close {
+                depth -= 1;
+                if depth == 0 {
+                    end = start + i + 1;
+                    break;
+                }
+            }
+        }
+        rest = &after[end..];
+    }
+    out.push_str(rest);
+    out
+}
