@@ -5,5 +5,6 @@
 //! sees only the stage before it.
 
 pub mod fuzz;
+pub mod irgen;
 pub mod sema;
 pub mod syntax;

@@ -1,0 +1,388 @@
+//! Statements: blocks, `let`, assignment, `return`, `if`, `match`, `foreach`.
+//!
+//! Every lowering function returns [`Flow`]: whether control can reach the next statement. A
+//! block stops emitting after a statement that cannot fall through (a `return`).
+
+use super::FuncCx;
+use crate::sema::Resolution;
+use crate::syntax::ast::{Expr, ExprKind, MatchArm, PatternKind, Stmt, StmtKind};
+use scion_ir::attr::Attr;
+use scion_ir::diag::InternalError;
+use scion_ir::entity::{TypeId, ValueId};
+use scion_ir::tree::Op;
+use scion_ir::types::Type;
+use scion_ir::{Builder, OpSpec};
+
+/// Whether control falls through a lowered statement.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Flow {
+    /// The next statement runs.
+    Next,
+    /// The statement left the function.
+    Returned,
+}
+
+/// The outcome of lowering in value mode.
+enum Value {
+    /// The statement produced this value.
+    Some(ValueId),
+    /// The statement left the function (every path returned).
+    Returned,
+}
+
+impl FuncCx<'_> {
+    /// Lowers the function body into the entry block and terminates it.
+    pub(super) fn lower_body(
+        &mut self,
+        b: &mut Builder<'_>,
+        body: &Stmt,
+        results: &[TypeId],
+    ) -> Result<(), InternalError> {
+        if results.is_empty() {
+            if self.stmt(b, body)? == Flow::Next {
+                b.ret(&[]);
+            }
+        } else if let Value::Some(v) = self.value_stmt(b, body, results[0])? {
+            b.ret(&[v]);
+        }
+        Ok(())
+    }
+
+    /// Lowers a statement whose value is not used.
+    pub(super) fn stmt(&mut self, b: &mut Builder<'_>, s: &Stmt) -> Result<Flow, InternalError> {
+        b.set_span(Some(s.span));
+        match &s.kind {
+            StmtKind::Expr(e) => {
+                self.expr_effect(b, e)?;
+                Ok(Flow::Next)
+            }
+            StmtKind::Assign { target, value } => {
+                let v = self.expr(b, value)?;
+                self.assign(b, target, v)?;
+                Ok(Flow::Next)
+            }
+            StmtKind::Block(stmts) => {
+                for st in stmts {
+                    if self.stmt(b, st)? == Flow::Returned {
+                        return Ok(Flow::Returned);
+                    }
+                }
+                Ok(Flow::Next)
+            }
+            StmtKind::Return(e) => {
+                let vals = match e {
+                    Some(e) if !self.typed.expr_ty(e.id).is_unit() => vec![self.expr(b, e)?],
+                    Some(e) => {
+                        self.expr_effect(b, e)?;
+                        vec![]
+                    }
+                    None => vec![],
+                };
+                b.set_span(Some(s.span));
+                b.ret(&vals);
+                Ok(Flow::Returned)
+            }
+            StmtKind::Let { value, .. } => {
+                let v = self.expr(b, value)?;
+                let binding = self.binder(s.id)?;
+                self.locals.insert(binding, v);
+                Ok(Flow::Next)
+            }
+            StmtKind::If {
+                branches,
+                otherwise,
+            } => {
+                self.if_chain(b, branches, otherwise.as_deref(), None)?;
+                Ok(Flow::Next)
+            }
+            StmtKind::Match { scrutinee, arms } => {
+                self.match_stmt(b, scrutinee, arms, None)?;
+                Ok(Flow::Next)
+            }
+            StmtKind::Foreach { iter, body, .. } => {
+                let arr = self.expr(b, iter)?;
+                let binding = self.binder(s.id)?;
+                let elem = match b.m.types.get(b.value_type(arr)) {
+                    Type::Array { elem, .. } => *elem,
+                    _ => return Err(self.bug("foreach over a non-array value")),
+                };
+                let mut err = None;
+                let region = b.region(&[elem], |b, args| {
+                    self.locals.insert(binding, args[0]);
+                    match self.stmt(b, body) {
+                        Ok(Flow::Next) => {
+                            b.yield_(&[]);
+                        }
+                        Ok(Flow::Returned) => {}
+                        Err(e) => err = Some(e),
+                    }
+                });
+                if let Some(e) = err {
+                    return Err(e);
+                }
+                b.set_span(Some(s.span));
+                b.insert(OpSpec::new(Op::Foreach).operands(&[arr]).region(region));
+                Ok(Flow::Next)
+            }
+            StmtKind::Build { .. } => Err(self.bug("a `build` statement inside a function")),
+        }
+    }
+
+    /// Lowers a statement in value mode: its tail expression is the value of type `ty`.
+    fn value_stmt(
+        &mut self,
+        b: &mut Builder<'_>,
+        s: &Stmt,
+        ty: TypeId,
+    ) -> Result<Value, InternalError> {
+        b.set_span(Some(s.span));
+        match &s.kind {
+            StmtKind::Expr(e) => Ok(Value::Some(self.expr(b, e)?)),
+            StmtKind::Block(stmts) => {
+                let Some((last, init)) = stmts.split_last() else {
+                    return Err(self.bug("an empty block must produce a value"));
+                };
+                for st in init {
+                    if self.stmt(b, st)? == Flow::Returned {
+                        return Ok(Value::Returned);
+                    }
+                }
+                self.value_stmt(b, last, ty)
+            }
+            StmtKind::Return(_) => {
+                self.stmt(b, s)?;
+                Ok(Value::Returned)
+            }
+            StmtKind::If {
+                branches,
+                otherwise,
+            } => match self.if_chain(b, branches, otherwise.as_deref(), Some(ty))? {
+                Some(v) => Ok(Value::Some(v)),
+                None => Err(self.bug("a value `if` without a result")),
+            },
+            StmtKind::Match { scrutinee, arms } => {
+                match self.match_stmt(b, scrutinee, arms, Some(ty))? {
+                    Some(v) => Ok(Value::Some(v)),
+                    None => Err(self.bug("a value `match` without a result")),
+                }
+            }
+            _ => Err(self.bug("a statement that cannot produce the function's value")),
+        }
+    }
+
+    /// Lowers a region body in statement or value mode and ends it with `tree.yield` when
+    /// control falls through.
+    fn region_body(
+        &mut self,
+        b: &mut Builder<'_>,
+        s: &Stmt,
+        result: Option<TypeId>,
+    ) -> Result<(), InternalError> {
+        match result {
+            None => {
+                if self.stmt(b, s)? == Flow::Next {
+                    b.yield_(&[]);
+                }
+            }
+            Some(ty) => {
+                if let Value::Some(v) = self.value_stmt(b, s, ty)? {
+                    b.yield_(&[v]);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// `if c1 { } elif c2 { } else { }` as nested `tree.if`s; with `result`, each yields it.
+    fn if_chain(
+        &mut self,
+        b: &mut Builder<'_>,
+        branches: &[(Expr, Stmt)],
+        otherwise: Option<&Stmt>,
+        result: Option<TypeId>,
+    ) -> Result<Option<ValueId>, InternalError> {
+        let Some(((cond, then), rest)) = branches.split_first() else {
+            return Err(self.bug("`if` without a condition"));
+        };
+        let c = self.expr(b, cond)?;
+        let mut err = None;
+        let then_r = b.region(&[], |b, _| {
+            if let Err(e) = self.region_body(b, then, result) {
+                err = Some(e);
+            }
+        });
+        let else_r = b.region(&[], |b, _| {
+            let r = if !rest.is_empty() {
+                self.if_chain(b, rest, otherwise, result).map(|v| {
+                    if let Some(v) = v {
+                        b.yield_(&[v]);
+                    } else {
+                        b.yield_(&[]);
+                    }
+                })
+            } else if let Some(o) = otherwise {
+                self.region_body(b, o, result)
+            } else {
+                b.yield_(&[]);
+                Ok(())
+            };
+            if let Err(e) = r {
+                err = Some(e);
+            }
+        });
+        if let Some(e) = err {
+            return Err(e);
+        }
+        b.set_span(Some(cond.span));
+        let results: Vec<TypeId> = result.into_iter().collect();
+        let op = b.insert(
+            OpSpec::new(Op::If)
+                .operands(&[c])
+                .results(&results)
+                .region(then_r)
+                .region(else_r),
+        );
+        Ok(result.map(|_| b.result(op, 0)))
+    }
+
+    /// `match e { arms }` as `tree.match`, one region per arm.
+    fn match_stmt(
+        &mut self,
+        b: &mut Builder<'_>,
+        scrutinee: &Expr,
+        arms: &[MatchArm],
+        result: Option<TypeId>,
+    ) -> Result<Option<ValueId>, InternalError> {
+        let v = self.expr(b, scrutinee)?;
+        let mut names = Vec::with_capacity(arms.len());
+        let mut regions = Vec::with_capacity(arms.len());
+        for arm in arms {
+            let (name, arg_types): (String, Vec<TypeId>) = match &arm.pattern.kind {
+                PatternKind::Variant { name, .. } => {
+                    let adt =
+                        b.m.adt_of_type(b.value_type(v))
+                            .ok_or_else(|| self.bug("match on a non-ADT value"))?;
+                    let fields = adt
+                        .fields_of(Some(&name.name))
+                        .ok_or_else(|| self.bug(format!("no variant `{}`", name.name)))?;
+                    (name.name.clone(), fields.iter().map(|f| f.ty).collect())
+                }
+                PatternKind::Wildcard | PatternKind::Bind { .. } => ("_".to_string(), Vec::new()),
+            };
+            let mut err = None;
+            let region = b.region(&arg_types, |b, args| {
+                let r = self
+                    .bind_pattern(arm, v, args)
+                    .and_then(|_| self.region_body(b, &arm.body, result));
+                if let Err(e) = r {
+                    err = Some(e);
+                }
+            });
+            if let Some(e) = err {
+                return Err(e);
+            }
+            names.push(Attr::str(name));
+            regions.push(region);
+        }
+        b.set_span(Some(scrutinee.span));
+        let results: Vec<TypeId> = result.into_iter().collect();
+        let mut spec = OpSpec::new(Op::Match)
+            .operands(&[v])
+            .results(&results)
+            .attr("arms", Attr::List(names));
+        for r in regions {
+            spec = spec.region(r);
+        }
+        let op = b.insert(spec);
+        Ok(result.map(|_| b.result(op, 0)))
+    }
+
+    fn bind_pattern(
+        &mut self,
+        arm: &MatchArm,
+        scrutinee: ValueId,
+        args: &[ValueId],
+    ) -> Result<(), InternalError> {
+        match &arm.pattern.kind {
+            PatternKind::Wildcard => Ok(()),
+            PatternKind::Bind { .. } => {
+                let binding = self.binder(arm.pattern.id)?;
+                self.locals.insert(binding, scrutinee);
+                Ok(())
+            }
+            PatternKind::Variant { fields, .. } => {
+                for (i, p) in fields.iter().enumerate() {
+                    if let PatternKind::Bind { .. } = p.kind {
+                        let binding = self.binder(p.id)?;
+                        let arg = *args.get(i).ok_or_else(|| {
+                            self.bug("pattern binds more fields than the variant has")
+                        })?;
+                        self.locals.insert(binding, arg);
+                    }
+                }
+                Ok(())
+            }
+        }
+    }
+
+    fn binder(
+        &self,
+        id: crate::syntax::ast::NodeId,
+    ) -> Result<crate::sema::BindingId, InternalError> {
+        self.typed
+            .binders
+            .get(&id)
+            .copied()
+            .ok_or_else(|| self.bug("a binding without a binder"))
+    }
+
+    /// Stores `v` into an assignment target: a `mut` parameter or a tuple component of one.
+    fn assign(
+        &mut self,
+        b: &mut Builder<'_>,
+        target: &Expr,
+        v: ValueId,
+    ) -> Result<(), InternalError> {
+        match &target.kind {
+            ExprKind::Name(_) => {
+                let r = self.mut_param_ref(target)?;
+                b.build(Op::Store, &[r, v], &[]);
+                Ok(())
+            }
+            ExprKind::Index { base, index } => {
+                let i = match index.kind {
+                    ExprKind::Int(i) => i as i128,
+                    _ => return Err(self.bug("component assignment with a non-literal index")),
+                };
+                let r = self.mut_param_ref(base)?;
+                let ty = match b.m.types.get(b.value_type(r)) {
+                    Type::Ref(t) => *t,
+                    _ => return Err(self.bug("assignment through a non-reference")),
+                };
+                let old = b.build1(Op::Load, &[r], ty);
+                let op = b.insert(
+                    OpSpec::new(Op::Insert)
+                        .operands(&[old, v])
+                        .attr("index", Attr::Int(i))
+                        .results(&[ty]),
+                );
+                let new = b.result(op, 0);
+                b.build(Op::Store, &[r, new], &[]);
+                Ok(())
+            }
+            _ => Err(self.bug("unsupported assignment target")),
+        }
+    }
+
+    /// The reference argument of the `mut` parameter named by `e`.
+    pub(super) fn mut_param_ref(&self, e: &Expr) -> Result<ValueId, InternalError> {
+        match self.typed.resolution(e.id) {
+            Some(Resolution::Param(i))
+                if self.typed.func(self.func).params[*i as usize].mutable =>
+            {
+                Ok(self.params[*i as usize])
+            }
+            _ => Err(self.bug("expected a `mut` parameter")),
+        }
+    }
+}
