@@ -535,27 +535,25 @@ impl Parser<'_> {
             self.expect_punct(')')?;
         }
         let mut attrs = Attrs::new();
-        if self.eat_punct('{') {
-            if !self.eat_punct('}') {
-                loop {
-                    let aspan = self.span();
-                    let aname = self.name("an attribute name")?;
-                    self.expect_punct('=')?;
-                    let value = self.attr()?;
-                    if attrs.get(&aname).is_some() {
-                        return Err(self.error(
-                            "E0957",
-                            aspan,
-                            format!("attribute `{aname}` given twice"),
-                        ));
-                    }
-                    attrs.set(&aname, value);
-                    if !self.eat_punct(',') {
-                        break;
-                    }
+        if self.eat_punct('{') && !self.eat_punct('}') {
+            loop {
+                let aspan = self.span();
+                let aname = self.name("an attribute name")?;
+                self.expect_punct('=')?;
+                let value = self.attr()?;
+                if attrs.get(&aname).is_some() {
+                    return Err(self.error(
+                        "E0957",
+                        aspan,
+                        format!("attribute `{aname}` given twice"),
+                    ));
                 }
-                self.expect_punct('}')?;
+                attrs.set(&aname, value);
+                if !self.eat_punct(',') {
+                    break;
+                }
             }
+            self.expect_punct('}')?;
         }
         self.expect_punct(':')?;
         let sig_span = self.span();
