@@ -4,4 +4,5 @@
 //! (typed AST → `tree` dialect) → passes → backends. Each stage lives in its own module and
 //! sees only the stage before it.
 
+pub mod layout;
 pub mod syntax;
