@@ -27,6 +27,10 @@ pub mod check_layout;
 #[path = "../sema/check_build.rs"]
 pub mod check_build;
 
+#[cfg(test)]
+#[path = "../sema/check_tests.rs"]
+mod check_tests;
+
 pub use model::LayoutModel;
 pub use plan::BufferPlan;
 pub use resolve::{resolve_field, FieldPath, Resolver};

@@ -412,7 +412,8 @@ pub fn stmt_exprs<'a>(s: &'a Stmt, f: &mut dyn FnMut(&'a Expr)) {
             f(value);
         }
         StmtKind::Block(b) => b.iter().for_each(|s| stmt_exprs(s, f)),
-        StmtKind::Return(e) => e.iter().for_each(|e| f(e)),
+        StmtKind::Return(Some(e)) => f(e),
+        StmtKind::Return(None) => {}
         StmtKind::Match { scrutinee, arms } => {
             f(scrutinee);
             arms.iter().for_each(|a| stmt_exprs(&a.body, f));
@@ -434,7 +435,8 @@ pub fn stmt_exprs<'a>(s: &'a Stmt, f: &mut dyn FnMut(&'a Expr)) {
             f(iter);
             stmt_exprs(body, f);
         }
-        StmtKind::Build { value, .. } => value.iter().for_each(|e| f(e)),
+        StmtKind::Build { value: Some(e), .. } => f(e),
+        StmtKind::Build { value: None, .. } => {}
     }
 }
 
