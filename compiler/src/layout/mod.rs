@@ -8,8 +8,10 @@
 //! well-formedness checks of layouts and builds (`sema::check_layout`, `sema::check_build`) are
 //! declared here for now so this module compiles on its own; they belong to `sema`.
 
+pub mod adt;
 pub mod domain;
 pub mod model;
+mod place;
 pub mod plan;
 pub mod resolve;
 pub mod types;
