@@ -4,5 +4,6 @@
 //! (typed AST → `tree` dialect) → passes → backends. Each stage lives in its own module and
 //! sees only the stage before it.
 
+pub mod fuzz;
 pub mod layout;
 pub mod syntax;

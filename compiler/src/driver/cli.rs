@@ -1,0 +1,227 @@
+//! Command-line interface of `scionc`: every flag of the planned compiler, documented in
+//! `--help`. Flags whose stage is not built yet are accepted by the parser and rejected by
+//! [`Options::check_implemented`] with a clear error (code E0901), never ignored silently.
+
+use clap::{Parser, ValueEnum};
+use std::path::PathBuf;
+
+/// What `scionc` writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Emit {
+    /// The parsed program, printed back as canonical Scion source.
+    Ast,
+    /// The layout-agnostic `tree` dialect (after type checking and well-formedness).
+    Tree,
+    /// The `mem` dialect: traversals specialized to a layout (destructor specialization).
+    Mem,
+    /// The `lo` dialect: an SSA control-flow graph with loads and stores.
+    Lo,
+    /// Cranelift IR.
+    Clif,
+    /// LLVM IR.
+    Llvm,
+    /// Assembly for the target.
+    Asm,
+    /// An object file for the target.
+    Obj,
+    /// NVPTX assembly.
+    Ptx,
+    /// A C header for the generated entry points.
+    Header,
+    /// Nothing: check the input and report diagnostics only.
+    Check,
+}
+
+impl Emit {
+    /// The flag value as written.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Emit::Ast => "ast",
+            Emit::Tree => "tree",
+            Emit::Mem => "mem",
+            Emit::Lo => "lo",
+            Emit::Clif => "clif",
+            Emit::Llvm => "llvm",
+            Emit::Asm => "asm",
+            Emit::Obj => "obj",
+            Emit::Ptx => "ptx",
+            Emit::Header => "header",
+            Emit::Check => "check",
+        }
+    }
+}
+
+/// Code generation targets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Target {
+    /// x86-64 (System V).
+    #[value(name = "x86_64")]
+    X86_64,
+    /// 64-bit ARM.
+    Aarch64,
+    /// NVIDIA GPUs through PTX.
+    Nvptx64,
+}
+
+/// In-process execution engines.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum RunEngine {
+    /// The Cranelift JIT.
+    Jit,
+    /// The reference interpreter.
+    Interp,
+}
+
+const AFTER_HELP: &str = "\
+Inputs:
+  The prelude (library/prelude.scion: Ray, AABB, Triangle, BVH and the geometric tests) is
+  loaded first, then every FILE in order; all items share one namespace. A layout and its build
+  usually sit in one file (library/layouts/pbrt.scion), an algorithm in another
+  (library/algorithms/closest_hit.scion).
+
+Examples:
+  Print the tree IR of closest-hit, checked against the pbrt layout:
+    scionc --emit=tree library/algorithms/closest_hit.scion library/layouts/pbrt.scion
+  Only check a layout and report every diagnostic:
+    scionc --emit=check library/layouts/ptr.scion
+  Show the pass pipeline of -O2 without running it:
+    scionc -O2 --print-pipeline library/algorithms/closest_hit.scion
+  Run one pass by name on tree IR and print every step:
+    scionc --emit=tree --passes=const-fold,dce --print-after-all FILE.scion
+
+Exit status: 0 on success, 1 when the input has errors, 2 on a bad command line, 101 on an
+internal compiler error (a bug: please report it with the input).
+
+Not built yet (these say so with error E0901 instead of being ignored):
+  --emit=mem|lo|clif|llvm|asm|obj|ptx|header, --layout, --target, --cpu, --run, --stack-size.";
+
+/// `scionc`: the Scion compiler.
+///
+/// Compiles tree traversals written against a logical BVH (an algebraic data type) to code
+/// specialized for a physical layout (a `layout` spec) and its packer (a `build` spec).
+#[derive(Debug, Parser)]
+#[command(name = "scionc", version, about, long_about = None, after_help = AFTER_HELP)]
+pub struct Options {
+    /// Scion source files (.scion), compiled together after the prelude.
+    #[arg(value_name = "FILE")]
+    pub files: Vec<PathBuf>,
+
+    /// What to produce.
+    #[arg(long, value_enum, default_value = "tree", value_name = "KIND")]
+    pub emit: Emit,
+
+    /// Write the output here instead of standard output.
+    #[arg(short = 'o', long, value_name = "PATH")]
+    pub output: Option<PathBuf>,
+
+    /// Optimization level 0-3: selects the pass pipeline (see --print-pipeline).
+    #[arg(short = 'O', value_name = "LEVEL", default_value = "0",
+          value_parser = clap::value_parser!(u8).range(0..=3))]
+    pub opt_level: u8,
+
+    /// Layout to specialize the traversals for (a `layout` name declared in the inputs).
+    #[arg(long, value_name = "NAME")]
+    pub layout: Option<String>,
+
+    /// Code generation target.
+    #[arg(long, value_enum, value_name = "TARGET")]
+    pub target: Option<Target>,
+
+    /// Target CPU: `native`, an LLVM CPU name, or `sm_XX` for NVPTX.
+    #[arg(long, value_name = "CPU")]
+    pub cpu: Option<String>,
+
+    /// Run the compiled traversal in process instead of writing output.
+    #[arg(long, value_enum, value_name = "ENGINE")]
+    pub run: Option<RunEngine>,
+
+    /// Entries of the traversal's fixed software stack (default 64); overflow is reported.
+    #[arg(long, value_name = "N")]
+    pub stack_size: Option<u32>,
+
+    /// Do not load the prelude.
+    #[arg(long)]
+    pub no_prelude: bool,
+
+    /// Load this file as the prelude instead of the built-in library/prelude.scion.
+    #[arg(long, value_name = "PATH", conflicts_with = "no_prelude")]
+    pub prelude: Option<PathBuf>,
+
+    /// Run exactly these passes (comma-separated names) instead of the -O pipeline.
+    #[arg(long, value_name = "P1,P2,...", value_delimiter = ',')]
+    pub passes: Option<Vec<String>>,
+
+    /// Print the pass pipeline that would run, then stop.
+    #[arg(long)]
+    pub print_pipeline: bool,
+
+    /// List every pass with a one-line summary, then stop.
+    #[arg(long)]
+    pub help_passes: bool,
+
+    /// Print the IR after every pass (to standard error).
+    #[arg(long)]
+    pub print_after_all: bool,
+
+    /// Print the IR before every pass (to standard error).
+    #[arg(long)]
+    pub print_before_all: bool,
+
+    /// Stop the pipeline after the named pass and emit the IR at that point.
+    #[arg(long, value_name = "PASS")]
+    pub stop_after: Option<String>,
+
+    /// Run the IR verifier after every pass (always on in debug builds).
+    #[arg(long)]
+    pub verify_each: bool,
+
+    /// Print the time each pass took (to standard error).
+    #[arg(long)]
+    pub time_passes: bool,
+
+    /// Stop after this many errors (0 = no limit).
+    #[arg(long, value_name = "N", default_value = "50")]
+    pub error_limit: usize,
+}
+
+/// A command-line request for a stage that does not exist yet.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct NotImplemented {
+    /// The flag as the user wrote it.
+    pub flag: String,
+    /// What will provide it.
+    pub planned: &'static str,
+}
+
+impl Options {
+    /// Rejects flags whose stage is not built yet, naming them.
+    pub fn check_implemented(&self) -> Result<(), NotImplemented> {
+        let emit_plan = match self.emit {
+            Emit::Ast | Emit::Tree | Emit::Check => None,
+            Emit::Mem | Emit::Lo => Some("destructor and constructor specialization (mem, lo dialects)"),
+            Emit::Clif => Some("the Cranelift backend"),
+            Emit::Llvm | Emit::Asm | Emit::Obj | Emit::Ptx => Some("the LLVM backend"),
+            Emit::Header => Some("the C ABI header generator"),
+        };
+        if let Some(planned) = emit_plan {
+            return Err(NotImplemented { flag: format!("--emit={}", self.emit.as_str()), planned });
+        }
+        if self.layout.is_some() {
+            return Err(NotImplemented { flag: "--layout".into(), planned: "destructor specialization" });
+        }
+        if self.target.is_some() || self.cpu.is_some() {
+            let flag = if self.target.is_some() { "--target" } else { "--cpu" };
+            return Err(NotImplemented { flag: flag.into(), planned: "the LLVM backend" });
+        }
+        if self.run.is_some() {
+            return Err(NotImplemented { flag: "--run".into(), planned: "the JIT and the interpreter" });
+        }
+        if self.stack_size.is_some() {
+            return Err(NotImplemented {
+                flag: "--stack-size".into(),
+                planned: "recursion-to-stack lowering",
+            });
+        }
+        Ok(())
+    }
+}

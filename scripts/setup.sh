@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Installs what Scion needs on a fresh Debian 12 machine when it is missing, and prints what it
+# found. Safe to run again: it installs nothing that is already there.
+#   - LLVM 22 tools (lit, FileCheck, not) from Debian: the lit test suite runs on them.
+#   - The Rust toolchain is expected on the machine (cargo, rustc); we do not install it.
+set -euo pipefail
+
+need_apt=()
+[ -x /usr/lib/llvm-22/bin/lit ] || need_apt+=(llvm-22-tools)
+[ -x /usr/bin/FileCheck-22 ] || need_apt+=(llvm-22-tools)
+command -v python3 >/dev/null || need_apt+=(python3)
+
+if [ ${#need_apt[@]} -gt 0 ]; then
+  pkgs=$(printf '%s\n' "${need_apt[@]}" | sort -u | tr '\n' ' ')
+  echo "setup: installing ${pkgs}(Debian packages)" >&2
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  $SUDO apt-get update -q >/dev/null
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q $pkgs >/dev/null
+fi
+
+if ! command -v cargo >/dev/null; then
+  echo "setup: cargo not found; install the Rust toolchain (rustup) first" >&2
+  exit 1
+fi
+echo "setup: ok ($(cargo --version), lit $(/usr/lib/llvm-22/bin/lit --version 2>&1 | head -1))" >&2
