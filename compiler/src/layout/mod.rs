@@ -33,6 +33,10 @@ pub mod check_build;
 #[path = "../sema/check_tests.rs"]
 mod check_tests;
 
+#[cfg(test)]
+#[path = "../sema/check_robustness.rs"]
+mod check_robustness;
+
 pub use model::LayoutModel;
 pub use plan::BufferPlan;
 pub use resolve::{resolve_field, FieldPath, Resolver};
