@@ -4,7 +4,11 @@
 //! (typed AST → `tree` dialect) → passes → backends. Each stage lives in its own module and
 //! sees only the stage before it.
 
+pub mod driver;
+pub mod frontend;
 pub mod fuzz;
 pub mod irgen;
+pub mod layout;
+pub mod passes;
 pub mod sema;
 pub mod syntax;

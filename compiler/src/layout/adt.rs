@@ -1,0 +1,238 @@
+//! Which algebraic data type a layout realizes.
+//!
+//! Input: a [`LayoutDecl`] and its [`Program`]; output: the [`Adt`] (its variants and their
+//! logical fields, shared fields first, each marked recursive or array) or an E0311 diagnostic.
+//! The ADT is the sum type that has every variant the split arms name; a layout without splits
+//! realizes the type whose variants its build names, or else the program's only one-variant sum
+//! type. When several sum types have the named variants (`BVH` and `BVH8` both have `Interior`
+//! and `Leaf`), the one whose logical field names the layout declares best is chosen; a tie is
+//! an error.
+
+use crate::layout::model::{Adt, AdtVariant, LogicalField};
+use crate::layout::types::TypeEnv;
+use crate::syntax::ast::{
+    Ident, Item, LayoutDecl, Member, MemberKind, Program, SplitArmBody, TypeExpr, TypeExprKind,
+};
+use scion_ir::diag::{Diagnostic, Diagnostics, Span};
+
+fn err(code: &str, msg: impl Into<String>, span: Span, label: &str) -> Diagnostic {
+    Diagnostic::error(code, msg).with_primary(span, label)
+}
+
+/// Finds the sum type whose variants the layout's split arms name (E0311 when there is none or
+/// more than one).
+pub(crate) fn find_adt(
+    decl: &LayoutDecl,
+    program: &Program,
+    env: &TypeEnv<'_>,
+    diags: &mut Diagnostics,
+) -> Option<Adt> {
+    let mut named: Vec<Ident> = Vec::new();
+    collect_arm_variants(&decl.members, &mut named, 0);
+    if named.is_empty() {
+        for item in &program.items {
+            if let Item::Build(b) = item {
+                if b.name.name == decl.name.name {
+                    named.extend(b.variants.iter().map(|v| v.name.clone()));
+                }
+            }
+        }
+    }
+    let mut sums: Vec<_> = program
+        .items
+        .iter()
+        .filter_map(|i| match i {
+            Item::Type(t) if t.variants.is_some() => Some(t),
+            _ => None,
+        })
+        .collect();
+    sums.dedup_by(|a, b| a.name.name == b.name.name);
+    let has = |t: &crate::syntax::ast::TypeDecl, v: &str| {
+        t.variants
+            .as_ref()
+            .is_some_and(|vs| vs.iter().any(|x| x.name.name == v))
+    };
+    let chosen = if named.is_empty() {
+        let single: Vec<_> = sums
+            .iter()
+            .filter(|t| t.variants.as_ref().is_some_and(|v| v.len() == 1))
+            .collect();
+        if single.len() == 1 {
+            Some(*single[0])
+        } else {
+            diags.push(
+                err(
+                    "E0311",
+                    format!(
+                        "cannot tell which type layout `{}` realizes",
+                        decl.name.name
+                    ),
+                    decl.name.span,
+                    "no split names a variant",
+                )
+                .with_note("name the variants in `split` arms, or write a build for this layout"),
+            );
+            None
+        }
+    } else {
+        let mut unknown = false;
+        for v in &named {
+            if !sums.iter().any(|t| has(t, &v.name)) {
+                unknown = true;
+                diags.push(err(
+                    "E0311",
+                    format!("`{}` is not a variant of any type", v.name),
+                    v.span,
+                    "unknown variant",
+                ));
+            }
+        }
+        let mut all: Vec<_> = sums
+            .iter()
+            .filter(|t| named.iter().all(|v| has(t, &v.name)))
+            .collect();
+        if all.len() > 1 {
+            // Several types have these variant names (BVH and BVH8 both have Interior and
+            // Leaf): keep those whose logical fields the layout declares best.
+            let mut declared: Vec<&str> = Vec::new();
+            collect_member_names(&decl.members, &mut declared, 0);
+            let score = |t: &crate::syntax::ast::TypeDecl| {
+                let mut fields: Vec<&str> = t.fields.iter().map(|f| f.name.name.as_str()).collect();
+                for v in t.variants.iter().flatten() {
+                    fields.extend(v.fields.iter().map(|f| f.name.name.as_str()));
+                }
+                let found = fields.iter().filter(|f| declared.contains(f)).count();
+                (found * 1000) / fields.len().max(1)
+            };
+            let best = all.iter().map(|t| score(t)).max().unwrap_or(0);
+            all.retain(|t| score(t) == best);
+        }
+        match all.len() {
+            1 => Some(*all[0]),
+            0 if unknown => None,
+            0 => {
+                let owners: Vec<String> = named
+                    .iter()
+                    .map(|v| {
+                        let t = sums
+                            .iter()
+                            .find(|t| has(t, &v.name))
+                            .map(|t| t.name.name.as_str())
+                            .unwrap_or("?");
+                        format!("`{}` of `{t}`", v.name)
+                    })
+                    .collect();
+                diags.push(
+                    err(
+                        "E0311",
+                        "split arms name variants of different types",
+                        decl.name.span,
+                        "a layout realizes exactly one type",
+                    )
+                    .with_note(format!("the arms name {}", owners.join(", "))),
+                );
+                None
+            }
+            _ => {
+                let names: Vec<String> = all.iter().map(|t| format!("`{}`", t.name.name)).collect();
+                diags.push(
+                    err(
+                        "E0311",
+                        format!("layout `{}` could realize several types", decl.name.name),
+                        decl.name.span,
+                        "ambiguous",
+                    )
+                    .with_note(format!("candidates: {}", names.join(", "))),
+                );
+                None
+            }
+        }
+    };
+    let t = chosen?;
+    let shared = &t.fields;
+    let variants = t
+        .variants
+        .as_ref()?
+        .iter()
+        .map(|v| AdtVariant {
+            name: v.name.clone(),
+            fields: shared
+                .iter()
+                .chain(v.fields.iter())
+                .map(|f| LogicalField {
+                    name: f.name.clone(),
+                    ty: f.ty.clone(),
+                    recursive: mentions_type(&f.ty, &t.name.name),
+                    array: matches!(f.ty.kind, TypeExprKind::Array { .. }),
+                })
+                .collect(),
+        })
+        .collect();
+    let _ = env;
+    Some(Adt {
+        name: t.name.name.clone(),
+        variants,
+    })
+}
+
+fn mentions_type(ty: &TypeExpr, name: &str) -> bool {
+    match &ty.kind {
+        TypeExprKind::Named(id) => id.name == name,
+        TypeExprKind::Array { elem, .. } | TypeExprKind::Set(elem) | TypeExprKind::Option(elem) => {
+            mentions_type(elem, name)
+        }
+        TypeExprKind::Tuple(ts) => ts.iter().any(|t| mentions_type(t, name)),
+        TypeExprKind::Vector { .. } => false,
+    }
+}
+
+fn collect_member_names<'a>(members: &'a [Member], out: &mut Vec<&'a str>, depth: u32) {
+    if depth > 64 {
+        return;
+    }
+    for m in members {
+        match &m.kind {
+            MemberKind::Field { name, .. } | MemberKind::Derived { name, .. } => {
+                out.push(&name.name)
+            }
+            MemberKind::Group(g) => collect_member_names(&g.members, out, depth + 1),
+            MemberKind::Split { arms, .. } => {
+                for a in arms {
+                    if let SplitArmBody::Members { members, .. } = &a.body {
+                        collect_member_names(members, out, depth + 1);
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+fn collect_arm_variants(members: &[Member], out: &mut Vec<Ident>, depth: u32) {
+    if depth > 64 {
+        return;
+    }
+    for m in members {
+        match &m.kind {
+            MemberKind::Group(g) => collect_arm_variants(&g.members, out, depth + 1),
+            MemberKind::Split { arms, .. } => {
+                for a in arms {
+                    match &a.body {
+                        SplitArmBody::Members { variant, members } => {
+                            if !out.iter().any(|v| v.name == variant.name) {
+                                out.push(variant.clone());
+                            }
+                            collect_arm_variants(members, out, depth + 1);
+                        }
+                        SplitArmBody::From { variant, .. } => {
+                            if !out.iter().any(|v| v.name == variant.name) {
+                                out.push(variant.clone());
+                            }
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+}

@@ -1,0 +1,187 @@
+//! Test fixtures: layouts of layout-catalog.md written in the layout language, faithfully to
+//! the catalog's §8 sources (with `build root` as a top-level entry of the build, as
+//! `docs/language.md` places it). Used by the tests of `layout` and of the checks.
+
+/// The prelude's types (functions are skipped by the test parser).
+pub const PRELUDE: &str = include_str!("../../../library/prelude.scion");
+/// library/layouts/pbrt.scion.
+pub const PBRT: &str = include_str!("../../../library/layouts/pbrt.scion");
+/// library/layouts/ptr.scion.
+pub const PTR: &str = include_str!("../../../library/layouts/ptr.scion");
+
+/// Catalog §3.3: `pbrt` with `align=16`.
+pub const PBRT_ALIGN16: &str = r#"
+layout PbrtAlign16(I: u32) {
+  P: u32; N: u32; primitives: Triangle[P];
+  group nodes[size=N, align=16] by I {
+    bounds: AABB;
+    split nprims {
+      > 0 -> Leaf     { p_o: u32; data = primitives[p_o : p_o + nprims]; };
+      0   -> Interior { c_o: u32; left = I + 1; right = I + c_o; };
+    };
+    nprims: u16;
+  };
+};
+"#;
+
+/// Catalog §8.2: `pbrt-soaos` (16 + 16 with `---`) and its build.
+pub const PBRT_SOAOS: &str = r#"
+layout PbrtSoAoS(I: u32) {
+  P: u32; N: u32; primitives: Triangle[P];
+  group nodes[size=N] by I {
+    low: f32x3;
+    split nprims {
+      > 0 -> Leaf     { p_o: u32; data = primitives[p_o : p_o + nprims]; };
+      0   -> Interior { c_o: u32; left = I + 1; right = I + c_o; };
+    };
+    ---
+    high: f32x3;
+    nprims: u16;
+    2;
+    bounds = AABB(low, high);
+  };
+};
+
+build PbrtSoAoS[order=pre] {
+  build Interior(bounds: AABB, left: BVH, right: BVH) {
+    build low = bounds.low; build high = bounds.high; build nprims = 0;
+    build left; let R: u32 = build right;
+    build c_o = R - this; return this;
+  };
+  build Leaf(bounds: AABB, nprims: u16, data: Triangle[nprims]) {
+    build low = bounds.low; build high = bounds.high; build nprims;
+    build p_o = append(data, nprims);
+    return this;
+  };
+};
+"#;
+
+/// Catalog §8.3: `pbrt-q16` (16 B) and its build.
+pub const PBRT_Q16: &str = r#"
+layout PbrtQ16(I: u32) {
+  P: u32; N: u32; primitives: Triangle[P];
+  wlo: f32x3; wstep: f32x3;
+  group nodes[size=N, align=16] by I {
+    qlo: u16x3;
+    qhi: u16x3;
+    w: u32;
+    bounds = AABB(fma(qlo as f32x3, wstep, wlo), fma(qhi as f32x3, wstep, wlo));
+    split w[28:32] {
+      0 -> Interior { c_o = w[0:28]; left = I + 1; right = I + c_o; };
+      _ -> Leaf     { nprims = w[28:32] as u16; p_o = w[0:28];
+                      data = primitives[p_o : p_o + nprims]; };
+    };
+  };
+};
+
+build PbrtQ16[order=pre] {
+  build root {
+    build wlo = frame_origin(bounds.low);
+    build wstep = frame_step(wlo, bounds.high, 65535);
+  };
+  build Interior(bounds: AABB, left: BVH, right: BVH) {
+    build qlo = quant_lo(bounds.low,  wlo, wstep, 65535) as u16x3;
+    build qhi = quant_hi(bounds.high, wlo, wstep, 65535) as u16x3;
+    build left; let R: u32 = build right;
+    build w = R - this;
+    return this;
+  };
+  build Leaf(bounds: AABB, nprims: u16, data: Triangle[nprims]) {
+    build qlo = quant_lo(bounds.low,  wlo, wstep, 65535) as u16x3;
+    build qhi = quant_hi(bounds.high, wlo, wstep, 65535) as u16x3;
+    let p: u32 = append(data, nprims);
+    build w = ((nprims as u32) << 28) | p;
+    return this;
+  };
+};
+"#;
+
+/// Catalog §8.4: `sg-eq` (12 B).
+pub const SG_EQ: &str = r#"
+layout SgEq(I: u32) {
+  P: u32; N: u32; primitives: Triangle[P];
+  wlo: f32x3; whi: f32x3; bins: f32x3;
+  group nodes[size=N] by I {
+    qlo: u32;
+    qhi: u32;
+    w: u32;
+    lo = f32x3(fadd_rd(wlo.x, fmul_rd(qlo[20:30] as f32, bins.x)),
+               fadd_rd(wlo.y, fmul_rd(qlo[10:20] as f32, bins.y)),
+               fadd_rd(wlo.z, fmul_rd(qlo[0:10]  as f32, bins.z)));
+    hi = f32x3(fsub_ru(whi.x, fmul_rd(qhi[20:30] as f32, bins.x)),
+               fsub_ru(whi.y, fmul_rd(qhi[10:20] as f32, bins.y)),
+               fsub_ru(whi.z, fmul_rd(qhi[0:10]  as f32, bins.z)));
+    bounds = AABB(lo, hi);
+    split w[28:32] {
+      0 -> Interior { left = I + 1; right = I + w[0:28]; };
+      _ -> Leaf     { nprims = w[28:32] as u16;
+                      data = primitives[w[0:28] : w[0:28] + nprims]; };
+    };
+  };
+};
+"#;
+
+/// The eight-wide ADT of catalog §2.1.
+pub const BVH8_TYPE: &str = r#"
+type BVH8 = Interior(child_bounds: AABB[8], children: BVH8[8])
+          | Leaf(nprims: u16, data: Triangle[nprims]);
+"#;
+
+/// Catalog §4.3 / §8.5 (non-`ci` form): `bvh8-q8`, 136 B records in an indirect group.
+pub const BVH8_Q8: &str = r#"
+layout Bvh8Q8(R: u64) {
+  P: u32; primitives: Triangle[P];
+  top: u64; scene: AABB;
+  indirect group nodes {
+    child: u64[8];
+    lower_x: u8[8]; upper_x: u8[8];
+    lower_y: u8[8]; upper_y: u8[8];
+    lower_z: u8[8]; upper_z: u8[8];
+    start: f32x3;
+    scale: f32x3;
+    children = child;
+    child_bounds = dequant8(lower_x, lower_y, lower_z, upper_x, upper_y, upper_z, start, scale);
+  };
+  split R {
+    0xFFFF_FFFF_FFFF_FFFF -> Leaf { nprims = 0; data = primitives[0 : 0]; };
+    < 0x1_0000_0000       -> Interior from nodes[R];
+    _                     -> Leaf { nprims = R[32:64] as u16;
+                                    data = primitives[R[0:32] : R[0:32] + nprims]; };
+  };
+};
+
+build Bvh8Q8[order=pre] {
+  build root { build scene = root_bounds(); build top = 0; };
+  build Interior(child_bounds: AABB[8], children: BVH8[8]) {
+    let f: Frame = frame8(child_bounds, 255);
+    build start = f.origin; build scale = f.step;
+    build lower_x = q8_lo(child_bounds, f, 0); build upper_x = q8_hi(child_bounds, f, 0);
+    build lower_y = q8_lo(child_bounds, f, 1); build upper_y = q8_hi(child_bounds, f, 1);
+    build lower_z = q8_lo(child_bounds, f, 2); build upper_z = q8_hi(child_bounds, f, 2);
+    let C: u64[8] = build children;
+    build child = C;
+    return this;
+  };
+  build Leaf(nprims: u16, data: Triangle[nprims]) {
+    let p: u64 = append(data, nprims);
+    return ((nprims as u64) << 32) | p;
+  };
+};
+"#;
+
+/// `bvh8-q8-align16`: the indirect group padded explicitly (catalog §9 item 7), 144 B.
+pub fn bvh8_q8_align16() -> String {
+    BVH8_Q8
+        .replace("scale: f32x3;\n", "scale: f32x3;\n    8;\n")
+        .replace("Bvh8Q8", "Bvh8Q8A16")
+}
+
+/// Prelude plus the given sources, parsed.
+pub fn program(sources: &[&str]) -> crate::syntax::ast::Program {
+    let mut text = String::from(PRELUDE);
+    for s in sources {
+        text.push('\n');
+        text.push_str(s);
+    }
+    crate::layout::testparse::parse(&text)
+}
