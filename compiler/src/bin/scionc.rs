@@ -1,6 +1,9 @@
-//! `scionc`: the Scion compiler driver.
+//! `scionc`: the Scion compiler driver. See `scionc --help`.
+
+use clap::Parser;
+use scion_compiler::driver::{run, Options};
 
 fn main() {
-    eprintln!("scionc: the driver is not built yet");
-    std::process::exit(2);
+    let opts = Options::parse();
+    std::process::exit(run(&opts));
 }

@@ -198,23 +198,41 @@ impl Options {
     pub fn check_implemented(&self) -> Result<(), NotImplemented> {
         let emit_plan = match self.emit {
             Emit::Ast | Emit::Tree | Emit::Check => None,
-            Emit::Mem | Emit::Lo => Some("destructor and constructor specialization (mem, lo dialects)"),
+            Emit::Mem | Emit::Lo => {
+                Some("destructor and constructor specialization (mem, lo dialects)")
+            }
             Emit::Clif => Some("the Cranelift backend"),
             Emit::Llvm | Emit::Asm | Emit::Obj | Emit::Ptx => Some("the LLVM backend"),
             Emit::Header => Some("the C ABI header generator"),
         };
         if let Some(planned) = emit_plan {
-            return Err(NotImplemented { flag: format!("--emit={}", self.emit.as_str()), planned });
+            return Err(NotImplemented {
+                flag: format!("--emit={}", self.emit.as_str()),
+                planned,
+            });
         }
         if self.layout.is_some() {
-            return Err(NotImplemented { flag: "--layout".into(), planned: "destructor specialization" });
+            return Err(NotImplemented {
+                flag: "--layout".into(),
+                planned: "destructor specialization",
+            });
         }
         if self.target.is_some() || self.cpu.is_some() {
-            let flag = if self.target.is_some() { "--target" } else { "--cpu" };
-            return Err(NotImplemented { flag: flag.into(), planned: "the LLVM backend" });
+            let flag = if self.target.is_some() {
+                "--target"
+            } else {
+                "--cpu"
+            };
+            return Err(NotImplemented {
+                flag: flag.into(),
+                planned: "the LLVM backend",
+            });
         }
         if self.run.is_some() {
-            return Err(NotImplemented { flag: "--run".into(), planned: "the JIT and the interpreter" });
+            return Err(NotImplemented {
+                flag: "--run".into(),
+                planned: "the JIT and the interpreter",
+            });
         }
         if self.stack_size.is_some() {
             return Err(NotImplemented {

@@ -1,0 +1,12 @@
+//! The `scionc` driver: command line, compilation session, pass pipelines and output.
+//!
+//! [`run`] takes parsed [`Options`] and returns the process exit status: 0 on success, 1 when
+//! the input has errors (diagnostics were printed), 101 on an internal compiler error. Nothing
+//! here panics on user input.
+
+pub mod cli;
+pub mod pipelines;
+pub mod session;
+
+pub use cli::Options;
+pub use session::run;

@@ -1,0 +1,66 @@
+//! Pass pipelines per optimization level: the only place that knows pass order.
+//!
+//! Today every pipeline works on the `tree` dialect:
+//! * `-O0`: nothing (the IR exactly as generated, for reading and for pass tests).
+//! * `-O1` and up: `const-fold` first, so that `dce` sees the operands it made dead.
+
+use super::cli::Options;
+use crate::passes;
+use scion_ir::diag::Diagnostic;
+
+/// The passes of optimization level `level`.
+pub fn for_level(level: u8) -> Vec<String> {
+    let names: &[&str] = match level {
+        0 => &[],
+        _ => &["const-fold", "dce"],
+    };
+    names.iter().map(|s| s.to_string()).collect()
+}
+
+/// The pipeline the options ask for: `--passes` when given, else the `-O` level's. Unknown
+/// pass names are reported (E0905) with the list of known ones.
+pub fn select(opts: &Options) -> Result<Vec<String>, Diagnostic> {
+    let names = match &opts.passes {
+        Some(list) => list
+            .iter()
+            .map(|s| s.trim().to_string())
+            .filter(|s| !s.is_empty())
+            .collect(),
+        None => for_level(opts.opt_level),
+    };
+    let reg = passes::registry();
+    for n in &names {
+        if reg.get(n).is_none() {
+            let known: Vec<&str> = reg.infos().iter().map(|i| i.name).collect();
+            return Err(Diagnostic::error("E0905", format!("unknown pass `{n}`"))
+                .with_note(format!("known passes: {}", known.join(", ")))
+                .with_note("`scionc --help-passes` describes each"));
+        }
+    }
+    if let Some(stop) = &opts.stop_after {
+        if !names.iter().any(|n| n == stop) {
+            return Err(Diagnostic::error(
+                "E0906",
+                format!("--stop-after={stop}: `{stop}` is not in the pipeline"),
+            )
+            .with_note(format!(
+                "the pipeline is: {}",
+                if names.is_empty() {
+                    "(empty)".to_string()
+                } else {
+                    names.join(",")
+                }
+            )));
+        }
+    }
+    Ok(names)
+}
+
+/// The `--help-passes` text.
+pub fn describe_passes() -> String {
+    let mut s = passes::registry().help();
+    if !s.ends_with('\n') {
+        s.push('\n');
+    }
+    s
+}

@@ -1,0 +1,207 @@
+//! The compilation pipeline as a library call: sources in, diagnostics and output text out.
+//!
+//! `scionc` (through `driver::session`) and the tests call [`compile`]: parse the prelude and the
+//! inputs, run `sema` and the well-formedness checks, generate the `tree` dialect, run the pass
+//! pipeline and print what `--emit` asks for. Every failure is a value: user errors are
+//! [`Diagnostics`], compiler bugs an [`InternalError`]; nothing here panics on user input.
+
+use crate::driver::cli::{Emit, Options};
+use crate::layout::{check_build, check_layout};
+use crate::syntax::ast::Program;
+use crate::{irgen, passes, sema, syntax};
+use rustc_hash::FxHashSet;
+use scion_ir::attr::Attr;
+use scion_ir::diag::{Diagnostics, FileId, InternalError, SourceMap};
+use scion_ir::entity::FuncId;
+use scion_ir::op::OpKind;
+use scion_ir::pass::{PassCx, PassError, PassManager};
+use scion_ir::tree::Op;
+use scion_ir::Module;
+
+/// The files of one compilation.
+pub struct Frontend<'a> {
+    /// Every file's text.
+    pub sources: &'a SourceMap,
+    /// Prelude files, loaded first (their functions are printed only when used).
+    pub prelude: &'a [FileId],
+    /// The user's files, in command-line order.
+    pub inputs: &'a [FileId],
+}
+
+/// Instrumentation of the pass pipeline.
+#[derive(Clone, Debug, Default)]
+pub struct PassOptions {
+    /// Dump the IR after every pass.
+    pub print_after_all: bool,
+    /// Dump the IR before every pass.
+    pub print_before_all: bool,
+    /// Stop after this pass.
+    pub stop_after: Option<String>,
+    /// Record pass times.
+    pub time_passes: bool,
+}
+
+impl From<&Options> for PassOptions {
+    fn from(o: &Options) -> PassOptions {
+        PassOptions {
+            print_after_all: o.print_after_all,
+            print_before_all: o.print_before_all,
+            stop_after: o.stop_after.clone(),
+            time_passes: o.time_passes,
+        }
+    }
+}
+
+/// What a compilation produced.
+#[derive(Debug, Default)]
+pub struct CompileResult {
+    /// Errors and warnings, in the order found.
+    pub diagnostics: Diagnostics,
+    /// A compiler bug, if one happened.
+    pub internal_error: Option<InternalError>,
+    /// The requested output (none for `--emit=check` or on error).
+    pub output: Option<String>,
+    /// IR dumps and timing reports asked for by the pass options (for standard error).
+    pub dumps: String,
+}
+
+/// Parses, checks, lowers and transforms; see the module docs.
+pub fn compile(
+    fe: &Frontend<'_>,
+    emit: Emit,
+    pipeline: &[String],
+    popts: &PassOptions,
+) -> CompileResult {
+    let mut out = CompileResult::default();
+    let files: Vec<FileId> = fe.prelude.iter().chain(fe.inputs).copied().collect();
+    let (program, diags) = syntax::parse_program(fe.sources, &files);
+    let parse_failed = diags.has_errors();
+    out.diagnostics.extend(diags);
+    if parse_failed {
+        return out;
+    }
+    if emit == Emit::Ast {
+        out.output = Some(syntax::print::print_program(&user_items(
+            &program, fe.inputs,
+        )));
+        return out;
+    }
+
+    let (typed, diags) = sema::check_program(&program);
+    out.diagnostics.extend(diags);
+    out.diagnostics
+        .extend(check_layout::check_layouts(&program));
+    out.diagnostics.extend(check_build::check_builds(&program));
+    if out.diagnostics.has_errors() || emit == Emit::Check {
+        return out;
+    }
+
+    let mut module = match irgen::generate(&program, &typed) {
+        Ok(m) => m,
+        Err(e) => {
+            out.internal_error = Some(e);
+            return out;
+        }
+    };
+    if let Err(e) = run_pipeline(&mut module, pipeline, popts, &mut out) {
+        match e {
+            PassError::Diagnostics(d) => out.diagnostics.extend(d),
+            PassError::Internal(i) => out.internal_error = Some(i),
+        }
+        return out;
+    }
+    keep_reachable(&mut module, fe.inputs);
+    out.output = Some(scion_ir::print::print_module(&module));
+    out
+}
+
+fn run_pipeline(
+    m: &mut Module,
+    pipeline: &[String],
+    popts: &PassOptions,
+    out: &mut CompileResult,
+) -> Result<(), PassError> {
+    let registry = passes::registry();
+    let mut pm = PassManager::from_names(&registry, pipeline)
+        .map_err(|d| PassError::Diagnostics(d.into()))?;
+    pm.options.print_after_all = popts.print_after_all;
+    if popts.print_before_all {
+        pm.options.print_before = pipeline.to_vec();
+    }
+    pm.options.stop_after = popts.stop_after.clone();
+    pm.options.time_passes = popts.time_passes;
+    let mut cx = PassCx::new();
+    let report = pm.run(m, &mut cx, &mut out.dumps)?;
+    out.diagnostics.extend(std::mem::take(&mut cx.diagnostics));
+    if popts.time_passes {
+        out.dumps.push_str(&report.timing_table());
+    }
+    Ok(())
+}
+
+/// The program restricted to the items written in `inputs` (for `--emit=ast`).
+fn user_items(program: &Program, inputs: &[FileId]) -> Program {
+    Program {
+        items: program
+            .items
+            .iter()
+            .filter(|it| inputs.contains(&it.span().file))
+            .cloned()
+            .collect(),
+        node_count: program.node_count,
+    }
+}
+
+/// Drops the functions that no function of `inputs` reaches (prelude helpers nobody calls), so
+/// that `--emit=tree` shows the user's code and exactly what it depends on.
+fn keep_reachable(m: &mut Module, inputs: &[FileId]) {
+    let mut live: FxHashSet<FuncId> = FxHashSet::default();
+    let mut work: Vec<FuncId> = m
+        .func_order
+        .iter()
+        .copied()
+        .filter(|&f| {
+            m.func_spans
+                .get(f)
+                .is_some_and(|s| inputs.contains(&s.file))
+        })
+        .collect();
+    while let Some(f) = work.pop() {
+        if !live.insert(f) {
+            continue;
+        }
+        for callee in callees(m, f) {
+            if let Some(g) = m.func_by_name(&callee) {
+                work.push(g);
+            }
+        }
+    }
+    let dead: Vec<FuncId> = m
+        .func_order
+        .iter()
+        .copied()
+        .filter(|f| !live.contains(f))
+        .collect();
+    for f in dead {
+        m.remove_func(f);
+    }
+}
+
+fn callees(m: &Module, f: FuncId) -> Vec<String> {
+    let mut names = Vec::new();
+    let mut regions = vec![m.funcs[f].body];
+    while let Some(r) = regions.pop() {
+        for &b in &m.regions[r].blocks {
+            for &op in &m.blocks[b].ops {
+                let o = &m.ops[op];
+                if o.kind == OpKind::Tree(Op::Call) {
+                    if let Some(Attr::Sym(s)) = o.attr("callee") {
+                        names.push(s.clone());
+                    }
+                }
+                regions.extend(o.regions.iter().copied());
+            }
+        }
+    }
+    names
+}
