@@ -19,10 +19,13 @@ fn main() {
         std::process::exit(1);
     };
     let scionc = env!("CARGO_BIN_EXE_scionc");
+    let scion_opt = env!("CARGO_BIN_EXE_scion-opt");
     let out = Command::new(lit)
         .arg("-v")
         .arg("--param")
         .arg(format!("scionc={scionc}"))
+        .arg("--param")
+        .arg(format!("scion_opt={scion_opt}"))
         .arg(repo.join("lit-tests"))
         .output()
         .expect("running lit");
