@@ -280,3 +280,62 @@ mod tests {
         assert!(a.iter().filter(|s| **s != seeds[0]).count() > 40);
     }
 }
+
+/// Seed texts for the front end: the prelude alone and with each library file appended, so
+/// that mutations reach types, functions, layouts and builds.
+pub fn library_seeds(library: &std::path::Path) -> std::io::Result<Vec<String>> {
+    let prelude = std::fs::read_to_string(library.join("prelude.scion"))?;
+    let mut seeds = vec![prelude.clone()];
+    for rel in [
+        "algorithms/closest_hit.scion",
+        "layouts/pbrt.scion",
+        "layouts/ptr.scion",
+    ] {
+        let text = std::fs::read_to_string(library.join(rel))?;
+        seeds.push(format!("{prelude}\n{text}"));
+        seeds.push(text);
+    }
+    Ok(seeds)
+}
+
+/// The outcome of one campaign.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Campaign {
+    /// Inputs compiled.
+    pub inputs: u64,
+    /// Inputs the compiler accepted.
+    pub accepted: u64,
+    /// Inputs rejected with diagnostics.
+    pub rejected: u64,
+    /// Inputs that produced an internal compiler error (a bug, but not a crash).
+    pub internal_errors: u64,
+}
+
+/// Compiles one source text through the whole front end (parse, sema, well-formedness,
+/// irgen, `const-fold` and `dce`) with no prelude, and classifies the outcome.
+pub fn compile_once(text: &str, campaign: &mut Campaign) -> Option<String> {
+    use crate::driver::cli::Emit;
+    use crate::frontend::{compile, Frontend, PassOptions};
+    let mut sources = scion_ir::diag::SourceMap::new();
+    let file = sources.add("fuzz.scion", text.to_string());
+    let fe = Frontend {
+        sources: &sources,
+        prelude: &[],
+        inputs: &[file],
+    };
+    let pipeline = vec!["const-fold".to_string(), "dce".to_string()];
+    let r = compile(&fe, Emit::Tree, &pipeline, &PassOptions::default());
+    campaign.inputs += 1;
+    // Rendering is part of the contract: spans must stay inside their files.
+    let _ = r.diagnostics.render(&sources);
+    if let Some(ice) = r.internal_error {
+        campaign.internal_errors += 1;
+        return Some(ice.to_string());
+    }
+    if r.diagnostics.has_errors() {
+        campaign.rejected += 1;
+    } else {
+        campaign.accepted += 1;
+    }
+    None
+}
