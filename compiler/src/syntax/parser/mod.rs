@@ -68,6 +68,10 @@ fn parse_tokens(sources: &SourceMap, file: FileId, first_id: u32) -> (Vec<Item>,
     let mut parser = Parser::new(tokens, file, first_id, &mut diags);
     let items = parser.items();
     let next_id = parser.next_id;
+    // Lexical errors were found first; report everything in source order.
+    diags
+        .list
+        .sort_by_key(|d| d.primary_span().map(|s| s.start));
     (items, next_id, diags)
 }
 
@@ -80,6 +84,15 @@ pub fn parse_program(sources: &SourceMap, files: &[FileId]) -> (Program, Diagnos
         diags.extend(parse_file(sources, file, &mut program));
     }
     (program, diags)
+}
+
+/// `type`, `func` and `layout` start an item and occur nowhere else (`build` also starts
+/// statements and expressions).
+pub(crate) fn starts_item_strictly(kind: &TokenKind) -> bool {
+    matches!(
+        kind,
+        TokenKind::Keyword(Keyword::Type | Keyword::Func | Keyword::Layout)
+    )
 }
 
 /// The error already reported: unwind to the nearest list that recovers.
@@ -263,12 +276,14 @@ impl<'d> Parser<'d> {
 
     /// Skips tokens up to (not including) a token in `stops` at the current nesting level.
     /// Bracketed groups are skipped whole. An unmatched `}` always stops; an unmatched `)` or
-    /// `]` stops when it is in `stops` and is skipped otherwise.
+    /// `]` stops when it is in `stops` and is skipped otherwise. The keywords that start an
+    /// item other than `build` (`type`, `func`, `layout`) stop at any depth: reaching one means
+    /// a closing bracket is missing, and the next item should still be parsed.
     pub(crate) fn skip_until(&mut self, stops: &[TokenKind]) {
         let mut depth = 0usize;
         loop {
             let kind = self.peek();
-            if *kind == TokenKind::Eof {
+            if *kind == TokenKind::Eof || starts_item_strictly(kind) {
                 return;
             }
             if depth == 0 && stops.contains(kind) {
@@ -350,7 +365,15 @@ impl<'d> Parser<'d> {
             let start = p.pos;
             match elem(p) {
                 Ok(v) => out.push(v),
-                Err(Fail) => p.skip_until(&[TokenKind::Comma, close.clone()]),
+                Err(Fail) => {
+                    // `;` never occurs inside a list (bodies with statements are not
+                    // expressions), so it marks the end of the construct left open.
+                    p.skip_until(&[TokenKind::Comma, TokenKind::Semi, close.clone()]);
+                    let lost = p.at(&TokenKind::Semi) || starts_item_strictly(p.peek());
+                    if lost || p.at_eof() || p.at(&TokenKind::RBrace) {
+                        return Err(Fail);
+                    }
+                }
             }
             if p.eat(&TokenKind::Comma) {
                 continue;
@@ -358,11 +381,12 @@ impl<'d> Parser<'d> {
             if p.eat(&close) {
                 return Ok(out);
             }
-            if p.pos == start || p.at_eof() || p.at(&TokenKind::RBrace) || p.bailed {
+            let stuck = p.at(&TokenKind::Semi) || starts_item_strictly(p.peek());
+            if p.pos == start || p.at_eof() || p.at(&TokenKind::RBrace) || stuck || p.bailed {
                 return Err(p.expected(&format!("`,` or `{}`", close.punct_str())));
             }
             p.expected(&format!("`,` or `{}`", close.punct_str()));
-            p.skip_until(&[TokenKind::Comma, close.clone()]);
+            p.skip_until(&[TokenKind::Comma, TokenKind::Semi, close.clone()]);
             if !p.eat(&TokenKind::Comma) && !p.at(&close) {
                 return Err(Fail);
             }
@@ -384,7 +408,8 @@ impl<'d> Parser<'d> {
             if p.eat(&TokenKind::RBrace) {
                 return out;
             }
-            if p.at_eof() {
+            if p.at_eof() || starts_item_strictly(p.peek()) {
+                // A missing `}`: end the list here so the next item is parsed as one.
                 p.expected(&format!("{what} or `}}`"));
                 return out;
             }
