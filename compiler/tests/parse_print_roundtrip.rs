@@ -461,6 +461,17 @@ impl Gen {
     }
 
     fn item(&mut self) -> Item {
+        let mut item = self.item_inner();
+        if let Item::Build(b) = &mut item {
+            // `order=post` is always written.
+            if b.order == BuildOrder::Post {
+                b.order_span = Some(Span::default());
+            }
+        }
+        item
+    }
+
+    fn item_inner(&mut self) -> Item {
         let name = self.ident(&["L", "BVH", "f"]);
         match self.below(4) {
             0 => Item::Type(TypeDecl {
@@ -528,7 +539,11 @@ impl Gen {
                 } else {
                     BuildOrder::Post
                 },
-                order_span: Some(Span::default()),
+                order_span: if self.below(2) == 0 {
+                    Some(Span::default())
+                } else {
+                    None
+                },
                 root: if self.below(2) == 0 {
                     None
                 } else {

@@ -625,10 +625,12 @@ impl Printer {
     fn build(&mut self, d: &BuildDecl) {
         self.w("build ");
         self.w(&d.name.name);
-        self.w(match d.order {
-            BuildOrder::Pre => "[order=pre] {",
-            BuildOrder::Post => "[order=post] {",
-        });
+        // `order=pre` is the default: print the attribute only when it was written.
+        match d.order {
+            BuildOrder::Pre if d.order_span.is_none() => self.w(" {"),
+            BuildOrder::Pre => self.w("[order=pre] {"),
+            BuildOrder::Post => self.w("[order=post] {"),
+        }
         self.indent += 1;
         if let Some(root) = &d.root {
             self.newline();
