@@ -161,6 +161,14 @@ impl<'d> Parser<'d> {
         }
     }
 
+    /// True when the list just closed ended with a comma (`(a,)`).
+    pub(crate) fn closed_after_comma(&self) -> bool {
+        self.pos
+            .checked_sub(2)
+            .and_then(|i| self.tokens.get(i))
+            .is_some_and(|t| t.kind == TokenKind::Comma)
+    }
+
     pub(crate) fn prev_is(&self, kind: &TokenKind) -> bool {
         self.pos
             .checked_sub(1)
