@@ -144,10 +144,10 @@ fn one_error_per_code() {
     check(
         "func f() = 1 # 2; @",
         expect![[r#"
-        E0103 1:14 unknown character `#`
-        E0101 1:16 expected `;` or the next item, found integer `2`
-        E0103 1:19 unknown character `@`
-    "#]],
+            E0101 1:13 expected `;` or the next item, found integer `2`
+            E0103 1:14 unknown character `#`
+            E0103 1:19 unknown character `@`
+        "#]],
     );
 }
 
@@ -162,8 +162,8 @@ fn unexpected_tokens_say_what_was_expected() {
     check(
         "func f() = { a = 1 b = 2; }",
         expect![[r#"
-        E0101 1:20 expected `;` or `}`, found name `b`
-    "#]],
+            E0101 1:19 expected `;` or `}`, found name `b`
+        "#]],
     );
     check(
         "func f() = match x { | A => 1 }",
@@ -180,8 +180,8 @@ fn unexpected_tokens_say_what_was_expected() {
     check(
         "layout L { split x { 1 -> A {} 2 -> B from g[0] 3 -> C {} }; }",
         expect![[r#"
-        E0101 1:49 expected `;` or `}`, found integer `3`
-    "#]],
+            E0101 1:48 expected `;` or `}`, found integer `3`
+        "#]],
     );
     check(
         "layout L { group g[size] {}; }",
@@ -235,10 +235,12 @@ fn rendered_diagnostic_shows_the_line() {
         parse_str("err.scion", "func f() = {\n  let x = 1\n  let y = 2;\n}\n");
     expect![[r#"
         error[E0101]: expected `;` or `}`, found keyword `let`
-          ┌─ err.scion:3:3
+          ┌─ err.scion:2:12
           │
+        2 │   let x = 1
+          │            ^ expected `;` or `}` here
         3 │   let y = 2;
-          │   ^^^ expected `;` or `}`
+          │   --- unexpected token
 
     "#]]
     .assert_eq(&diags.render(&sources));

@@ -277,6 +277,20 @@ impl<'d> Parser<'d> {
             expected: expected.to_string(),
             found: self.peek().describe(),
             span: self.span(),
+            missing_after: None,
+        };
+        self.report(err);
+        Fail
+    }
+
+    /// Reports a missing separator (`expected` is e.g. "`;` or `}`"): shown right after the
+    /// last consumed token, where the separator belongs, rather than on the next line.
+    pub(crate) fn expected_separator(&mut self, expected: &str) -> Fail {
+        let err = SyntaxError::UnexpectedToken {
+            expected: expected.to_string(),
+            found: self.peek().describe(),
+            span: self.span(),
+            missing_after: (self.pos > 0).then(|| self.prev_span()),
         };
         self.report(err);
         Fail
@@ -391,9 +405,9 @@ impl<'d> Parser<'d> {
             }
             let stuck = p.at(&TokenKind::Semi) || starts_item_strictly(p.peek());
             if p.pos == start || p.at_eof() || p.at(&TokenKind::RBrace) || stuck || p.bailed {
-                return Err(p.expected(&format!("`,` or `{}`", close.punct_str())));
+                return Err(p.expected_separator(&format!("`,` or `{}`", close.punct_str())));
             }
-            p.expected(&format!("`,` or `{}`", close.punct_str()));
+            p.expected_separator(&format!("`,` or `{}`", close.punct_str()));
             p.skip_until(&[TokenKind::Comma, TokenKind::Semi, close.clone()]);
             if !p.eat(&TokenKind::Comma) && !p.at(&close) {
                 return Err(Fail);
@@ -429,7 +443,7 @@ impl<'d> Parser<'d> {
                     let self_ended =
                         p.prev_is(&TokenKind::RBrace) || p.prev_is(&TokenKind::Separator);
                     if !(p.at(&TokenKind::Semi) || p.at(&TokenKind::RBrace) || self_ended) {
-                        p.expected("`;` or `}`");
+                        p.expected_separator("`;` or `}`");
                         p.skip_until(&[TokenKind::Semi]);
                     }
                 }

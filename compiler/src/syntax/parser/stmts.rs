@@ -175,7 +175,7 @@ impl Parser<'_> {
                     arms.push(arm);
                     self.eat(&TokenKind::Semi);
                     if !self.at(&TokenKind::Bar) && !self.at(&TokenKind::RBrace) {
-                        self.expected("`|` (the next arm) or `}`");
+                        self.expected_separator("`|` (the next arm) or `}`");
                         self.skip_until(&[TokenKind::Bar]);
                     }
                 }
