@@ -211,6 +211,12 @@ fn unexpected_tokens_say_what_was_expected() {
     "#]],
     );
     check(
+        "func f() = { let type = 1; x; }\nfunc g() = 1;",
+        expect![[r#"
+            E0101 1:18 expected a name after `let`, found keyword `type`
+        "#]],
+    );
+    check(
         "func f(x: u32 = ) = x;",
         expect![[r#"
         E0101 1:17 expected an expression, found `)`

@@ -86,15 +86,6 @@ pub fn parse_program(sources: &SourceMap, files: &[FileId]) -> (Program, Diagnos
     (program, diags)
 }
 
-/// `type`, `func` and `layout` start an item and occur nowhere else (`build` also starts
-/// statements and expressions).
-pub(crate) fn starts_item_strictly(kind: &TokenKind) -> bool {
-    matches!(
-        kind,
-        TokenKind::Keyword(Keyword::Type | Keyword::Func | Keyword::Layout)
-    )
-}
-
 /// The error already reported: unwind to the nearest list that recovers.
 #[derive(Debug)]
 pub(crate) struct Fail;
@@ -182,6 +173,16 @@ impl<'d> Parser<'d> {
 
     pub(crate) fn at_kw(&self, kw: Keyword) -> bool {
         self.peek().is_kw(kw)
+    }
+
+    /// True at `type Name`, `func name` or `layout Name`: the start of an item, which occurs
+    /// nowhere else (`build` also starts statements and expressions, so it is no anchor).
+    /// Recovery stops there, so that a missing `}` or `)` costs one error, not the next item.
+    pub(crate) fn at_item_anchor(&self) -> bool {
+        matches!(
+            self.peek(),
+            TokenKind::Keyword(Keyword::Type | Keyword::Func | Keyword::Layout)
+        ) && matches!(self.peek_at(1), TokenKind::Ident(_))
     }
 
     /// True when the current token is the contextual keyword `word`.
@@ -298,14 +299,14 @@ impl<'d> Parser<'d> {
 
     /// Skips tokens up to (not including) a token in `stops` at the current nesting level.
     /// Bracketed groups are skipped whole. An unmatched `}` always stops; an unmatched `)` or
-    /// `]` stops when it is in `stops` and is skipped otherwise. The keywords that start an
-    /// item other than `build` (`type`, `func`, `layout`) stop at any depth: reaching one means
-    /// a closing bracket is missing, and the next item should still be parsed.
+    /// `]` stops when it is in `stops` and is skipped otherwise. An item anchor (`type T`,
+    /// `func f`, `layout L`) stops at any depth: reaching one means a closing bracket is
+    /// missing, and the next item should still be parsed.
     pub(crate) fn skip_until(&mut self, stops: &[TokenKind]) {
         let mut depth = 0usize;
         loop {
             let kind = self.peek();
-            if *kind == TokenKind::Eof || starts_item_strictly(kind) {
+            if *kind == TokenKind::Eof || self.at_item_anchor() {
                 return;
             }
             if depth == 0 && stops.contains(kind) {
@@ -391,7 +392,7 @@ impl<'d> Parser<'d> {
                     // `;` never occurs inside a list (bodies with statements are not
                     // expressions), so it marks the end of the construct left open.
                     p.skip_until(&[TokenKind::Comma, TokenKind::Semi, close.clone()]);
-                    let lost = p.at(&TokenKind::Semi) || starts_item_strictly(p.peek());
+                    let lost = p.at(&TokenKind::Semi) || p.at_item_anchor();
                     if lost || p.at_eof() || p.at(&TokenKind::RBrace) {
                         return Err(Fail);
                     }
@@ -403,7 +404,7 @@ impl<'d> Parser<'d> {
             if p.eat(&close) {
                 return Ok(out);
             }
-            let stuck = p.at(&TokenKind::Semi) || starts_item_strictly(p.peek());
+            let stuck = p.at(&TokenKind::Semi) || p.at_item_anchor();
             if p.pos == start || p.at_eof() || p.at(&TokenKind::RBrace) || stuck || p.bailed {
                 return Err(p.expected_separator(&format!("`,` or `{}`", close.punct_str())));
             }
@@ -430,7 +431,7 @@ impl<'d> Parser<'d> {
             if p.eat(&TokenKind::RBrace) {
                 return out;
             }
-            if p.at_eof() || starts_item_strictly(p.peek()) {
+            if p.at_eof() || p.at_item_anchor() {
                 // A missing `}`: end the list here so the next item is parsed as one.
                 p.expected(&format!("{what} or `}}`"));
                 return out;
