@@ -253,6 +253,21 @@ fn rendered_diagnostic_shows_the_line() {
 }
 
 #[test]
+fn an_unclosed_body_ends_at_the_next_item() {
+    for src in [
+        "func f() = match x { | A -> 1 +\nfunc g() = 1;",
+        "func f() = match x { | A -> 1\nfunc g() = 1;",
+        "func f() = { g(1, 2\nfunc g() = 1;",
+        "layout L { group g { split x { 0 -> A { a: u8\nfunc g() = 1;",
+        "build L { build A(x: u8) { build x\nfunc g() = 1;",
+    ] {
+        let (errs, items) = errors(src);
+        assert_eq!(errs.lines().count(), 1, "{src}\n{errs}");
+        assert_eq!(items.last().map(String::as_str), Some("g"), "{src}\n{errs}");
+    }
+}
+
+#[test]
 fn items_after_errors_are_kept() {
     let (program, diags, _) = parse_str(
         "err.scion",

@@ -165,7 +165,7 @@ impl Parser<'_> {
                 self.bump();
                 return arms;
             }
-            if self.at_eof() {
+            if self.at_eof() || self.at_item_anchor() {
                 self.expected("`}`");
                 return arms;
             }
