@@ -130,6 +130,9 @@ impl Parser<'_> {
                 let body = self.block_stmt()?;
                 branches.push((cond, body));
             } else if self.eat_kw(Keyword::Else) {
+                if self.at_kw(Keyword::If) {
+                    return Err(self.expected("`{` (`else if` is written `elif`)"));
+                }
                 otherwise = Some(Box::new(self.block_stmt()?));
                 break;
             } else {
