@@ -216,9 +216,12 @@ fn unexpected_tokens_say_what_was_expected() {
             E0101 1:18 expected a name after `let`, found keyword `type`
         "#]],
     );
-    check("func f() = { if a { } else if b { } }", expect![[r#"
+    check(
+        "func f() = { if a { } else if b { } }",
+        expect![[r#"
         E0101 1:28 expected `{` (`else if` is written `elif`), found keyword `if`
-    "#]]);
+    "#]],
+    );
     check(
         "func f(x: u32 = ) = x;",
         expect![[r#"
