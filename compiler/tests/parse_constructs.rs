@@ -16,9 +16,17 @@ fn parse_ok(src: &str) -> Program {
     program
 }
 
-/// The canonical printing of `src`.
+/// The canonical printing of `src`; the printed text must parse back to the same tree.
 fn check_print(src: &str, expected: Expect) {
-    expected.assert_eq(&print_program(&parse_ok(src)));
+    let program = parse_ok(src);
+    let printed = print_program(&program);
+    let again = parse_ok(&printed);
+    assert_eq!(
+        common::strip_positions(&format!("{:?}", program.items)),
+        common::strip_positions(&format!("{:?}", again.items)),
+        "{printed}"
+    );
+    expected.assert_eq(&printed);
 }
 
 /// `func f() = <expr>`, shown as an S-expression.
@@ -351,7 +359,7 @@ fn build_declarations() {
               };
             };
 
-            build M[order=pre] {
+            build M {
               build A {
                 return this;
               };

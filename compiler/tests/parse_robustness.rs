@@ -246,11 +246,19 @@ fn long_chains_are_bounded_and_long_lists_are_fine() {
             "{chain}"
         );
     }
-    let sum = format!("func f() = {}1;", "1 + ".repeat(200));
-    let (_, diags, _) = parse_str("flat.scion", &sum);
-    assert!(diags.is_empty(), "{:?}", diags.list);
     let block = format!("func f() = {{ {} }}", "x = 1; ".repeat(50_000));
     let (program, diags, _) = parse_str("flat.scion", &block);
     assert!(diags.is_empty());
     assert_eq!(program.node_count, 150_001);
+}
+
+#[test]
+fn nesting_within_the_limit_parses() {
+    let parens = format!("func f() = {}1{};", "(".repeat(200), ")".repeat(200));
+    let blocks = format!("func f() = {}x{};", "{ ".repeat(120), " }".repeat(120));
+    let sum = format!("func f() = {}1;", "1 + ".repeat(200));
+    for src in [parens, blocks, sum] {
+        let (_, diags, sources) = parse_str("ok.scion", &src);
+        assert!(diags.is_empty(), "{}", diags.render(&sources));
+    }
 }

@@ -33,6 +33,9 @@ pub enum SyntaxError {
         found: String,
         /// Where the token is.
         span: Span,
+        /// For a missing separator (`;`, `,`): the token it should follow. The error is then
+        /// shown right after that token, where the separator goes, as rustc does.
+        missing_after: Option<Span>,
     },
     /// E0102: a numeric literal that does not follow the literal grammar.
     MalformedLiteral {
@@ -149,6 +152,10 @@ impl SyntaxError {
     /// The primary span.
     pub fn span(&self) -> Span {
         match self {
+            SyntaxError::UnexpectedToken {
+                missing_after: Some(after),
+                ..
+            } => Span::new(after.file, after.end, after.end),
             SyntaxError::UnexpectedToken { span, .. }
             | SyntaxError::MalformedLiteral { span, .. }
             | SyntaxError::UnknownCharacter { span, .. }
@@ -173,8 +180,20 @@ impl SyntaxError {
                 expected,
                 found,
                 span,
+                missing_after: None,
             } => Diagnostic::error(code, format!("expected {expected}, found {found}"))
                 .with_primary(*span, format!("expected {expected}")),
+            SyntaxError::UnexpectedToken {
+                expected,
+                found,
+                span,
+                missing_after: Some(after),
+            } => {
+                let gap = Span::new(after.file, after.end, after.end);
+                Diagnostic::error(code, format!("expected {expected}, found {found}"))
+                    .with_primary(gap, format!("expected {expected} here"))
+                    .with_secondary(*span, "unexpected token")
+            }
             SyntaxError::MalformedLiteral { text, reason, span } => {
                 Diagnostic::error(code, format!("malformed numeric literal `{text}`"))
                     .with_primary(*span, *reason)

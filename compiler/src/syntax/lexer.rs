@@ -59,6 +59,10 @@ impl Lexer<'_, '_> {
     }
 
     fn run(&mut self) {
+        // Editors on some systems start UTF-8 files with a byte order mark; it is no token.
+        if self.text.starts_with('\u{feff}') {
+            self.pos = '\u{feff}'.len_utf8();
+        }
         while self.pos < self.src.len() {
             let b = self.src[self.pos];
             let start = self.pos;
@@ -334,6 +338,27 @@ mod tests {
         assert!(e[4].contains("E0104"));
         assert_eq!(k.last().map(String::as_str), Some("Eof"));
         assert_eq!(k[k.len() - 2], "Ident(\"x\")");
+    }
+
+    #[test]
+    fn spans_are_byte_ranges() {
+        let mut diags = Diagnostics::new();
+        let toks = lex("\u{feff}let x_1 = 0x1F;// c\n---", FileId(3), &mut diags);
+        assert!(diags.is_empty());
+        let spans: Vec<(u32, u32)> = toks.iter().map(|t| (t.span.start, t.span.end)).collect();
+        assert_eq!(
+            spans,
+            [
+                (3, 6),
+                (7, 10),
+                (11, 12),
+                (13, 17),
+                (17, 18),
+                (23, 26),
+                (26, 26)
+            ]
+        );
+        assert!(toks.iter().all(|t| t.span.file == FileId(3)));
     }
 
     #[test]

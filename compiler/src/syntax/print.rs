@@ -67,6 +67,21 @@ fn expr_prec(e: &Expr) -> u8 {
     }
 }
 
+/// True when `e` prints starting with the keyword `build` (`build x + 1`, `build x.y`): as a
+/// statement that would read as a `build x` statement, so it is parenthesized there.
+fn starts_with_build(e: &Expr) -> bool {
+    match &e.kind {
+        ExprKind::Build(_) => true,
+        ExprKind::Binary { lhs: inner, .. }
+        | ExprKind::Field { base: inner, .. }
+        | ExprKind::Index { base: inner, .. }
+        | ExprKind::Slice { base: inner, .. }
+        | ExprKind::Cast { expr: inner, .. }
+        | ExprKind::BitCast { expr: inner, .. } => starts_with_build(inner),
+        _ => false,
+    }
+}
+
 fn ends_in_brace(s: &Stmt) -> bool {
     match &s.kind {
         StmtKind::Block(_)
@@ -244,9 +259,9 @@ impl Printer {
     /// body of a match arm, where a top-level `|` must be parenthesized.
     fn stmt(&mut self, s: &Stmt, no_bar: bool) {
         match &s.kind {
-            StmtKind::Expr(e) => self.expr(e, 0, no_bar),
+            StmtKind::Expr(e) => self.stmt_head_expr(e, no_bar),
             StmtKind::Assign { target, value } => {
-                self.expr(target, 0, no_bar);
+                self.stmt_head_expr(target, no_bar);
                 self.w(" = ");
                 self.expr(value, 0, no_bar);
             }
@@ -323,6 +338,17 @@ impl Printer {
                     self.expr(v, 0, no_bar);
                 }
             }
+        }
+    }
+
+    /// An expression that starts a statement: parenthesized when it starts with `build`.
+    fn stmt_head_expr(&mut self, e: &Expr, no_bar: bool) {
+        if starts_with_build(e) {
+            self.w("(");
+            self.expr(e, 0, false);
+            self.w(")");
+        } else {
+            self.expr(e, 0, no_bar);
         }
     }
 
@@ -599,10 +625,12 @@ impl Printer {
     fn build(&mut self, d: &BuildDecl) {
         self.w("build ");
         self.w(&d.name.name);
-        self.w(match d.order {
-            BuildOrder::Pre => "[order=pre] {",
-            BuildOrder::Post => "[order=post] {",
-        });
+        // `order=pre` is the default: print the attribute only when it was written.
+        match d.order {
+            BuildOrder::Pre if d.order_span.is_none() => self.w(" {"),
+            BuildOrder::Pre => self.w("[order=pre] {"),
+            BuildOrder::Post => self.w("[order=post] {"),
+        }
         self.indent += 1;
         if let Some(root) = &d.root {
             self.newline();

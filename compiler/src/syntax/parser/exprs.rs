@@ -105,42 +105,39 @@ impl Parser<'_> {
     }
 
     fn binary_chain(&mut self, min_prec: u8) -> PResult<Expr> {
-        {
-            let p = self;
-            let mut lhs = p.unary()?;
-            // The span of the comparison just built at this level, to reject `a < b < c`.
-            let mut last_comparison: Option<Span> = None;
-            while let Some(op) = binary_op(p.peek()) {
-                let prec = binary_prec(op);
-                if prec < min_prec || (op == BinaryOp::BitOr && p.no_bar) {
-                    break;
-                }
-                let op_span = p.span();
-                p.deepen()?;
-                p.bump();
-                if is_comparison(op) {
-                    if let Some(first) = last_comparison {
-                        p.report_at_node(SyntaxError::ChainedComparison {
-                            op: op.as_str(),
-                            span: op_span,
-                            first,
-                        });
-                    }
-                    last_comparison = Some(op_span);
-                } else {
-                    last_comparison = None;
-                }
-                let rhs = p.expr_prec(prec + 1)?;
-                let span = lhs.span.to(rhs.span);
-                let kind = ExprKind::Binary {
-                    op,
-                    lhs: Box::new(lhs),
-                    rhs: Box::new(rhs),
-                };
-                lhs = p.mk_expr(kind, span);
+        let mut lhs = self.unary()?;
+        // The span of the comparison just built at this level, to reject `a < b < c`.
+        let mut last_comparison: Option<Span> = None;
+        while let Some(op) = binary_op(self.peek()) {
+            let prec = binary_prec(op);
+            if prec < min_prec || (op == BinaryOp::BitOr && self.no_bar) {
+                break;
             }
-            Ok(lhs)
+            let op_span = self.span();
+            self.deepen()?;
+            self.bump();
+            if is_comparison(op) {
+                if let Some(first) = last_comparison {
+                    self.report_at_node(SyntaxError::ChainedComparison {
+                        op: op.as_str(),
+                        span: op_span,
+                        first,
+                    });
+                }
+                last_comparison = Some(op_span);
+            } else {
+                last_comparison = None;
+            }
+            let rhs = self.expr_prec(prec + 1)?;
+            let span = lhs.span.to(rhs.span);
+            let kind = ExprKind::Binary {
+                op,
+                lhs: Box::new(lhs),
+                rhs: Box::new(rhs),
+            };
+            lhs = self.mk_expr(kind, span);
         }
+        Ok(lhs)
     }
 
     fn unary(&mut self) -> PResult<Expr> {
@@ -335,10 +332,7 @@ impl Parser<'_> {
     fn paren_or_tuple(&mut self, start: Span) -> PResult<Expr> {
         let elems = self.comma_list(TokenKind::RParen, |p| p.expr())?;
         let span = start.to(self.prev_span());
-        let trailing_comma = self
-            .tokens
-            .get(self.pos.saturating_sub(2))
-            .is_some_and(|t| t.kind == TokenKind::Comma);
+        let trailing_comma = self.closed_after_comma();
         if elems.len() == 1 {
             if trailing_comma {
                 self.report_at_node(SyntaxError::OneElementTuple {

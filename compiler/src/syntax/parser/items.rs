@@ -40,7 +40,7 @@ impl Parser<'_> {
                         && !self.at_eof()
                         && !is_item_keyword(self.peek())
                     {
-                        self.expected("`;` or the next item");
+                        self.expected_separator("`;` or the next item");
                         self.skip_to_item();
                     }
                 }

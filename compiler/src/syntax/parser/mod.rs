@@ -68,6 +68,10 @@ fn parse_tokens(sources: &SourceMap, file: FileId, first_id: u32) -> (Vec<Item>,
     let mut parser = Parser::new(tokens, file, first_id, &mut diags);
     let items = parser.items();
     let next_id = parser.next_id;
+    // Lexical errors were found first; report everything in source order.
+    diags
+        .list
+        .sort_by_key(|d| d.primary_span().map(|s| s.start));
     (items, next_id, diags)
 }
 
@@ -148,6 +152,14 @@ impl<'d> Parser<'d> {
         }
     }
 
+    /// True when the list just closed ended with a comma (`(a,)`).
+    pub(crate) fn closed_after_comma(&self) -> bool {
+        self.pos
+            .checked_sub(2)
+            .and_then(|i| self.tokens.get(i))
+            .is_some_and(|t| t.kind == TokenKind::Comma)
+    }
+
     pub(crate) fn prev_is(&self, kind: &TokenKind) -> bool {
         self.pos
             .checked_sub(1)
@@ -161,6 +173,16 @@ impl<'d> Parser<'d> {
 
     pub(crate) fn at_kw(&self, kw: Keyword) -> bool {
         self.peek().is_kw(kw)
+    }
+
+    /// True at `type Name`, `func name` or `layout Name`: the start of an item, which occurs
+    /// nowhere else (`build` also starts statements and expressions, so it is no anchor).
+    /// Recovery stops there, so that a missing `}` or `)` costs one error, not the next item.
+    pub(crate) fn at_item_anchor(&self) -> bool {
+        matches!(
+            self.peek(),
+            TokenKind::Keyword(Keyword::Type | Keyword::Func | Keyword::Layout)
+        ) && matches!(self.peek_at(1), TokenKind::Ident(_))
     }
 
     /// True when the current token is the contextual keyword `word`.
@@ -256,6 +278,20 @@ impl<'d> Parser<'d> {
             expected: expected.to_string(),
             found: self.peek().describe(),
             span: self.span(),
+            missing_after: None,
+        };
+        self.report(err);
+        Fail
+    }
+
+    /// Reports a missing separator (`expected` is e.g. "`;` or `}`"): shown right after the
+    /// last consumed token, where the separator belongs, rather than on the next line.
+    pub(crate) fn expected_separator(&mut self, expected: &str) -> Fail {
+        let err = SyntaxError::UnexpectedToken {
+            expected: expected.to_string(),
+            found: self.peek().describe(),
+            span: self.span(),
+            missing_after: (self.pos > 0).then(|| self.prev_span()),
         };
         self.report(err);
         Fail
@@ -263,12 +299,14 @@ impl<'d> Parser<'d> {
 
     /// Skips tokens up to (not including) a token in `stops` at the current nesting level.
     /// Bracketed groups are skipped whole. An unmatched `}` always stops; an unmatched `)` or
-    /// `]` stops when it is in `stops` and is skipped otherwise.
+    /// `]` stops when it is in `stops` and is skipped otherwise. An item anchor (`type T`,
+    /// `func f`, `layout L`) stops at any depth: reaching one means a closing bracket is
+    /// missing, and the next item should still be parsed.
     pub(crate) fn skip_until(&mut self, stops: &[TokenKind]) {
         let mut depth = 0usize;
         loop {
             let kind = self.peek();
-            if *kind == TokenKind::Eof {
+            if *kind == TokenKind::Eof || self.at_item_anchor() {
                 return;
             }
             if depth == 0 && stops.contains(kind) {
@@ -350,7 +388,15 @@ impl<'d> Parser<'d> {
             let start = p.pos;
             match elem(p) {
                 Ok(v) => out.push(v),
-                Err(Fail) => p.skip_until(&[TokenKind::Comma, close.clone()]),
+                Err(Fail) => {
+                    // `;` never occurs inside a list (bodies with statements are not
+                    // expressions), so it marks the end of the construct left open.
+                    p.skip_until(&[TokenKind::Comma, TokenKind::Semi, close.clone()]);
+                    let lost = p.at(&TokenKind::Semi) || p.at_item_anchor();
+                    if lost || p.at_eof() || p.at(&TokenKind::RBrace) {
+                        return Err(Fail);
+                    }
+                }
             }
             if p.eat(&TokenKind::Comma) {
                 continue;
@@ -358,11 +404,12 @@ impl<'d> Parser<'d> {
             if p.eat(&close) {
                 return Ok(out);
             }
-            if p.pos == start || p.at_eof() || p.at(&TokenKind::RBrace) || p.bailed {
-                return Err(p.expected(&format!("`,` or `{}`", close.punct_str())));
+            let stuck = p.at(&TokenKind::Semi) || p.at_item_anchor();
+            if p.pos == start || p.at_eof() || p.at(&TokenKind::RBrace) || stuck || p.bailed {
+                return Err(p.expected_separator(&format!("`,` or `{}`", close.punct_str())));
             }
-            p.expected(&format!("`,` or `{}`", close.punct_str()));
-            p.skip_until(&[TokenKind::Comma, close.clone()]);
+            p.expected_separator(&format!("`,` or `{}`", close.punct_str()));
+            p.skip_until(&[TokenKind::Comma, TokenKind::Semi, close.clone()]);
             if !p.eat(&TokenKind::Comma) && !p.at(&close) {
                 return Err(Fail);
             }
@@ -384,7 +431,8 @@ impl<'d> Parser<'d> {
             if p.eat(&TokenKind::RBrace) {
                 return out;
             }
-            if p.at_eof() {
+            if p.at_eof() || p.at_item_anchor() {
+                // A missing `}`: end the list here so the next item is parsed as one.
                 p.expected(&format!("{what} or `}}`"));
                 return out;
             }
@@ -396,7 +444,7 @@ impl<'d> Parser<'d> {
                     let self_ended =
                         p.prev_is(&TokenKind::RBrace) || p.prev_is(&TokenKind::Separator);
                     if !(p.at(&TokenKind::Semi) || p.at(&TokenKind::RBrace) || self_ended) {
-                        p.expected("`;` or `}`");
+                        p.expected_separator("`;` or `}`");
                         p.skip_until(&[TokenKind::Semi]);
                     }
                 }

@@ -97,12 +97,18 @@ impl Parser<'_> {
         };
         self.bump();
         let span = start.to(self.prev_span());
-        match i128::try_from(v) {
-            Ok(n) => Ok(if negative { -n } else { n }),
-            Err(_) => {
+        let value = if negative {
+            // -2^127 is the one negative value whose magnitude is no `i128`.
+            0i128.checked_sub_unsigned(v)
+        } else {
+            i128::try_from(v).ok()
+        };
+        match value {
+            Some(n) => Ok(n),
+            None => {
                 self.report_at_node(SyntaxError::IntegerTooLarge {
                     text: format!("{}{v}", if negative { "-" } else { "" }),
-                    max: i128::MAX.to_string(),
+                    max: if negative { i128::MIN } else { i128::MAX }.to_string(),
                     what: "split pattern literal",
                     span,
                 });

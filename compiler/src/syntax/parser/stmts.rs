@@ -130,6 +130,9 @@ impl Parser<'_> {
                 let body = self.block_stmt()?;
                 branches.push((cond, body));
             } else if self.eat_kw(Keyword::Else) {
+                if self.at_kw(Keyword::If) {
+                    return Err(self.expected("`{` (`else if` is written `elif`)"));
+                }
                 otherwise = Some(Box::new(self.block_stmt()?));
                 break;
             } else {
@@ -165,7 +168,7 @@ impl Parser<'_> {
                 self.bump();
                 return arms;
             }
-            if self.at_eof() {
+            if self.at_eof() || self.at_item_anchor() {
                 self.expected("`}`");
                 return arms;
             }
@@ -175,7 +178,7 @@ impl Parser<'_> {
                     arms.push(arm);
                     self.eat(&TokenKind::Semi);
                     if !self.at(&TokenKind::Bar) && !self.at(&TokenKind::RBrace) {
-                        self.expected("`|` (the next arm) or `}`");
+                        self.expected_separator("`|` (the next arm) or `}`");
                         self.skip_until(&[TokenKind::Bar]);
                     }
                 }

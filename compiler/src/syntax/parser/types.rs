@@ -13,33 +13,30 @@ impl Parser<'_> {
     }
 
     fn array_chain(&mut self) -> PResult<TypeExpr> {
-        {
-            let p = self;
-            let mut ty = p.type_atom()?;
-            while p.at(&TokenKind::LBracket) {
-                p.deepen()?;
-                p.bump();
-                let len = match p.peek().clone() {
-                    TokenKind::Int(v) => {
-                        p.bump();
-                        let span = p.prev_span();
-                        ArrayLen::Const(p.int_to_u64(v, span, "array length"), span)
-                    }
-                    TokenKind::Ident(_) => ArrayLen::Name(p.ident("a name")?),
-                    _ => return Err(p.expected("an array length (an integer or a name)")),
-                };
-                let close = p.expect(&TokenKind::RBracket)?;
-                let span = ty.span.to(close);
-                ty = TypeExpr {
-                    kind: TypeExprKind::Array {
-                        elem: Box::new(ty),
-                        len,
-                    },
-                    span,
-                };
-            }
-            Ok(ty)
+        let mut ty = self.type_atom()?;
+        while self.at(&TokenKind::LBracket) {
+            self.deepen()?;
+            self.bump();
+            let len = match self.peek().clone() {
+                TokenKind::Int(v) => {
+                    self.bump();
+                    let span = self.prev_span();
+                    ArrayLen::Const(self.int_to_u64(v, span, "array length"), span)
+                }
+                TokenKind::Ident(_) => ArrayLen::Name(self.ident("a name")?),
+                _ => return Err(self.expected("an array length (an integer or a name)")),
+            };
+            let close = self.expect(&TokenKind::RBracket)?;
+            let span = ty.span.to(close);
+            ty = TypeExpr {
+                kind: TypeExprKind::Array {
+                    elem: Box::new(ty),
+                    len,
+                },
+                span,
+            };
         }
+        Ok(ty)
     }
 
     fn type_atom(&mut self) -> PResult<TypeExpr> {
@@ -86,10 +83,7 @@ impl Parser<'_> {
                 self.bump();
                 let elems = self.comma_list(TokenKind::RParen, |p| p.ty())?;
                 let span = start.to(self.prev_span());
-                let trailing_comma = self
-                    .tokens
-                    .get(self.pos.saturating_sub(2))
-                    .is_some_and(|t| t.kind == TokenKind::Comma);
+                let trailing_comma = self.closed_after_comma();
                 if elems.len() == 1 {
                     if trailing_comma {
                         self.report_at_node(SyntaxError::OneElementTuple { what: "type", span });
