@@ -745,6 +745,9 @@ pub fn dominator_tree(m: &Module, blocks: &[BlockId]) -> (Vec<Vec<usize>>, Vec<b
             children[idom[b]].push(b);
         }
     }
+    for c in &mut children {
+        c.sort_unstable();
+    }
     (children, visited)
 }
 

@@ -25,7 +25,7 @@ use rustc_hash::{FxHashMap, FxHashSet};
 use smallvec::SmallVec;
 
 /// The deepest nesting of regions and types the parser accepts.
-pub const MAX_DEPTH: usize = 200;
+pub const MAX_DEPTH: usize = 64;
 
 /// Parses a whole module. `file` is the id of `text` in the caller's
 /// [`SourceMap`](crate::diag::SourceMap), used for the spans of diagnostics and of ops.
@@ -42,6 +42,7 @@ pub fn parse_module(text: &str, file: FileId) -> Result<Module, Diagnostics> {
         forward: FxHashMap::default(),
         blocks: FxHashMap::default(),
         defined_blocks: FxHashSet::default(),
+        scopes: Vec::new(),
     };
     match p.module() {
         Ok(()) => Ok(p.m),
@@ -79,6 +80,9 @@ struct Parser<'t> {
     /// Block names of the current function.
     blocks: FxHashMap<String, (BlockId, Span)>,
     defined_blocks: FxHashSet<BlockId>,
+    /// Names defined in each open op region; they go out of scope when the region closes, so
+    /// sibling regions may reuse names (as in MLIR).
+    scopes: Vec<Vec<String>>,
 }
 
 fn describe(t: &Tok) -> String {
@@ -281,6 +285,7 @@ impl Parser<'_> {
             return Err(self.error("E0954", start, format!("function `@{name}` defined twice")));
         }
         self.values.clear();
+        self.scopes.clear();
         self.forward.clear();
         self.blocks.clear();
         self.defined_blocks.clear();
@@ -362,12 +367,18 @@ impl Parser<'_> {
             }
             rewrite::replace_all_uses(&mut self.m, placeholder, v);
             self.values.insert(name.to_string(), v);
+            if let Some(scope) = self.scopes.last_mut() {
+                scope.push(name.to_string());
+            }
             return Ok(());
         }
         if self.values.contains_key(name) {
             return Err(self.error("E0954", span, format!("value `%{name}` defined twice")));
         }
         self.values.insert(name.to_string(), v);
+        if let Some(scope) = self.scopes.last_mut() {
+            scope.push(name.to_string());
+        }
         Ok(())
     }
 
@@ -456,6 +467,7 @@ impl Parser<'_> {
     fn region(&mut self) -> PResult<RegionId> {
         self.enter()?;
         self.expect_punct('{')?;
+        self.scopes.push(Vec::new());
         let region = self.m.new_region();
         if !matches!(self.peek(), Tok::Block(_) | Tok::Punct('}')) {
             let b = self.m.add_block(region, &[]);
@@ -467,6 +479,9 @@ impl Parser<'_> {
             self.block_body(b)?;
         }
         self.expect_punct('}')?;
+        for name in self.scopes.pop().unwrap_or_default() {
+            self.values.remove(&name);
+        }
         self.leave();
         Ok(region)
     }
