@@ -17,6 +17,8 @@
 //! a cast to `i1` is `!= 0`. A NaN produced by arithmetic becomes the canonical quiet NaN (IEEE
 //! leaves payloads open); `neg` and `bitcast` keep bits exactly. `f16` is not folded. The
 //! replaced ops' results are aliased to the new constants; `dce` then removes the dead operands.
+//! A `tree.if` on a constant condition is replaced by the ops of the region it would run, when
+//! that region ends with `tree.yield`.
 
 use crate::attr::{Attr, CANONICAL_NAN_BITS};
 use crate::builder::{Builder, InsertPoint, OpSpec};
@@ -55,6 +57,12 @@ impl Pass for ConstFold {
                     }
                     continue;
                 }
+                if o.kind.is_tree(Op::If) && o.parent.is_some() {
+                    if let Some(Attr::Bool(c)) = o.operands.first().and_then(|v| consts.get(v)) {
+                        changed |= fold_if(m, op, *c);
+                    }
+                    continue;
+                }
                 match fold_op(m, op, &consts) {
                     Some(Folded::Const(attr)) => {
                         let res = m.ops[op].results[0];
@@ -88,6 +96,29 @@ impl Pass for ConstFold {
         }
         Ok(changed)
     }
+}
+
+/// Replaces `tree.if` with a constant condition by the ops of the region it would run, when
+/// that region ends with `tree.yield` (one ending with `tree.return` is left alone, as the rest
+/// of the enclosing block would become dead). Returns whether it changed anything.
+fn fold_if(m: &mut Module, op: OpId, cond: bool) -> bool {
+    let Some(&region) = m.ops[op].regions.get(if cond { 0 } else { 1 }) else {
+        return false;
+    };
+    let ends_in_yield = m.regions[region]
+        .blocks
+        .first()
+        .and_then(|&b| m.blocks[b].ops.last())
+        .is_some_and(|&t| m.ops[t].kind.is_tree(Op::Yield));
+    if !ends_in_yield {
+        return false;
+    }
+    let Some(term) = rewrite::inline_region_before(m, region, op, &[]) else {
+        return false;
+    };
+    let yielded = m.ops[term].operands.clone();
+    rewrite::replace_op(m, op, &yielded);
+    true
 }
 
 /// What an op folds to.
