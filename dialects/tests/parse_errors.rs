@@ -194,3 +194,37 @@ fn deep_regions_are_an_error_not_a_stack_overflow() {
     let diags = parse_module(&text, file).unwrap_err();
     assert_eq!(diags.list[0].code.as_deref(), Some("E0958"));
 }
+
+#[test]
+fn block_names_are_local_to_their_region() {
+    // Sibling regions may reuse `^bb0` and value names, as in MLIR.
+    let text = r#"
+func @f(%c: i1, %a: f32) -> (f32) {
+  %r = "tree.if"(%c) ({
+  ^bb0:
+    %x = "tree.neg"(%a) : (f32) -> f32
+    "tree.yield"(%x) : (f32) -> ()
+  }, {
+  ^bb0:
+    %x = "tree.add"(%a, %a) : (f32, f32) -> f32
+    "tree.yield"(%x) : (f32) -> ()
+  }) : (i1) -> f32
+  "tree.return"(%r) : (f32) -> ()
+}
+"#;
+    let m = parse_module(text, scion_ir::diag::FileId(0)).unwrap();
+    scion_ir::verify(&m).unwrap();
+    check(
+        "func @f(%c: i1) -> () {\n  \"tree.if\"(%c) ({\n    \"tree.yield\"()[^nowhere] : () -> ()\n  }, {\n    \"tree.yield\"() : () -> ()\n  }) : (i1) -> ()\n  \"tree.return\"() : () -> ()\n}\n",
+        expect![[r#"
+            error[E0953]: reference to undefined block `^nowhere`
+              ┌─ input.tree:3:20
+              │
+            3 │     "tree.yield"()[^nowhere] : () -> ()
+              │                    ^^^^^^^^
+              │
+              = at 3:20
+
+        "#]],
+    );
+}

@@ -283,3 +283,28 @@ fn pass_options_and_extensions() {
     assert_eq!(cx.ext::<Vec<u32>>(), Some(&vec![1, 2, 3]));
     assert_eq!(cx.ext::<String>(), None);
 }
+
+#[test]
+fn registry_entries_match_their_passes() {
+    for info in PassRegistry::with_builtin().infos() {
+        let pass = (info.create)();
+        assert_eq!(pass.name(), info.name);
+        assert_eq!(pass.summary(), info.summary);
+    }
+}
+
+#[test]
+fn print_before_writes_the_input_of_the_pass() {
+    let mut m = parse_module(SMALL, FileId(0)).unwrap();
+    let reg = PassRegistry::with_builtin();
+    let mut pm = PassManager::parse(&reg, "const-fold,dce").unwrap();
+    pm.options.print_before = vec!["dce".into()];
+    let mut sink = String::new();
+    pm.run(&mut m, &mut PassCx::new(), &mut sink).unwrap();
+    assert!(
+        sink.starts_with("// -----// IR Dump Before dce //----- //\nfunc @f"),
+        "{sink}"
+    );
+    assert_eq!(sink.matches("IR Dump").count(), 1);
+    assert_eq!(pm.names(), ["const-fold", "dce"]);
+}

@@ -43,6 +43,7 @@ pub fn parse_module(text: &str, file: FileId) -> Result<Module, Diagnostics> {
         blocks: FxHashMap::default(),
         defined_blocks: FxHashSet::default(),
         scopes: Vec::new(),
+        block_scopes: Vec::new(),
     };
     match p.module() {
         Ok(()) => Ok(p.m),
@@ -83,6 +84,8 @@ struct Parser<'t> {
     /// Names defined in each open op region; they go out of scope when the region closes, so
     /// sibling regions may reuse names (as in MLIR).
     scopes: Vec<Vec<String>>,
+    /// Block names first seen in each open op region; like value names they are local to it.
+    block_scopes: Vec<Vec<String>>,
 }
 
 fn describe(t: &Tok) -> String {
@@ -286,6 +289,7 @@ impl Parser<'_> {
         }
         self.values.clear();
         self.scopes.clear();
+        self.block_scopes.clear();
         self.forward.clear();
         self.blocks.clear();
         self.defined_blocks.clear();
@@ -416,6 +420,9 @@ impl Parser<'_> {
         }
         let b = self.m.blocks.alloc(Block::default());
         self.blocks.insert(name.to_string(), (b, span));
+        if let Some(scope) = self.block_scopes.last_mut() {
+            scope.push(name.to_string());
+        }
         b
     }
 
@@ -468,6 +475,7 @@ impl Parser<'_> {
         self.enter()?;
         self.expect_punct('{')?;
         self.scopes.push(Vec::new());
+        self.block_scopes.push(Vec::new());
         let region = self.m.new_region();
         if !matches!(self.peek(), Tok::Block(_) | Tok::Punct('}')) {
             let b = self.m.add_block(region, &[]);
@@ -481,6 +489,17 @@ impl Parser<'_> {
         self.expect_punct('}')?;
         for name in self.scopes.pop().unwrap_or_default() {
             self.values.remove(&name);
+        }
+        for name in self.block_scopes.pop().unwrap_or_default() {
+            if let Some((b, span)) = self.blocks.remove(&name) {
+                if !self.defined_blocks.contains(&b) {
+                    return Err(self.error(
+                        "E0953",
+                        span,
+                        format!("reference to undefined block `^{name}`"),
+                    ));
+                }
+            }
         }
         self.leave();
         Ok(region)
