@@ -81,6 +81,23 @@ impl PassCx {
             .insert(key.to_string(), value.to_string());
     }
 
+    /// Reads one `--pass-opt` value, `pass:key=value`. A malformed one is a user error (`E0962`).
+    pub fn parse_option(&mut self, text: &str) -> Result<(), Diagnostic> {
+        let parsed = text
+            .split_once(':')
+            .and_then(|(pass, kv)| Some((pass, kv.split_once('=')?)));
+        match parsed {
+            Some((pass, (key, value))) if !pass.is_empty() && !key.is_empty() => {
+                self.set_option(pass, key, value);
+                Ok(())
+            }
+            _ => Err(
+                Diagnostic::error("E0962", format!("malformed pass option `{text}`"))
+                    .with_note("expected `pass:key=value`, e.g. `inline:threshold=40`"),
+            ),
+        }
+    }
+
     /// Stores an extension value, one per type.
     pub fn insert_ext<T: Any>(&mut self, value: T) {
         self.ext.insert(AnyTypeId::of::<T>(), Box::new(value));
@@ -265,7 +282,7 @@ pub struct PassManager {
 }
 
 impl PassManager {
-    /// A pipeline of the named passes. An unknown name is a user error (`E0901`).
+    /// A pipeline of the named passes. An unknown name is a user error (`E0961`).
     pub fn from_names<S: AsRef<str>>(
         registry: &PassRegistry,
         names: &[S],
@@ -275,7 +292,7 @@ impl PassManager {
             let n = n.as_ref();
             let info = registry.get(n).ok_or_else(|| {
                 let known: Vec<&str> = registry.infos().iter().map(|i| i.name).collect();
-                Diagnostic::error("E0901", format!("unknown pass `{n}`"))
+                Diagnostic::error("E0961", format!("unknown pass `{n}`"))
                     .with_note(format!("known passes: {}", known.join(", ")))
             })?;
             passes.push((*info, (info.create)()));

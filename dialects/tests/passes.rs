@@ -193,7 +193,7 @@ fn print_after_all_and_stop_after() {
 fn unknown_pass_is_a_user_error() {
     let reg = PassRegistry::with_builtin();
     let err = PassManager::parse(&reg, "dce,frobnicate").err().unwrap();
-    assert_eq!(err.to_string(), "error[E0901]: unknown pass `frobnicate`");
+    assert_eq!(err.to_string(), "error[E0961]: unknown pass `frobnicate`");
     assert_eq!(err.notes, ["known passes: const-fold, dce"]);
     assert_eq!(
         reg.help(),
@@ -275,7 +275,11 @@ fn invalid_input_is_a_user_diagnostic() {
 #[test]
 fn pass_options_and_extensions() {
     let mut cx = PassCx::new();
-    cx.set_option("inline", "threshold", "40");
+    cx.parse_option("inline:threshold=40").unwrap();
+    assert_eq!(
+        cx.parse_option("inline=3").unwrap_err().to_string(),
+        "error[E0962]: malformed pass option `inline=3`"
+    );
     assert_eq!(cx.option("inline", "threshold"), Some("40"));
     assert_eq!(cx.option("inline", "depth"), None);
     cx.insert_ext(vec![1u32, 2]);
