@@ -11,6 +11,7 @@
 //!
 //! Arenas never shrink: erasing an op only detaches it from its block (see [`crate::rewrite`]).
 
+use crate::attr::Attrs;
 use crate::diag::Span;
 use crate::entity::{BlockId, FuncId, OpId, RegionId, TypeId, ValueId};
 use crate::op::Operation;
@@ -80,6 +81,9 @@ pub struct Func {
     pub results: Vec<TypeId>,
     /// The body; its entry block's arguments are the parameters.
     pub body: RegionId,
+    /// Function-level facts for later levels (e.g. an entry point's ABI name), printed as
+    /// `attributes {...}` after the signature.
+    pub attrs: Attrs,
 }
 
 /// A named, typed field of an ADT.
@@ -230,6 +234,7 @@ impl Module {
             params: params.to_vec(),
             results: results.to_vec(),
             body,
+            attrs: Attrs::new(),
         });
         self.regions[body].parent = Some(RegionParent::Func(fid));
         self.func_order.push(fid);

@@ -326,6 +326,8 @@ impl PassManager {
         sink: &mut String,
     ) -> Result<PipelineReport, PassError> {
         let mut report = PipelineReport::default();
+        // Aliases left by whoever built the module count as already applied.
+        crate::rewrite::resolve_aliases(m);
         if self.options.verify_input {
             if let Err(e) = verify(m) {
                 return Err(PassError::Diagnostics(e.to_diagnostics(m)));

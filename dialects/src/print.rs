@@ -18,7 +18,7 @@
 //! drops temporaries. Spans are not printed. Input: a [`Module`]; output: text that
 //! [`crate::parse::parse_module`] reads back to an equal module (`print ∘ parse ∘ print = print`).
 
-use crate::attr::{quote, symbol_text};
+use crate::attr::{quote, symbol_text, Attr, Attrs};
 use crate::entity::{raw_index, BlockId, FuncId, OpId, RegionId, TypeId, ValueId};
 use crate::module::{Field, Module};
 use rustc_hash::{FxHashMap, FxHashSet};
@@ -239,7 +239,12 @@ impl<'a> Printer<'a> {
         self.out.push_str(") -> (");
         let results: Vec<String> = func.results.iter().map(|&t| type_text(m, t)).collect();
         self.out.push_str(&results.join(", "));
-        self.out.push_str(") {\n");
+        self.out.push(')');
+        if !func.attrs.is_empty() {
+            self.out.push_str(" attributes");
+            self.attr_dict(&func.attrs);
+        }
+        self.out.push_str(" {\n");
         for (i, &b) in blocks.iter().enumerate() {
             if i > 0 {
                 self.block_label(b, 0);
@@ -338,16 +343,7 @@ impl<'a> Printer<'a> {
             self.out.push(')');
         }
         if !o.attrs.is_empty() {
-            self.out.push_str(" {");
-            for (i, (name, a)) in o.attrs.iter().enumerate() {
-                if i > 0 {
-                    self.out.push_str(", ");
-                }
-                self.out.push_str(&symbol_text(name));
-                self.out.push_str(" = ");
-                a.print(&m.types, &mut self.out);
-            }
-            self.out.push('}');
+            self.attr_dict(&o.attrs);
         }
         let tys: Vec<String> = o.operands.iter().map(|&v| self.value_type(v)).collect();
         let _ = write!(self.out, " : ({}) -> ", tys.join(", "));
@@ -358,6 +354,22 @@ impl<'a> Printer<'a> {
             let _ = write!(self.out, "({})", res.join(", "));
         }
         self.out.push('\n');
+    }
+
+    /// ` {name = value, ...}`
+    fn attr_dict(&mut self, attrs: &Attrs) {
+        self.out.push_str(" {");
+        for (i, (name, a)) in attrs.iter().enumerate() {
+            if i > 0 {
+                self.out.push_str(", ");
+            }
+            self.out.push_str(&symbol_text(name));
+            if *a != Attr::Unit {
+                self.out.push_str(" = ");
+                a.print(&self.m.types, &mut self.out);
+            }
+        }
+        self.out.push('}');
     }
 
     fn region(&mut self, r: RegionId, depth: usize) {

@@ -485,7 +485,14 @@ fn random_module(seed: u64) -> Module {
     }
     let mut entries = Vec::new();
     for (name, params, results) in &sigs {
-        let (_, entry) = m.add_func(name, params, results);
+        let (f, entry) = m.add_func(name, params, results);
+        if rng.chance(30) {
+            m.funcs[f].attrs.set(
+                "abi_name",
+                scion_ir::attr::Attr::str(format!("scion_{name}")),
+            );
+            m.funcs[f].attrs.set("entry", scion_ir::attr::Attr::Unit);
+        }
         entries.push(entry);
     }
     let mut g = Gen {

@@ -200,7 +200,7 @@ fn float_constants_round_trip_bit_exactly() {
 fn names_strings_and_comments() {
     let text = r#"
 // A comment line.
-func @"weird name\n\"x\""(%a.b$c: i32) -> i32 { // trailing comment
+func @"weird name\n\"x\""(%a.b$c: i32) -> i32 attributes {entry, abi = "c"} { // trailing comment
   %r = "tree.intrinsic"(%a.b$c) {name = "abs", note = "tab\there \u{1f600}", flags = [unit, 1, -2, @sym, f32]} : (i32) -> i32
   "tree.return"(%r) : (i32) -> ()
 }
@@ -208,7 +208,7 @@ func @"weird name\n\"x\""(%a.b$c: i32) -> i32 { // trailing comment
     let m = parse_module(text, FileId(0)).unwrap();
     let printed = print_module(&m);
     expect![[r#"
-        func @"weird name\n\"x\""(%0: i32) -> (i32) {
+        func @"weird name\n\"x\""(%0: i32) -> (i32) attributes {abi = "c", entry} {
           %1 = "tree.intrinsic"(%0) {flags = [unit, 1, -2, @sym, f32], name = "abs", note = "tab\there 😀"} : (i32) -> i32
           "tree.return"(%1) : (i32) -> ()
         }

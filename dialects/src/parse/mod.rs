@@ -14,7 +14,7 @@
 mod lexer;
 mod types;
 
-use crate::attr::Attrs;
+use crate::attr::{Attr, Attrs};
 use crate::diag::{Diagnostic, Diagnostics, FileId, Span};
 use crate::entity::{BlockId, RegionId, TypeId, ValueId};
 use crate::module::{AdtDef, Block, Field, Module, ValueData, ValueDef, Variant};
@@ -317,8 +317,16 @@ impl Parser<'_> {
             self.bump();
             results = self.type_list_or_single()?;
         }
+        let attrs = match self.peek() {
+            Tok::Ident(s) if s == "attributes" => {
+                self.bump();
+                self.attr_dict()?
+            }
+            _ => Attrs::new(),
+        };
         let param_tys: Vec<TypeId> = params.iter().map(|p| p.2).collect();
         let (fid, entry) = self.m.add_func(&name, &param_tys, &results);
+        self.m.funcs[fid].attrs = attrs;
         self.m.func_spans.insert(fid, start);
         self.defined_blocks.insert(entry);
         let args = self.m.blocks[entry].args.clone();
@@ -568,27 +576,11 @@ impl Parser<'_> {
             }
             self.expect_punct(')')?;
         }
-        let mut attrs = Attrs::new();
-        if self.eat_punct('{') && !self.eat_punct('}') {
-            loop {
-                let aspan = self.span();
-                let aname = self.name("an attribute name")?;
-                self.expect_punct('=')?;
-                let value = self.attr()?;
-                if attrs.get(&aname).is_some() {
-                    return Err(self.error(
-                        "E0957",
-                        aspan,
-                        format!("attribute `{aname}` given twice"),
-                    ));
-                }
-                attrs.set(&aname, value);
-                if !self.eat_punct(',') {
-                    break;
-                }
-            }
-            self.expect_punct('}')?;
-        }
+        let attrs = if *self.peek() == Tok::Punct('{') {
+            self.attr_dict()?
+        } else {
+            Attrs::new()
+        };
         self.expect_punct(':')?;
         let sig_span = self.span();
         self.expect_punct('(')?;
@@ -638,6 +630,34 @@ impl Parser<'_> {
             self.define_value(&name, v, span)?;
         }
         Ok(())
+    }
+
+    /// `{name = value, ...}`
+    fn attr_dict(&mut self) -> PResult<Attrs> {
+        self.expect_punct('{')?;
+        let mut attrs = Attrs::new();
+        if self.eat_punct('}') {
+            return Ok(attrs);
+        }
+        loop {
+            let aspan = self.span();
+            let aname = self.name("an attribute name")?;
+            // A name alone is a unit attribute, as in MLIR (`{entry}`).
+            let value = if self.eat_punct('=') {
+                self.attr()?
+            } else {
+                Attr::Unit
+            };
+            if attrs.get(&aname).is_some() {
+                return Err(self.error("E0957", aspan, format!("attribute `{aname}` given twice")));
+            }
+            attrs.set(&aname, value);
+            if !self.eat_punct(',') {
+                break;
+            }
+        }
+        self.expect_punct('}')?;
+        Ok(attrs)
     }
 
     /// `^bb(%a, %b : T, U)` or `^bb`.
