@@ -219,6 +219,8 @@ pub struct PipelineOptions {
     pub print_after: Vec<String>,
     /// Dump the module before these passes.
     pub print_before: Vec<String>,
+    /// Dump the module before every pass.
+    pub print_before_all: bool,
     /// Stop after the first run of this pass.
     pub stop_after: Option<String>,
     /// Record each pass's wall time in the report.
@@ -233,6 +235,7 @@ impl Default for PipelineOptions {
             print_after_all: false,
             print_after: Vec::new(),
             print_before: Vec::new(),
+            print_before_all: false,
             stop_after: None,
             time_passes: false,
         }
@@ -335,7 +338,8 @@ impl PassManager {
         }
         for (info, pass) in &mut self.passes {
             let name = info.name;
-            if self.options.print_before.iter().any(|p| p == name) {
+            if self.options.print_before_all || self.options.print_before.iter().any(|p| p == name)
+            {
                 dump(sink, "Before", name, m);
             }
             let start = Instant::now();

@@ -311,4 +311,10 @@ fn print_before_writes_the_input_of_the_pass() {
     );
     assert_eq!(sink.matches("IR Dump").count(), 1);
     assert_eq!(pm.names(), ["const-fold", "dce"]);
+    let mut m = parse_module(SMALL, FileId(0)).unwrap();
+    pm.options.print_before = Vec::new();
+    pm.options.print_before_all = true;
+    let mut sink = String::new();
+    pm.run(&mut m, &mut PassCx::new(), &mut sink).unwrap();
+    assert_eq!(sink.matches("// -----// IR Dump Before ").count(), 2, "{sink}");
 }
