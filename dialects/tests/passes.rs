@@ -316,5 +316,9 @@ fn print_before_writes_the_input_of_the_pass() {
     pm.options.print_before_all = true;
     let mut sink = String::new();
     pm.run(&mut m, &mut PassCx::new(), &mut sink).unwrap();
-    assert_eq!(sink.matches("// -----// IR Dump Before ").count(), 2, "{sink}");
+    assert_eq!(
+        sink.matches("// -----// IR Dump Before ").count(),
+        2,
+        "{sink}"
+    );
 }
