@@ -13,7 +13,6 @@ fn every_shorthand_builds_valid_ir() {
     let f32t = m.types.f32();
     let u32t = m.types.u32();
     let u8t = m.types.int(IntTy::U8);
-    let vec3 = m.types.vector(f32t, 3);
     let slice = m.types.array(f32t, None);
     let arr4 = m.types.array(f32t, Some(4));
     let node = m.types.adt("Node");
@@ -81,9 +80,8 @@ fn every_shorthand_builds_valid_ir() {
     })
     .unwrap();
     let matched = b
-        .match_(n, &["Tip", "_"], &[f32t], |b, arm, fields| {
+        .match_(n, &["Tip", "_"], &[f32t], |b, arm, _fields| {
             if arm == 0 {
-                let xs = fields[1];
                 let inner = b.if_(
                     is_tip,
                     &[f32t],
@@ -95,7 +93,6 @@ fn every_shorthand_builds_valid_ir() {
                     },
                 );
                 let r = b.result(inner, 0);
-                let _ = xs;
                 b.yield_(&[r]);
             } else {
                 let c = b.call("sum", &[n, a, k], &[]);
