@@ -316,10 +316,11 @@ impl Module {
         self.spans.insert(op, span);
     }
 
-    /// The function whose body (transitively) contains `op`, following parent links.
+    /// The function whose body (transitively) contains `op`, following parent links (`None`
+    /// for a detached op, or parent links that loop, which only broken IR has).
     pub fn func_of_op(&self, op: OpId) -> Option<FuncId> {
         let mut op = op;
-        loop {
+        for _ in 0..=self.ops.len() {
             let block = self.ops[op].parent?;
             let region = self.blocks[block].parent?;
             match self.regions[region].parent? {
@@ -327,5 +328,6 @@ impl Module {
                 RegionParent::Op(o) => op = o,
             }
         }
+        None
     }
 }

@@ -514,7 +514,7 @@ fn random_module(seed: u64) -> Module {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: std::env::var("PROPTEST_CASES").ok().and_then(|c| c.parse().ok()).unwrap_or(300), ..ProptestConfig::default() })]
 
     #[test]
     fn print_parse_print_is_identity(seed in any::<u64>()) {
@@ -559,6 +559,38 @@ proptest! {
             let _ = verify(&m).map_err(|e| e.to_string());
             let _ = print_module(&m);
         }
+    }
+
+    /// Damaged arenas (operands, results, regions and block lists pointing anywhere, in range
+    /// or not) are reported by the verifier, never a panic of the verifier or the printer.
+    #[test]
+    fn damaged_modules_never_panic_the_verifier(seed in any::<u64>(), edits in proptest::collection::vec((any::<u8>(), any::<u32>(), any::<u32>()), 1..6)) {
+        let mut m = random_module(seed);
+        let nops = m.ops.len() as u32;
+        for (what, a, b) in edits {
+            let op = scion_ir::OpId::from_raw(la_arena::RawIdx::from(a % nops.max(1)));
+            let wild = b % (m.values.len() as u32 + 3);
+            match what % 5 {
+                0 if !m.ops[op].operands.is_empty() => {
+                    let i = b as usize % m.ops[op].operands.len();
+                    m.ops[op].operands[i] = scion_ir::ValueId::from_raw(la_arena::RawIdx::from(wild));
+                }
+                1 if !m.ops[op].results.is_empty() => {
+                    m.ops[op].results[0] = scion_ir::ValueId::from_raw(la_arena::RawIdx::from(wild));
+                }
+                2 => m.ops[op].regions.push(scion_ir::RegionId::from_raw(la_arena::RawIdx::from(b % (m.regions.len() as u32 + 2)))),
+                3 => {
+                    let blk = scion_ir::BlockId::from_raw(la_arena::RawIdx::from(b % m.blocks.len() as u32));
+                    m.blocks[blk].ops.push(op);
+                }
+                _ => {
+                    let blk = scion_ir::BlockId::from_raw(la_arena::RawIdx::from(b % m.blocks.len() as u32));
+                    m.blocks[blk].ops.clear();
+                }
+            }
+        }
+        let _ = verify(&m).map_err(|e| e.to_string());
+        let _ = print_module(&m);
     }
 }
 
