@@ -187,3 +187,31 @@ fn shorthands_refuse_wrong_types_instead_of_panicking() {
     assert!(b.match_(x, &["_"], &[], |_, _, _| {}).is_none());
     assert!(b.m.blocks[entry].ops.is_empty());
 }
+
+#[test]
+fn foreach_over_a_set_of_pairs() {
+    let mut m = Module::new();
+    let u32t = m.types.u32();
+    let pair = m.types.tuple(vec![u32t, u32t]);
+    let set = m.types.intern(scion_ir::Type::Set(pair));
+    let (_, entry) = m.add_func("count", &[set], &[]);
+    let s = m.blocks[entry].args[0];
+    let mut b = Builder::at_end(&mut m, entry);
+    let zero = b.const_int(u32t, 0);
+    let n = b.var(zero);
+    b.foreach(s, |b, p| {
+        let a = b.extract(p, 0).unwrap();
+        let cur = b.load(n).unwrap();
+        let next = b.binary(Op::Add, cur, a);
+        b.store(n, next);
+        b.yield_(&[]);
+    })
+    .unwrap();
+    b.ret(&[]);
+    verify(&m).unwrap_or_else(|e| panic!("{e}"));
+    let text = print_module(&m);
+    assert!(
+        text.contains(r#""tree.foreach"(%0) ({"#) && text.contains("set<tuple<u32, u32>>"),
+        "{text}"
+    );
+}

@@ -209,15 +209,15 @@ impl Builder<'_> {
         Some(self.insert(spec.attr("arms", Attr::List(names))))
     }
 
-    /// `tree.foreach` over an array or slice; `body` gets the element and must end the region
-    /// with `tree.yield()`. Returns `None` when `array` is not an array.
+    /// `tree.foreach` over an array, slice or set; `body` gets the element and must end the
+    /// region with `tree.yield()`. Returns `None` when `array` is neither.
     pub fn foreach(
         &mut self,
         array: ValueId,
         body: impl FnOnce(&mut Builder<'_>, ValueId),
     ) -> Option<OpId> {
         let elem = match self.m.types.get(self.value_type(array)) {
-            Type::Array { elem, .. } => *elem,
+            Type::Array { elem, .. } | Type::Set(elem) => *elem,
             _ => return None,
         };
         let r = self.region(&[elem], |b, args| body(b, args[0]));
@@ -302,7 +302,7 @@ impl Builder<'_> {
     /// `tree.slice` `[lo, hi)` of an array; `None` for other types.
     pub fn slice(&mut self, array: ValueId, lo: ValueId, hi: ValueId) -> Option<ValueId> {
         let elem = match self.m.types.get(self.value_type(array)) {
-            Type::Array { elem, .. } => *elem,
+            Type::Array { elem, .. } | Type::Set(elem) => *elem,
             _ => return None,
         };
         let ty = self.m.types.array(elem, None);

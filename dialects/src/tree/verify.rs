@@ -275,8 +275,9 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
         }
         Op::Foreach => {
             counts(&ot, &rt, 1, 0)?;
-            let Type::Array { elem, .. } = t.get(ot[0]) else {
-                return Err(format!("foreach over non-array {}", show(ot[0])));
+            let elem = match t.get(ot[0]) {
+                Type::Array { elem, .. } | Type::Set(elem) => elem,
+                _ => return Err(format!("foreach over {}, not an array or set", show(ot[0]))),
             };
             if o.regions.len() != 1 {
                 return Err("`tree.foreach` needs one body region".into());
