@@ -21,6 +21,7 @@
 use crate::attr::{quote, symbol_text, Attr, Attrs};
 use crate::entity::{raw_index, BlockId, FuncId, OpId, RegionId, TypeId, ValueId};
 use crate::module::{Field, Module};
+use crate::types::FloatTy;
 use rustc_hash::{FxHashMap, FxHashSet};
 use std::fmt::Write;
 
@@ -242,7 +243,7 @@ impl<'a> Printer<'a> {
         self.out.push(')');
         if !func.attrs.is_empty() {
             self.out.push_str(" attributes");
-            self.attr_dict(&func.attrs);
+            self.attr_dict(&func.attrs, false);
         }
         self.out.push_str(" {\n");
         for (i, &b) in blocks.iter().enumerate() {
@@ -343,7 +344,14 @@ impl<'a> Printer<'a> {
             self.out.push(')');
         }
         if !o.attrs.is_empty() {
-            self.attr_dict(&o.attrs);
+            // Float attributes of an op computing in f32 print in their short f32 spelling.
+            let f32_hint = o.results.len() == 1
+                && self.has_value(o.results[0])
+                && m.types.contains(m.values[o.results[0]].ty)
+                && m.types
+                    .as_float(m.types.scalar_of(m.values[o.results[0]].ty))
+                    == Some(FloatTy::F32);
+            self.attr_dict(&o.attrs, f32_hint);
         }
         let tys: Vec<String> = o.operands.iter().map(|&v| self.value_type(v)).collect();
         let _ = write!(self.out, " : ({}) -> ", tys.join(", "));
@@ -357,7 +365,7 @@ impl<'a> Printer<'a> {
     }
 
     /// ` {name = value, ...}`
-    fn attr_dict(&mut self, attrs: &Attrs) {
+    fn attr_dict(&mut self, attrs: &Attrs, f32_hint: bool) {
         self.out.push_str(" {");
         for (i, (name, a)) in attrs.iter().enumerate() {
             if i > 0 {
@@ -366,7 +374,7 @@ impl<'a> Printer<'a> {
             self.out.push_str(&symbol_text(name));
             if *a != Attr::Unit {
                 self.out.push_str(" = ");
-                a.print(&self.m.types, &mut self.out);
+                a.print_with_hint(&self.m.types, &mut self.out, f32_hint);
             }
         }
         self.out.push('}');

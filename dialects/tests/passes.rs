@@ -43,7 +43,7 @@ func @f() -> (f32, f32, f32, f64, i1, i1, f32) {
 "#,
         expect![[r#"
             func @f() -> (f32, f32, f32, f64, i1, i1, f32) {
-              %0 = "tree.const"() {value = 0.3333333432674408} : () -> f32
+              %0 = "tree.const"() {value = 0.33333334 : f32} : () -> f32
               %1 = "tree.const"() {value = -inf} : () -> f32
               %2 = "tree.const"() {value = nan} : () -> f32
               %3 = "tree.const"() {value = 0.2} : () -> f64

@@ -166,9 +166,23 @@ impl Parser<'_> {
             }
             Tok::Float(s) => {
                 self.bump();
-                s.parse::<f64>()
-                    .map(Attr::float)
-                    .map_err(|_| self.error("E0957", span, format!("bad float literal `{s}`")))
+                let bad = self.error("E0957", span, format!("bad float literal `{s}`"));
+                // `1.0000004 : f32` is read as an `f32` directly (no double rounding through
+                // `f64`), then widened exactly.
+                if self.eat_punct(':') {
+                    match self.peek() {
+                        Tok::Ident(t) if t == "f32" => {
+                            self.bump();
+                            return s
+                                .parse::<f32>()
+                                .map(|x| Attr::float(x as f64))
+                                .map_err(|_| bad);
+                        }
+                        Tok::Ident(t) if t == "f64" => self.bump(),
+                        _ => return Err(self.unexpected("`f32` or `f64` after a typed float")),
+                    };
+                }
+                s.parse::<f64>().map(Attr::float).map_err(|_| bad)
             }
             Tok::Str(s) => {
                 self.bump();
