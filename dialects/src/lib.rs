@@ -62,7 +62,7 @@
 //! Each op reads: results, `=`, the quoted op name, operands in parentheses, successors in
 //! brackets, regions in parentheses (`({ ^bb1(%x: T): ... }, { ... })`), attributes in braces,
 //! then `:` and the operand and result types. Values and blocks are numbered per function in
-//! print order. Floats print exactly (`-0.0`, `inf`, `nan`, `nan(0x...)`). See [`print`] and
+//! print order. Floats print exactly (`-0.0`, `inf`, `nan`, `nan(0x...)`). See [`mod@print`] and
 //! [`parse`]; `docs/ir.md` lists every op.
 //!
 //! # Building IR

@@ -1,7 +1,7 @@
 //! The containers: [`Module`] → [`Func`] → [`Region`] → [`Block`] → operation → value, all in
 //! the module's arenas, plus the table of algebraic data types and the spans side table.
 //!
-//! Invariants (checked by [`crate::verify`]):
+//! Invariants (checked by [`crate::verify::verify`]):
 //! - every op, block and region listed somewhere is listed exactly once, and its `parent` field
 //!   names the block, region or owner that lists it;
 //! - every value is defined exactly once, by the op result or block argument its

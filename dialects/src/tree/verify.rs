@@ -1,7 +1,7 @@
 //! Per-op rules of the `tree` dialect: operand and result counts and types, attributes, region
 //! shapes and terminators, and field indices checked against the module's ADT table.
 //!
-//! Called by [`crate::verify`] after the structural checks, so ids are valid here. Each rule is
+//! Called by [`crate::verify::verify`] after the structural checks, so ids are valid here. Each rule is
 //! the one documented on the op's variant in [`super::ops::Op`].
 
 use super::ops::{CmpPred, Op};
