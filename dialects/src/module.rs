@@ -242,6 +242,20 @@ impl Module {
         (fid, entry)
     }
 
+    /// Adds a function declaration: a signature whose body region has no block (defined
+    /// elsewhere, e.g. by the runtime). It prints as `func @name(T, ...) -> (R, ...)`.
+    pub fn declare_func(&mut self, name: &str, params: &[TypeId], results: &[TypeId]) -> FuncId {
+        let (f, _) = self.add_func(name, params, results);
+        let body = self.funcs[f].body;
+        self.regions[body].blocks.clear();
+        f
+    }
+
+    /// True when `f` has no body (see [`Module::declare_func`]).
+    pub fn is_declaration(&self, f: FuncId) -> bool {
+        self.regions[self.funcs[f].body].blocks.is_empty()
+    }
+
     /// The live function called `name`.
     pub fn func_by_name(&self, name: &str) -> Option<FuncId> {
         self.func_order

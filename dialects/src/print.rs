@@ -233,7 +233,7 @@ impl<'a> Printer<'a> {
         if let Some(&entry) = blocks.first() {
             self.block_args(entry);
         } else {
-            // A body without blocks: show the signature's parameter types only.
+            // A declaration (no body): the parameters have no names.
             let params: Vec<String> = func.params.iter().map(|&t| type_text(m, t)).collect();
             self.out.push_str(&params.join(", "));
         }
@@ -244,6 +244,10 @@ impl<'a> Printer<'a> {
         if !func.attrs.is_empty() {
             self.out.push_str(" attributes");
             self.attr_dict(&func.attrs, false);
+        }
+        if blocks.is_empty() {
+            self.out.push('\n');
+            return;
         }
         self.out.push_str(" {\n");
         for (i, &b) in blocks.iter().enumerate() {

@@ -495,10 +495,15 @@ fn random_module(seed: u64) -> Module {
         }
         entries.push(entry);
     }
+    // A declaration (a function defined elsewhere) that bodies may call too.
+    let ext_sig = ("ext".to_string(), vec![t.f32t, t.u32t], vec![t.f32t]);
+    m.declare_func(&ext_sig.0, &ext_sig.1, &ext_sig.2);
+    let mut callable = sigs.clone();
+    callable.push(ext_sig);
     let mut g = Gen {
         rng: &mut rng,
         t,
-        sigs: sigs.clone(),
+        sigs: callable,
     };
     for ((_, _, results), entry) in sigs.iter().zip(entries) {
         let mut scope: Vec<ValueId> = m.blocks[entry].args.to_vec();

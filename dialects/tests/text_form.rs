@@ -275,3 +275,42 @@ fn f32_constants_print_short_and_round_trip_exactly() {
         assert!(*got == want || f64::from_bits(want).is_nan(), "{bv:#x}");
     }
 }
+
+#[test]
+fn declarations_have_a_signature_and_no_body() {
+    let text = r#"
+func @report_overflow(u32, !tree.ref<tuple<f32, u32>>) -> () attributes {abi = "scion_rt_overflow"}
+func @f(%d: u32, %r: !tree.ref<tuple<f32, u32>>) -> () {
+  "tree.call"(%d, %r) {callee = @report_overflow} : (u32, !tree.ref<tuple<f32, u32>>) -> ()
+  "tree.return"() : () -> ()
+}
+"#;
+    let m = parse_module(text, FileId(0)).unwrap();
+    verify(&m).unwrap();
+    let decl = m.func_by_name("report_overflow").unwrap();
+    assert!(m.is_declaration(decl));
+    let printed = print_module(&m);
+    expect![[r#"
+        func @report_overflow(u32, !tree.ref<tuple<f32, u32>>) -> () attributes {abi = "scion_rt_overflow"}
+
+        func @f(%0: u32, %1: !tree.ref<tuple<f32, u32>>) -> () {
+          "tree.call"(%0, %1) {callee = @report_overflow} : (u32, !tree.ref<tuple<f32, u32>>) -> ()
+          "tree.return"() : () -> ()
+        }
+    "#]]
+    .assert_eq(&printed);
+    assert_eq!(
+        print_module(&parse_module(&printed, FileId(0)).unwrap()),
+        printed
+    );
+    let mut m2 = Module::new();
+    let u = m2.types.u32();
+    let g = m2.declare_func("g", &[u], &[u]);
+    assert!(m2.is_declaration(g));
+    assert_eq!(print_module(&m2), "func @g(u32) -> (u32)\n");
+    let err = parse_module("func @h(u32) -> () {\n}\n", FileId(0)).unwrap_err();
+    assert_eq!(
+        err.list[0].message,
+        "a parameter of a function with a body needs a name `%x: T`"
+    );
+}

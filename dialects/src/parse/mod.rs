@@ -293,19 +293,22 @@ impl Parser<'_> {
         self.forward.clear();
         self.blocks.clear();
         self.defined_blocks.clear();
-        // Parameters: `%name: T`.
+        // Parameters: `%name: T`, or bare types in a declaration.
         self.expect_punct('(')?;
-        let mut params: Vec<(String, Span, TypeId)> = Vec::new();
+        let mut params: Vec<(Option<String>, Span, TypeId)> = Vec::new();
         if !self.eat_punct(')') {
             loop {
                 let span = self.span();
-                let Tok::Value(v) = self.peek().clone() else {
-                    return Err(self.unexpected("a parameter `%name`"));
+                let name = match self.peek().clone() {
+                    Tok::Value(v) => {
+                        self.bump();
+                        self.expect_punct(':')?;
+                        Some(v)
+                    }
+                    _ => None,
                 };
-                self.bump();
-                self.expect_punct(':')?;
                 let ty = self.ty()?;
-                params.push((v, span, ty));
+                params.push((name, span, ty));
                 if !self.eat_punct(',') {
                     break;
                 }
@@ -328,9 +331,22 @@ impl Parser<'_> {
         let (fid, entry) = self.m.add_func(&name, &param_tys, &results);
         self.m.funcs[fid].attrs = attrs;
         self.m.func_spans.insert(fid, start);
+        if *self.peek() != Tok::Punct('{') {
+            // A declaration: no body.
+            let body = self.m.funcs[fid].body;
+            self.m.regions[body].blocks.clear();
+            return Ok(());
+        }
         self.defined_blocks.insert(entry);
         let args = self.m.blocks[entry].args.clone();
         for ((pname, span, _), v) in params.into_iter().zip(args) {
+            let Some(pname) = pname else {
+                return Err(self.error(
+                    "E0951",
+                    span,
+                    "a parameter of a function with a body needs a name `%x: T`",
+                ));
+            };
             self.define_value(&pname, v, span)?;
         }
         self.expect_punct('{')?;
