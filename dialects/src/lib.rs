@@ -2,7 +2,7 @@
 //!
 //! This crate depends on nothing else of Scion's and on neither LLVM nor Cranelift. It holds
 //! source positions and diagnostics ([`diag`]), the IR core, its dialects, its text form, its
-//! verifier and the pass manager.
+//! verifier, the pass manager and a reference interpreter of the `tree` level ([`interp`]).
 //!
 //! # The shape of the IR
 //!
@@ -105,6 +105,7 @@ pub mod attr;
 pub mod builder;
 pub mod diag;
 pub mod entity;
+pub mod interp;
 pub mod module;
 pub mod op;
 pub mod parse;
