@@ -314,3 +314,35 @@ func @f(%d: u32, %r: !tree.ref<tuple<f32, u32>>) -> () {
         "a parameter of a function with a body needs a name `%x: T`"
     );
 }
+
+/// The example at the top of docs/ir.md is valid IR, printed exactly as the printer would.
+#[test]
+fn docs_example_is_valid_and_canonical() {
+    let doc = include_str!("../../docs/ir.md");
+    let example = doc.split("```").nth(1).unwrap().trim_start_matches('\n');
+    let m = parse_module(example, FileId(0)).unwrap_or_else(|d| panic!("{d:?}"));
+    verify(&m).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(print_module(&m), example);
+}
+
+/// The text-form example in the crate's essay (lib.rs) is valid and canonical too.
+#[test]
+fn essay_example_is_valid_and_canonical() {
+    let lib = include_str!("../src/lib.rs");
+    let doc: String = lib
+        .lines()
+        .filter_map(|l| l.strip_prefix("//!"))
+        .map(|l| format!("{}\n", l.strip_prefix(' ').unwrap_or(l)))
+        .collect();
+    let start = doc.find("# Reading the text form").unwrap();
+    let example = doc[start..]
+        .split("```text\n")
+        .nth(1)
+        .unwrap()
+        .split("```")
+        .next()
+        .unwrap();
+    let m = parse_module(example, FileId(0)).unwrap_or_else(|d| panic!("{d:?}"));
+    verify(&m).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(print_module(&m), example);
+}
