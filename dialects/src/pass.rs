@@ -33,6 +33,22 @@ pub enum PassError {
     Internal(InternalError),
 }
 
+impl std::fmt::Display for PassError {
+    /// Diagnostics one per line (code and message; render them against the source map for
+    /// positions), or the internal error with its IR.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PassError::Diagnostics(ds) => {
+                for d in &ds.list {
+                    writeln!(f, "{d}")?;
+                }
+                Ok(())
+            }
+            PassError::Internal(e) => write!(f, "{e}"),
+        }
+    }
+}
+
 impl From<Diagnostics> for PassError {
     fn from(d: Diagnostics) -> PassError {
         PassError::Diagnostics(d)
