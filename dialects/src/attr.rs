@@ -6,7 +6,9 @@
 //! or `f16` constant is stored widened, which is exact), so equality is bit equality: `-0.0` and
 //! `0.0` differ, and a NaN equals itself. Their text form round-trips exactly: finite values
 //! print in Rust's shortest round-trip decimal form, infinities as `inf`/`-inf`, the canonical
-//! quiet NaN as `nan` and any other NaN as `nan(0x<f64 bits>)`.
+//! quiet NaN as `nan` and any other NaN as `nan(0x<f64 bits>)`. On ops computing in `f32`, an
+//! exact `f32` may print as the typed literal `1.0000004 : f32` (its shortest `f32` spelling),
+//! which the parser reads as an `f32` and widens, so the bits still round-trip.
 
 use crate::entity::TypeId;
 use crate::types::TypeTable;
@@ -87,13 +89,26 @@ impl Attr {
 
     /// Writes the text form of the attribute.
     pub fn print(&self, types: &TypeTable, out: &mut String) {
+        self.print_with_hint(types, out, false)
+    }
+
+    /// Writes the text form; with `f32_hint` (the op computes in `f32`), a float that is an
+    /// exact `f32` whose shortest `f32` spelling is shorter than its `f64` one prints as the
+    /// typed literal `1.0000004 : f32`, which the parser reads back as that `f32` exactly.
+    pub fn print_with_hint(&self, types: &TypeTable, out: &mut String, f32_hint: bool) {
         match self {
             Attr::Unit => out.push_str("unit"),
             Attr::Bool(b) => out.push_str(if *b { "true" } else { "false" }),
             Attr::Int(v) => {
                 let _ = write!(out, "{v}");
             }
-            Attr::Float(bits) => out.push_str(&format_float(*bits)),
+            Attr::Float(bits) => match f32_spelling(*bits).filter(|_| f32_hint) {
+                Some(short) => {
+                    out.push_str(&short);
+                    out.push_str(" : f32");
+                }
+                None => out.push_str(&format_float(*bits)),
+            },
             Attr::Str(s) => out.push_str(&quote(s)),
             Attr::Sym(s) => {
                 out.push('@');
@@ -108,7 +123,7 @@ impl Attr {
                     if i > 0 {
                         out.push_str(", ");
                     }
-                    a.print(types, out);
+                    a.print_with_hint(types, out, f32_hint);
                 }
                 out.push(']');
             }
@@ -140,6 +155,19 @@ pub fn format_float(bits: u64) -> String {
             format!("{s}.0")
         }
     }
+}
+
+/// The shortest `f32` spelling of the `f64` given by `bits` when the value is a finite `f32`
+/// and that spelling is shorter than the shortest `f64` one (`1.0000004` for the widened
+/// `1.0000004f32`, printed as `1.0000004768371582` otherwise).
+pub fn f32_spelling(bits: u64) -> Option<String> {
+    let v = f64::from_bits(bits);
+    let narrow = v as f32;
+    if !v.is_finite() || narrow as f64 != v {
+        return None;
+    }
+    let short = format!("{narrow:?}");
+    (short.len() < format_float(bits).len()).then_some(short)
 }
 
 /// `s` as a double-quoted string literal with `\"`, `\\`, `\n`, `\t` and `\u{..}` escapes.

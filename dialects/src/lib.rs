@@ -2,7 +2,7 @@
 //!
 //! This crate depends on nothing else of Scion's and on neither LLVM nor Cranelift. It holds
 //! source positions and diagnostics ([`diag`]), the IR core, its dialects, its text form, its
-//! verifier and the pass manager.
+//! verifier, the pass manager and a reference interpreter of the `tree` level ([`interp`]).
 //!
 //! # The shape of the IR
 //!
@@ -62,7 +62,7 @@
 //! Each op reads: results, `=`, the quoted op name, operands in parentheses, successors in
 //! brackets, regions in parentheses (`({ ^bb1(%x: T): ... }, { ... })`), attributes in braces,
 //! then `:` and the operand and result types. Values and blocks are numbered per function in
-//! print order. Floats print exactly (`-0.0`, `inf`, `nan`, `nan(0x...)`). See [`print`] and
+//! print order. Floats print exactly (`-0.0`, `inf`, `nan`, `nan(0x...)`). See [`mod@print`] and
 //! [`parse`]; `docs/ir.md` lists every op.
 //!
 //! # Building IR
@@ -105,6 +105,7 @@ pub mod attr;
 pub mod builder;
 pub mod diag;
 pub mod entity;
+pub mod interp;
 pub mod module;
 pub mod op;
 pub mod parse;

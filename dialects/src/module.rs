@@ -1,7 +1,7 @@
 //! The containers: [`Module`] → [`Func`] → [`Region`] → [`Block`] → operation → value, all in
 //! the module's arenas, plus the table of algebraic data types and the spans side table.
 //!
-//! Invariants (checked by [`crate::verify`]):
+//! Invariants (checked by [`crate::verify::verify`]):
 //! - every op, block and region listed somewhere is listed exactly once, and its `parent` field
 //!   names the block, region or owner that lists it;
 //! - every value is defined exactly once, by the op result or block argument its
@@ -11,6 +11,7 @@
 //!
 //! Arenas never shrink: erasing an op only detaches it from its block (see [`crate::rewrite`]).
 
+use crate::attr::Attrs;
 use crate::diag::Span;
 use crate::entity::{BlockId, FuncId, OpId, RegionId, TypeId, ValueId};
 use crate::op::Operation;
@@ -80,6 +81,9 @@ pub struct Func {
     pub results: Vec<TypeId>,
     /// The body; its entry block's arguments are the parameters.
     pub body: RegionId,
+    /// Function-level facts for later levels (e.g. an entry point's ABI name), printed as
+    /// `attributes {...}` after the signature.
+    pub attrs: Attrs,
 }
 
 /// A named, typed field of an ADT.
@@ -230,11 +234,26 @@ impl Module {
             params: params.to_vec(),
             results: results.to_vec(),
             body,
+            attrs: Attrs::new(),
         });
         self.regions[body].parent = Some(RegionParent::Func(fid));
         self.func_order.push(fid);
         let entry = self.add_block(body, params);
         (fid, entry)
+    }
+
+    /// Adds a function declaration: a signature whose body region has no block (defined
+    /// elsewhere, e.g. by the runtime). It prints as `func @name(T, ...) -> (R, ...)`.
+    pub fn declare_func(&mut self, name: &str, params: &[TypeId], results: &[TypeId]) -> FuncId {
+        let (f, _) = self.add_func(name, params, results);
+        let body = self.funcs[f].body;
+        self.regions[body].blocks.clear();
+        f
+    }
+
+    /// True when `f` has no body (see [`Module::declare_func`]).
+    pub fn is_declaration(&self, f: FuncId) -> bool {
+        self.regions[self.funcs[f].body].blocks.is_empty()
     }
 
     /// The live function called `name`.
@@ -311,10 +330,11 @@ impl Module {
         self.spans.insert(op, span);
     }
 
-    /// The function whose body (transitively) contains `op`, following parent links.
+    /// The function whose body (transitively) contains `op`, following parent links (`None`
+    /// for a detached op, or parent links that loop, which only broken IR has).
     pub fn func_of_op(&self, op: OpId) -> Option<FuncId> {
         let mut op = op;
-        loop {
+        for _ in 0..=self.ops.len() {
             let block = self.ops[op].parent?;
             let region = self.blocks[block].parent?;
             match self.regions[region].parent? {
@@ -322,5 +342,6 @@ impl Module {
                 RegionParent::Op(o) => op = o,
             }
         }
+        None
     }
 }

@@ -33,6 +33,22 @@ pub enum PassError {
     Internal(InternalError),
 }
 
+impl std::fmt::Display for PassError {
+    /// Diagnostics one per line (code and message; render them against the source map for
+    /// positions), or the internal error with its IR.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PassError::Diagnostics(ds) => {
+                for d in &ds.list {
+                    writeln!(f, "{d}")?;
+                }
+                Ok(())
+            }
+            PassError::Internal(e) => write!(f, "{e}"),
+        }
+    }
+}
+
 impl From<Diagnostics> for PassError {
     fn from(d: Diagnostics) -> PassError {
         PassError::Diagnostics(d)
@@ -79,6 +95,23 @@ impl PassCx {
             .entry(pass.to_string())
             .or_default()
             .insert(key.to_string(), value.to_string());
+    }
+
+    /// Reads one `--pass-opt` value, `pass:key=value`. A malformed one is a user error (`E0962`).
+    pub fn parse_option(&mut self, text: &str) -> Result<(), Diagnostic> {
+        let parsed = text
+            .split_once(':')
+            .and_then(|(pass, kv)| Some((pass, kv.split_once('=')?)));
+        match parsed {
+            Some((pass, (key, value))) if !pass.is_empty() && !key.is_empty() => {
+                self.set_option(pass, key, value);
+                Ok(())
+            }
+            _ => Err(
+                Diagnostic::error("E0962", format!("malformed pass option `{text}`"))
+                    .with_note("expected `pass:key=value`, e.g. `inline:threshold=40`"),
+            ),
+        }
     }
 
     /// Stores an extension value, one per type.
@@ -202,6 +235,8 @@ pub struct PipelineOptions {
     pub print_after: Vec<String>,
     /// Dump the module before these passes.
     pub print_before: Vec<String>,
+    /// Dump the module before every pass.
+    pub print_before_all: bool,
     /// Stop after the first run of this pass.
     pub stop_after: Option<String>,
     /// Record each pass's wall time in the report.
@@ -216,6 +251,7 @@ impl Default for PipelineOptions {
             print_after_all: false,
             print_after: Vec::new(),
             print_before: Vec::new(),
+            print_before_all: false,
             stop_after: None,
             time_passes: false,
         }
@@ -265,7 +301,7 @@ pub struct PassManager {
 }
 
 impl PassManager {
-    /// A pipeline of the named passes. An unknown name is a user error (`E0901`).
+    /// A pipeline of the named passes. An unknown name is a user error (`E0961`).
     pub fn from_names<S: AsRef<str>>(
         registry: &PassRegistry,
         names: &[S],
@@ -275,7 +311,7 @@ impl PassManager {
             let n = n.as_ref();
             let info = registry.get(n).ok_or_else(|| {
                 let known: Vec<&str> = registry.infos().iter().map(|i| i.name).collect();
-                Diagnostic::error("E0901", format!("unknown pass `{n}`"))
+                Diagnostic::error("E0961", format!("unknown pass `{n}`"))
                     .with_note(format!("known passes: {}", known.join(", ")))
             })?;
             passes.push((*info, (info.create)()));
@@ -309,6 +345,8 @@ impl PassManager {
         sink: &mut String,
     ) -> Result<PipelineReport, PassError> {
         let mut report = PipelineReport::default();
+        // Aliases left by whoever built the module count as already applied.
+        crate::rewrite::resolve_aliases(m);
         if self.options.verify_input {
             if let Err(e) = verify(m) {
                 return Err(PassError::Diagnostics(e.to_diagnostics(m)));
@@ -316,7 +354,8 @@ impl PassManager {
         }
         for (info, pass) in &mut self.passes {
             let name = info.name;
-            if self.options.print_before.iter().any(|p| p == name) {
+            if self.options.print_before_all || self.options.print_before.iter().any(|p| p == name)
+            {
                 dump(sink, "Before", name, m);
             }
             let start = Instant::now();

@@ -18,9 +18,10 @@
 //! drops temporaries. Spans are not printed. Input: a [`Module`]; output: text that
 //! [`crate::parse::parse_module`] reads back to an equal module (`print ∘ parse ∘ print = print`).
 
-use crate::attr::{quote, symbol_text};
+use crate::attr::{quote, symbol_text, Attr, Attrs};
 use crate::entity::{raw_index, BlockId, FuncId, OpId, RegionId, TypeId, ValueId};
 use crate::module::{Field, Module};
+use crate::types::FloatTy;
 use rustc_hash::{FxHashMap, FxHashSet};
 use std::fmt::Write;
 
@@ -232,14 +233,23 @@ impl<'a> Printer<'a> {
         if let Some(&entry) = blocks.first() {
             self.block_args(entry);
         } else {
-            // A body without blocks: show the signature's parameter types only.
+            // A declaration (no body): the parameters have no names.
             let params: Vec<String> = func.params.iter().map(|&t| type_text(m, t)).collect();
             self.out.push_str(&params.join(", "));
         }
         self.out.push_str(") -> (");
         let results: Vec<String> = func.results.iter().map(|&t| type_text(m, t)).collect();
         self.out.push_str(&results.join(", "));
-        self.out.push_str(") {\n");
+        self.out.push(')');
+        if !func.attrs.is_empty() {
+            self.out.push_str(" attributes");
+            self.attr_dict(&func.attrs, false);
+        }
+        if blocks.is_empty() {
+            self.out.push('\n');
+            return;
+        }
+        self.out.push_str(" {\n");
         for (i, &b) in blocks.iter().enumerate() {
             if i > 0 {
                 self.block_label(b, 0);
@@ -338,16 +348,14 @@ impl<'a> Printer<'a> {
             self.out.push(')');
         }
         if !o.attrs.is_empty() {
-            self.out.push_str(" {");
-            for (i, (name, a)) in o.attrs.iter().enumerate() {
-                if i > 0 {
-                    self.out.push_str(", ");
-                }
-                self.out.push_str(&symbol_text(name));
-                self.out.push_str(" = ");
-                a.print(&m.types, &mut self.out);
-            }
-            self.out.push('}');
+            // Float attributes of an op computing in f32 print in their short f32 spelling.
+            let f32_hint = o.results.len() == 1
+                && self.has_value(o.results[0])
+                && m.types.contains(m.values[o.results[0]].ty)
+                && m.types
+                    .as_float(m.types.scalar_of(m.values[o.results[0]].ty))
+                    == Some(FloatTy::F32);
+            self.attr_dict(&o.attrs, f32_hint);
         }
         let tys: Vec<String> = o.operands.iter().map(|&v| self.value_type(v)).collect();
         let _ = write!(self.out, " : ({}) -> ", tys.join(", "));
@@ -358,6 +366,22 @@ impl<'a> Printer<'a> {
             let _ = write!(self.out, "({})", res.join(", "));
         }
         self.out.push('\n');
+    }
+
+    /// ` {name = value, ...}`
+    fn attr_dict(&mut self, attrs: &Attrs, f32_hint: bool) {
+        self.out.push_str(" {");
+        for (i, (name, a)) in attrs.iter().enumerate() {
+            if i > 0 {
+                self.out.push_str(", ");
+            }
+            self.out.push_str(&symbol_text(name));
+            if *a != Attr::Unit {
+                self.out.push_str(" = ");
+                a.print_with_hint(&self.m.types, &mut self.out, f32_hint);
+            }
+        }
+        self.out.push('}');
     }
 
     fn region(&mut self, r: RegionId, depth: usize) {

@@ -334,6 +334,10 @@ pub struct TypeDisplay<'a> {
 impl fmt::Display for TypeDisplay<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let t = self.table;
+        // Printing must not panic even on broken IR (the verifier prints what it rejects).
+        if !t.contains(self.id) {
+            return write!(f, "<<invalid type {}>>", crate::entity::raw_index(self.id));
+        }
         match t.get(self.id) {
             Type::Bool => write!(f, "i1"),
             Type::Int(i) => write!(f, "{}", i.name()),

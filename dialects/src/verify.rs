@@ -367,7 +367,8 @@ impl<'m> Verifier<'m> {
             self.error(None, "function body region is not owned by the function");
         }
         let Some(&entry) = m.regions[body].blocks.first() else {
-            self.error(None, "function body has no block");
+            // A declaration: a signature without a body.
+            self.func = None;
             return;
         };
         if self.has_block(entry) {
@@ -534,11 +535,11 @@ impl<'m> Verifier<'m> {
             if last && !o.kind.is_terminator() {
                 self.error(Some(op), "block does not end with a terminator");
             }
-            self.op(op, b, r, structured);
+            self.op(op, r, structured);
         }
     }
 
-    fn op(&mut self, op: OpId, b: BlockId, r: RegionId, structured: bool) {
+    fn op(&mut self, op: OpId, r: RegionId, structured: bool) {
         let m = self.m;
         let o = &m.ops[op];
         let mut ids_ok = true;
@@ -578,6 +579,11 @@ impl<'m> Verifier<'m> {
             }
             if m.blocks[s.block].parent != Some(r) {
                 self.error(Some(op), "successor block is not in the same region");
+            } else if m.regions[r].blocks.first() == Some(&s.block) {
+                self.error(
+                    Some(op),
+                    "the entry block of a region cannot be a successor",
+                );
             }
             let params = &m.blocks[s.block].args;
             if params.len() != s.args.len() {
@@ -636,16 +642,16 @@ impl<'m> Verifier<'m> {
         if !ids_ok || !self.regions_sane(op) {
             return;
         }
-        let typed = o
+        // Dialect rules may look inside types, so they only run on well-formed ones (an
+        // ill-formed type was reported where its value is defined).
+        let types: Vec<TypeId> = o
             .operands
             .iter()
             .chain(o.results.iter())
-            .all(|&v| self.m.types.contains(m.values[v].ty));
-        if !typed {
+            .map(|&v| m.values[v].ty)
+            .collect();
+        if !types.into_iter().all(|t| self.check_type(t)) {
             return;
-        }
-        for &v in &o.operands {
-            self.check_value_type(Some(op), v);
         }
         let in_func_body = matches!(m.regions[r].parent, Some(RegionParent::Func(_)));
         let results = self.func_results.clone();
@@ -659,7 +665,6 @@ impl<'m> Verifier<'m> {
         if let Err(msg) = outcome {
             self.error(Some(op), msg);
         }
-        let _ = b;
     }
 }
 
@@ -744,6 +749,9 @@ pub fn dominator_tree(m: &Module, blocks: &[BlockId]) -> (Vec<Vec<usize>>, Vec<b
         if idom[b] != usize::MAX {
             children[idom[b]].push(b);
         }
+    }
+    for c in &mut children {
+        c.sort_unstable();
     }
     (children, visited)
 }

@@ -12,20 +12,20 @@
 //! its use, `E0956` bad type, `E0957` bad attribute, `E0958` too deeply nested.
 
 mod lexer;
+mod types;
 
-use crate::attr::{Attr, Attrs, CANONICAL_NAN_BITS};
+use crate::attr::{Attr, Attrs};
 use crate::diag::{Diagnostic, Diagnostics, FileId, Span};
 use crate::entity::{BlockId, RegionId, TypeId, ValueId};
 use crate::module::{AdtDef, Block, Field, Module, ValueData, ValueDef, Variant};
 use crate::op::{OpKind, Successor};
-use crate::types::{FloatTy, IntTy, Type};
 use crate::{rewrite, Builder, OpSpec};
 use lexer::{Tok, Token};
 use rustc_hash::{FxHashMap, FxHashSet};
 use smallvec::SmallVec;
 
 /// The deepest nesting of regions and types the parser accepts.
-pub const MAX_DEPTH: usize = 200;
+pub const MAX_DEPTH: usize = 64;
 
 /// Parses a whole module. `file` is the id of `text` in the caller's
 /// [`SourceMap`](crate::diag::SourceMap), used for the spans of diagnostics and of ops.
@@ -42,6 +42,8 @@ pub fn parse_module(text: &str, file: FileId) -> Result<Module, Diagnostics> {
         forward: FxHashMap::default(),
         blocks: FxHashMap::default(),
         defined_blocks: FxHashSet::default(),
+        scopes: Vec::new(),
+        block_scopes: Vec::new(),
     };
     match p.module() {
         Ok(()) => Ok(p.m),
@@ -79,6 +81,11 @@ struct Parser<'t> {
     /// Block names of the current function.
     blocks: FxHashMap<String, (BlockId, Span)>,
     defined_blocks: FxHashSet<BlockId>,
+    /// Names defined in each open op region; they go out of scope when the region closes, so
+    /// sibling regions may reuse names (as in MLIR).
+    scopes: Vec<Vec<String>>,
+    /// Block names first seen in each open op region; like value names they are local to it.
+    block_scopes: Vec<Vec<String>>,
 }
 
 fn describe(t: &Tok) -> String {
@@ -281,22 +288,27 @@ impl Parser<'_> {
             return Err(self.error("E0954", start, format!("function `@{name}` defined twice")));
         }
         self.values.clear();
+        self.scopes.clear();
+        self.block_scopes.clear();
         self.forward.clear();
         self.blocks.clear();
         self.defined_blocks.clear();
-        // Parameters: `%name: T`.
+        // Parameters: `%name: T`, or bare types in a declaration.
         self.expect_punct('(')?;
-        let mut params: Vec<(String, Span, TypeId)> = Vec::new();
+        let mut params: Vec<(Option<String>, Span, TypeId)> = Vec::new();
         if !self.eat_punct(')') {
             loop {
                 let span = self.span();
-                let Tok::Value(v) = self.peek().clone() else {
-                    return Err(self.unexpected("a parameter `%name`"));
+                let name = match self.peek().clone() {
+                    Tok::Value(v) => {
+                        self.bump();
+                        self.expect_punct(':')?;
+                        Some(v)
+                    }
+                    _ => None,
                 };
-                self.bump();
-                self.expect_punct(':')?;
                 let ty = self.ty()?;
-                params.push((v, span, ty));
+                params.push((name, span, ty));
                 if !self.eat_punct(',') {
                     break;
                 }
@@ -308,12 +320,33 @@ impl Parser<'_> {
             self.bump();
             results = self.type_list_or_single()?;
         }
+        let attrs = match self.peek() {
+            Tok::Ident(s) if s == "attributes" => {
+                self.bump();
+                self.attr_dict()?
+            }
+            _ => Attrs::new(),
+        };
         let param_tys: Vec<TypeId> = params.iter().map(|p| p.2).collect();
         let (fid, entry) = self.m.add_func(&name, &param_tys, &results);
+        self.m.funcs[fid].attrs = attrs;
         self.m.func_spans.insert(fid, start);
+        if *self.peek() != Tok::Punct('{') {
+            // A declaration: no body.
+            let body = self.m.funcs[fid].body;
+            self.m.regions[body].blocks.clear();
+            return Ok(());
+        }
         self.defined_blocks.insert(entry);
         let args = self.m.blocks[entry].args.clone();
         for ((pname, span, _), v) in params.into_iter().zip(args) {
+            let Some(pname) = pname else {
+                return Err(self.error(
+                    "E0951",
+                    span,
+                    "a parameter of a function with a body needs a name `%x: T`",
+                ));
+            };
             self.define_value(&pname, v, span)?;
         }
         self.expect_punct('{')?;
@@ -362,12 +395,18 @@ impl Parser<'_> {
             }
             rewrite::replace_all_uses(&mut self.m, placeholder, v);
             self.values.insert(name.to_string(), v);
+            if let Some(scope) = self.scopes.last_mut() {
+                scope.push(name.to_string());
+            }
             return Ok(());
         }
         if self.values.contains_key(name) {
             return Err(self.error("E0954", span, format!("value `%{name}` defined twice")));
         }
         self.values.insert(name.to_string(), v);
+        if let Some(scope) = self.scopes.last_mut() {
+            scope.push(name.to_string());
+        }
         Ok(())
     }
 
@@ -405,6 +444,9 @@ impl Parser<'_> {
         }
         let b = self.m.blocks.alloc(Block::default());
         self.blocks.insert(name.to_string(), (b, span));
+        if let Some(scope) = self.block_scopes.last_mut() {
+            scope.push(name.to_string());
+        }
         b
     }
 
@@ -456,6 +498,8 @@ impl Parser<'_> {
     fn region(&mut self) -> PResult<RegionId> {
         self.enter()?;
         self.expect_punct('{')?;
+        self.scopes.push(Vec::new());
+        self.block_scopes.push(Vec::new());
         let region = self.m.new_region();
         if !matches!(self.peek(), Tok::Block(_) | Tok::Punct('}')) {
             let b = self.m.add_block(region, &[]);
@@ -467,6 +511,20 @@ impl Parser<'_> {
             self.block_body(b)?;
         }
         self.expect_punct('}')?;
+        for name in self.scopes.pop().unwrap_or_default() {
+            self.values.remove(&name);
+        }
+        for name in self.block_scopes.pop().unwrap_or_default() {
+            if let Some((b, span)) = self.blocks.remove(&name) {
+                if !self.defined_blocks.contains(&b) {
+                    return Err(self.error(
+                        "E0953",
+                        span,
+                        format!("reference to undefined block `^{name}`"),
+                    ));
+                }
+            }
+        }
         self.leave();
         Ok(region)
     }
@@ -534,27 +592,11 @@ impl Parser<'_> {
             }
             self.expect_punct(')')?;
         }
-        let mut attrs = Attrs::new();
-        if self.eat_punct('{') && !self.eat_punct('}') {
-            loop {
-                let aspan = self.span();
-                let aname = self.name("an attribute name")?;
-                self.expect_punct('=')?;
-                let value = self.attr()?;
-                if attrs.get(&aname).is_some() {
-                    return Err(self.error(
-                        "E0957",
-                        aspan,
-                        format!("attribute `{aname}` given twice"),
-                    ));
-                }
-                attrs.set(&aname, value);
-                if !self.eat_punct(',') {
-                    break;
-                }
-            }
-            self.expect_punct('}')?;
-        }
+        let attrs = if *self.peek() == Tok::Punct('{') {
+            self.attr_dict()?
+        } else {
+            Attrs::new()
+        };
         self.expect_punct(':')?;
         let sig_span = self.span();
         self.expect_punct('(')?;
@@ -604,6 +646,34 @@ impl Parser<'_> {
             self.define_value(&name, v, span)?;
         }
         Ok(())
+    }
+
+    /// `{name = value, ...}`
+    fn attr_dict(&mut self) -> PResult<Attrs> {
+        self.expect_punct('{')?;
+        let mut attrs = Attrs::new();
+        if self.eat_punct('}') {
+            return Ok(attrs);
+        }
+        loop {
+            let aspan = self.span();
+            let aname = self.name("an attribute name")?;
+            // A name alone is a unit attribute, as in MLIR (`{entry}`).
+            let value = if self.eat_punct('=') {
+                self.attr()?
+            } else {
+                Attr::Unit
+            };
+            if attrs.get(&aname).is_some() {
+                return Err(self.error("E0957", aspan, format!("attribute `{aname}` given twice")));
+            }
+            attrs.set(&aname, value);
+            if !self.eat_punct(',') {
+                break;
+            }
+        }
+        self.expect_punct('}')?;
+        Ok(attrs)
     }
 
     /// `^bb(%a, %b : T, U)` or `^bb`.
@@ -672,253 +742,4 @@ impl Parser<'_> {
             Ok(vec![self.ty()?])
         }
     }
-
-    fn ty(&mut self) -> PResult<TypeId> {
-        self.enter()?;
-        let t = self.ty_inner();
-        self.leave();
-        t
-    }
-
-    fn ty_inner(&mut self) -> PResult<TypeId> {
-        let span = self.span();
-        let tok = self.peek().clone();
-        if !matches!(tok, Tok::Ident(_) | Tok::Bang(_)) {
-            return Err(self.error(
-                "E0956",
-                span,
-                format!("expected a type, found {}", describe(&tok)),
-            ));
-        }
-        self.bump();
-        let ty = match tok {
-            Tok::Ident(name) => match name.as_str() {
-                "vector" => {
-                    self.expect_punct('<')?;
-                    let lanes = self.int_in_type()?;
-                    let elem = self.x_then_type()?;
-                    self.expect_punct('>')?;
-                    let lanes = u32::try_from(lanes)
-                        .ok()
-                        .filter(|&l| l > 0)
-                        .ok_or_else(|| {
-                            self.error(
-                                "E0956",
-                                span,
-                                "vector lane count must be between 1 and 2^32-1",
-                            )
-                        })?;
-                    Type::Vector { elem, lanes }
-                }
-                "array" => {
-                    self.expect_punct('<')?;
-                    let len =
-                        if self.eat_punct('?') {
-                            None
-                        } else {
-                            let n = self.int_in_type()?;
-                            Some(u64::try_from(n).map_err(|_| {
-                                self.error("E0956", span, "array length out of range")
-                            })?)
-                        };
-                    let elem = self.x_then_type()?;
-                    self.expect_punct('>')?;
-                    Type::Array { elem, len }
-                }
-                "tuple" => {
-                    self.expect_punct('<')?;
-                    let mut elems = Vec::new();
-                    if !self.eat_punct('>') {
-                        loop {
-                            elems.push(self.ty()?);
-                            if !self.eat_punct(',') {
-                                break;
-                            }
-                        }
-                        self.expect_punct('>')?;
-                    }
-                    Type::Tuple(elems)
-                }
-                "set" | "option" => {
-                    self.expect_punct('<')?;
-                    let e = self.ty()?;
-                    self.expect_punct('>')?;
-                    if name == "set" {
-                        Type::Set(e)
-                    } else {
-                        Type::Option(e)
-                    }
-                }
-                other => match scalar_type(other) {
-                    Some(t) => t,
-                    None => {
-                        return Err(self.error("E0956", span, format!("unknown type `{other}`")))
-                    }
-                },
-            },
-            Tok::Bang(name) if name == "tree.adt" => {
-                self.expect_punct('<')?;
-                let Tok::Str(s) = self.peek().clone() else {
-                    return Err(self.unexpected("a quoted type name"));
-                };
-                self.bump();
-                self.expect_punct('>')?;
-                Type::Adt(s)
-            }
-            Tok::Bang(name) if name == "tree.ref" => {
-                self.expect_punct('<')?;
-                let e = self.ty()?;
-                self.expect_punct('>')?;
-                Type::Ref(e)
-            }
-            other => {
-                return Err(self.error(
-                    "E0956",
-                    span,
-                    format!("expected a type, found {}", describe(&other)),
-                ))
-            }
-        };
-        Ok(self.m.ty(ty))
-    }
-
-    fn int_in_type(&mut self) -> PResult<i128> {
-        match self.peek().clone() {
-            Tok::Int(v) => {
-                self.bump();
-                Ok(v)
-            }
-            _ => Err(self.unexpected("a number")),
-        }
-    }
-
-    /// After the count of `vector<3xf32>` or `array<8 x T>`: the `x` and the element type,
-    /// written together (`xf32`) or apart (`x T`).
-    fn x_then_type(&mut self) -> PResult<TypeId> {
-        let span = self.span();
-        match self.peek().clone() {
-            Tok::Ident(s) if s == "x" => {
-                self.bump();
-                self.ty()
-            }
-            Tok::Ident(s) if s.starts_with('x') => {
-                self.bump();
-                match scalar_type(&s[1..]) {
-                    Some(t) => Ok(self.m.ty(t)),
-                    None => Err(self.error(
-                        "E0956",
-                        span,
-                        format!("unknown element type `{}`", &s[1..]),
-                    )),
-                }
-            }
-            _ => Err(self.unexpected("`x` and an element type")),
-        }
-    }
-
-    fn attr(&mut self) -> PResult<Attr> {
-        self.enter()?;
-        let a = self.attr_inner();
-        self.leave();
-        a
-    }
-
-    fn attr_inner(&mut self) -> PResult<Attr> {
-        let span = self.span();
-        match self.peek().clone() {
-            Tok::Int(v) => {
-                self.bump();
-                Ok(Attr::Int(v))
-            }
-            Tok::Float(s) => {
-                self.bump();
-                s.parse::<f64>()
-                    .map(Attr::float)
-                    .map_err(|_| self.error("E0957", span, format!("bad float literal `{s}`")))
-            }
-            Tok::Str(s) => {
-                self.bump();
-                Ok(Attr::Str(s))
-            }
-            Tok::Sym(s) => {
-                self.bump();
-                Ok(Attr::Sym(s))
-            }
-            Tok::Punct('-') => {
-                self.bump();
-                match self.peek() {
-                    Tok::Ident(s) if s == "inf" => {
-                        self.bump();
-                        Ok(Attr::float(f64::NEG_INFINITY))
-                    }
-                    _ => Err(self.unexpected("`inf` after `-`")),
-                }
-            }
-            Tok::Punct('[') => {
-                self.bump();
-                let mut items = Vec::new();
-                if !self.eat_punct(']') {
-                    loop {
-                        items.push(self.attr()?);
-                        if !self.eat_punct(',') {
-                            break;
-                        }
-                    }
-                    self.expect_punct(']')?;
-                }
-                Ok(Attr::List(items))
-            }
-            Tok::Ident(s) => match s.as_str() {
-                "true" | "false" => {
-                    self.bump();
-                    Ok(Attr::Bool(s == "true"))
-                }
-                "unit" => {
-                    self.bump();
-                    Ok(Attr::Unit)
-                }
-                "inf" => {
-                    self.bump();
-                    Ok(Attr::float(f64::INFINITY))
-                }
-                "nan" => {
-                    self.bump();
-                    if !self.eat_punct('(') {
-                        return Ok(Attr::Float(CANONICAL_NAN_BITS));
-                    }
-                    let bits = match self.peek().clone() {
-                        Tok::Int(v) => {
-                            self.bump();
-                            v
-                        }
-                        _ => return Err(self.unexpected("the bits of a NaN")),
-                    };
-                    self.expect_punct(')')?;
-                    match u64::try_from(bits) {
-                        Ok(b) if f64::from_bits(b).is_nan() => Ok(Attr::Float(b)),
-                        _ => Err(self.error(
-                            "E0957",
-                            span,
-                            "`nan(...)` needs the bits of an f64 NaN",
-                        )),
-                    }
-                }
-                _ => Ok(Attr::Type(self.ty()?)),
-            },
-            Tok::Bang(_) => Ok(Attr::Type(self.ty()?)),
-            _ => Err(self.unexpected("an attribute value")),
-        }
-    }
-}
-
-/// The scalar type spelled `s`.
-fn scalar_type(s: &str) -> Option<Type> {
-    Some(match s {
-        "i1" => Type::Bool,
-        "f16" => Type::Float(FloatTy::F16),
-        "f32" => Type::Float(FloatTy::F32),
-        "f64" => Type::Float(FloatTy::F64),
-        "ptr" => Type::Ptr,
-        _ => Type::Int(IntTy::ALL.into_iter().find(|t| t.name() == s)?),
-    })
 }

@@ -12,6 +12,7 @@
 //! [`ops`] lists the op kinds, [`verify`] their rules; this module adds builder shorthands.
 
 pub mod ops;
+pub mod scalar;
 pub mod verify;
 
 pub use ops::{CmpPred, Op};
@@ -209,18 +210,147 @@ impl Builder<'_> {
         Some(self.insert(spec.attr("arms", Attr::List(names))))
     }
 
-    /// `tree.foreach` over an array or slice; `body` gets the element and must end the region
-    /// with `tree.yield()`. Returns `None` when `array` is not an array.
+    /// `tree.foreach` over an array, slice or set; `body` gets the element and must end the
+    /// region with `tree.yield()`. Returns `None` when `array` is neither.
     pub fn foreach(
         &mut self,
         array: ValueId,
         body: impl FnOnce(&mut Builder<'_>, ValueId),
     ) -> Option<OpId> {
         let elem = match self.m.types.get(self.value_type(array)) {
-            Type::Array { elem, .. } => *elem,
+            Type::Array { elem, .. } | Type::Set(elem) => *elem,
             _ => return None,
         };
         let r = self.region(&[elem], |b, args| body(b, args[0]));
         Some(self.insert(OpSpec::new(Op::Foreach).operands(&[array]).region(r)))
+    }
+
+    /// `tree.select(cond, a, b)`.
+    pub fn select(&mut self, cond: ValueId, a: ValueId, b: ValueId) -> ValueId {
+        let ty = self.value_type(a);
+        self.build1(Op::Select, &[cond, a, b], ty)
+    }
+
+    /// `tree.cast` (`as`) to `to`.
+    pub fn cast(&mut self, v: ValueId, to: TypeId) -> ValueId {
+        self.build1(Op::Cast, &[v], to)
+    }
+
+    /// `tree.bitcast` (`to`) to `to`.
+    pub fn bitcast(&mut self, v: ValueId, to: TypeId) -> ValueId {
+        self.build1(Op::Bitcast, &[v], to)
+    }
+
+    /// `tree.tuple` of the values.
+    pub fn tuple(&mut self, elems: &[ValueId]) -> ValueId {
+        let tys = elems.iter().map(|&e| self.value_type(e)).collect();
+        let ty = self.m.types.tuple(tys);
+        self.build1(Op::Tuple, elems, ty)
+    }
+
+    /// `tree.extract {index}`; `None` when `tuple` is not a tuple with that many elements.
+    pub fn extract(&mut self, tuple: ValueId, index: usize) -> Option<ValueId> {
+        let elem = match self.m.types.get(self.value_type(tuple)) {
+            Type::Tuple(elems) => *elems.get(index)?,
+            _ => return None,
+        };
+        let spec = OpSpec::new(Op::Extract)
+            .operands(&[tuple])
+            .attr("index", Attr::Int(index as i128));
+        let op = self.insert(spec.results(&[elem]));
+        Some(self.result(op, 0))
+    }
+
+    /// `tree.insert {index}`: `tuple` with element `index` replaced by `value`.
+    pub fn insert_elem(&mut self, tuple: ValueId, index: usize, value: ValueId) -> ValueId {
+        let ty = self.value_type(tuple);
+        let spec = OpSpec::new(Op::Insert)
+            .operands(&[tuple, value])
+            .attr("index", Attr::Int(index as i128));
+        let op = self.insert(spec.results(&[ty]));
+        self.result(op, 0)
+    }
+
+    /// `tree.vector` from scalars (at least one).
+    pub fn vector(&mut self, lanes: &[ValueId]) -> Option<ValueId> {
+        let elem = self.value_type(*lanes.first()?);
+        let ty = self.m.types.vector(elem, lanes.len() as u32);
+        Some(self.build1(Op::Vector, lanes, ty))
+    }
+
+    /// `tree.lane {index}` of a vector; `None` when `v` is not a vector.
+    pub fn lane(&mut self, v: ValueId, index: u32) -> Option<ValueId> {
+        let elem = match self.m.types.get(self.value_type(v)) {
+            Type::Vector { elem, .. } => *elem,
+            _ => return None,
+        };
+        let spec = OpSpec::new(Op::Lane)
+            .operands(&[v])
+            .attr("index", Attr::Int(index as i128));
+        let op = self.insert(spec.results(&[elem]));
+        Some(self.result(op, 0))
+    }
+
+    /// `tree.index` into an array or vector; `None` for other types.
+    pub fn index(&mut self, container: ValueId, i: ValueId) -> Option<ValueId> {
+        let elem = match self.m.types.get(self.value_type(container)) {
+            Type::Array { elem, .. } | Type::Vector { elem, .. } => *elem,
+            _ => return None,
+        };
+        Some(self.build1(Op::Index, &[container, i], elem))
+    }
+
+    /// `tree.slice` `[lo, hi)` of an array; `None` for other types.
+    pub fn slice(&mut self, array: ValueId, lo: ValueId, hi: ValueId) -> Option<ValueId> {
+        let elem = match self.m.types.get(self.value_type(array)) {
+            Type::Array { elem, .. } | Type::Set(elem) => *elem,
+            _ => return None,
+        };
+        let ty = self.m.types.array(elem, None);
+        Some(self.build1(Op::Slice, &[array, lo, hi], ty))
+    }
+
+    /// `tree.bits {lo, hi}`: bits `[lo, hi)` of an integer as `result_type`.
+    pub fn bits(&mut self, v: ValueId, lo: u32, hi: u32, result_type: TypeId) -> ValueId {
+        let spec = OpSpec::new(Op::Bits)
+            .operands(&[v])
+            .attr("lo", Attr::Int(lo as i128))
+            .attr("hi", Attr::Int(hi as i128))
+            .results(&[result_type]);
+        let op = self.insert(spec);
+        self.result(op, 0)
+    }
+
+    /// `tree.is {variant}`.
+    pub fn is_variant(&mut self, v: ValueId, variant: &str) -> ValueId {
+        let i1 = self.m.types.bool();
+        let op = self.insert(
+            OpSpec::new(Op::Is)
+                .operands(&[v])
+                .attr("variant", Attr::str(variant))
+                .results(&[i1]),
+        );
+        self.result(op, 0)
+    }
+
+    /// `tree.var`: a new mutable cell holding `init`.
+    pub fn var(&mut self, init: ValueId) -> ValueId {
+        let ty = self.value_type(init);
+        let r = self.m.types.reference(ty);
+        self.build1(Op::Var, &[init], r)
+    }
+
+    /// `tree.load` through a reference; `None` when `r` is not a `!tree.ref<T>`.
+    pub fn load(&mut self, r: ValueId) -> Option<ValueId> {
+        let pointee = match self.m.types.get(self.value_type(r)) {
+            Type::Ref(t) => *t,
+            _ => return None,
+        };
+        Some(self.build1(Op::Load, &[r], pointee))
+    }
+
+    /// `tree.store` of `value` through `r`.
+    pub fn store(&mut self, r: ValueId, value: ValueId) -> OpId {
+        self.build(Op::Store, &[r, value], &[])
     }
 }

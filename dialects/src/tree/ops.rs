@@ -71,8 +71,9 @@ pub enum Op {
     /// `tree.if` `(i1) -> (results...)`, regions then and else, each ending with `tree.yield` of
     /// the results or with `tree.return`.
     If,
-    /// `tree.foreach` `(array<N x T>) -> ()`, one region whose block argument is the element
-    /// (and optionally a second one, the index, of an integer type); it ends with `tree.yield()`.
+    /// `tree.foreach` `(array<N x T> | set<T>) -> ()`, one region whose block arguments are the
+    /// element and optionally its index (an integer type); it ends with `tree.yield()`. Sets
+    /// are visited in ascending order.
     Foreach,
     /// `tree.index` `(array<N x T> | vector<NxT>, integer) -> T`.
     Index,

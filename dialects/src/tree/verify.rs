@@ -1,7 +1,7 @@
 //! Per-op rules of the `tree` dialect: operand and result counts and types, attributes, region
 //! shapes and terminators, and field indices checked against the module's ADT table.
 //!
-//! Called by [`crate::verify`] after the structural checks, so ids are valid here. Each rule is
+//! Called by [`crate::verify::verify`] after the structural checks, so ids are valid here. Each rule is
 //! the one documented on the op's variant in [`super::ops::Op`].
 
 use super::ops::{CmpPred, Op};
@@ -275,8 +275,9 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
         }
         Op::Foreach => {
             counts(&ot, &rt, 1, 0)?;
-            let Type::Array { elem, .. } = t.get(ot[0]) else {
-                return Err(format!("foreach over non-array {}", show(ot[0])));
+            let elem = match t.get(ot[0]) {
+                Type::Array { elem, .. } | Type::Set(elem) => elem,
+                _ => return Err(format!("foreach over {}, not an array or set", show(ot[0]))),
             };
             if o.regions.len() != 1 {
                 return Err("`tree.foreach` needs one body region".into());

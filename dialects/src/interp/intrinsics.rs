@@ -1,0 +1,229 @@
+//! The builtins of `tree.intrinsic`, as the interpreter computes them.
+//!
+//! Floats compute in their own precision. `min`/`max` on floats are IEEE `minNum`/`maxNum`
+//! (a NaN operand yields the other one, as the prelude's slab test needs); `round` rounds half
+//! away from zero; `rsqrt` is `1 / sqrt`. `dot` sums the lane products left to right without
+//! fusing (`((a0*b0 + a1*b1) + a2*b2)`), `length` is `sqrt(dot(v, v))`, `normalize` divides
+//! each lane by the length, `cross` is the usual 3-lane formula, `hmin`/`hmax`/`hsum` fold the
+//! lanes left to right. `sqrt` and `fma` are correctly rounded; `exp`, `log`, `sin` and `cos`
+//! come from the host's math library.
+
+use super::tree::{lanewise1, lanewise2, scalar_type};
+use super::Val;
+use crate::entity::TypeId;
+use crate::module::Module;
+use crate::tree::scalar::Scalar;
+use crate::types::Type;
+use std::rc::Rc;
+
+type R = Result<Val, String>;
+
+fn float1(a: &Val, f32op: fn(f32) -> f32, f64op: fn(f64) -> f64) -> R {
+    lanewise1(a, &|x| match x {
+        Scalar::F32(v) => Ok(Scalar::F32(f32op(v))),
+        Scalar::F64(v) => Ok(Scalar::F64(f64op(v))),
+        _ => Err("expects floats".into()),
+    })
+}
+
+fn lanes(v: &Val) -> Result<&[Val], String> {
+    match v {
+        Val::Vector(l) => Ok(l),
+        _ => Err("expects a vector".into()),
+    }
+}
+
+fn add(a: &Val, b: &Val) -> R {
+    lanewise2(a, b, &|x, y| {
+        crate::tree::scalar::binary(crate::tree::Op::Add, x, y).ok_or_else(|| "bad operands".into())
+    })
+}
+
+fn mul(a: &Val, b: &Val) -> R {
+    lanewise2(a, b, &|x, y| {
+        crate::tree::scalar::binary(crate::tree::Op::Mul, x, y).ok_or_else(|| "bad operands".into())
+    })
+}
+
+fn sub(a: &Val, b: &Val) -> R {
+    lanewise2(a, b, &|x, y| {
+        crate::tree::scalar::binary(crate::tree::Op::Sub, x, y).ok_or_else(|| "bad operands".into())
+    })
+}
+
+fn dot(a: &Val, b: &Val) -> R {
+    let (x, y) = (lanes(a)?, lanes(b)?);
+    let mut acc = mul(
+        x.first().ok_or("empty vector")?,
+        y.first().ok_or("empty vector")?,
+    )?;
+    for (p, q) in x.iter().zip(y).skip(1) {
+        acc = add(&acc, &mul(p, q)?)?;
+    }
+    Ok(acc)
+}
+
+fn fold_lanes(v: &Val, f: &dyn Fn(&Val, &Val) -> R) -> R {
+    let l = lanes(v)?;
+    let mut acc = l.first().ok_or("empty vector")?.clone();
+    for x in &l[1..] {
+        acc = f(&acc, x)?;
+    }
+    Ok(acc)
+}
+
+fn min_max(a: &Val, b: &Val, max: bool) -> R {
+    lanewise2(a, b, &|x, y| {
+        Ok(match (x, y) {
+            (Scalar::Int(p, t), Scalar::Int(q, _)) => {
+                Scalar::Int(if max { p.max(q) } else { p.min(q) }, t)
+            }
+            (Scalar::F32(p), Scalar::F32(q)) => Scalar::F32(if max { p.max(q) } else { p.min(q) }),
+            (Scalar::F64(p), Scalar::F64(q)) => Scalar::F64(if max { p.max(q) } else { p.min(q) }),
+            _ => return Err("expects numbers of one type".into()),
+        })
+    })
+}
+
+/// Evaluates builtin `name` on `args`, giving a value of type `result`.
+pub fn eval(m: &Module, name: &str, args: &[Val], result: TypeId) -> R {
+    let one = || {
+        args.first()
+            .ok_or_else(|| format!("`{name}` needs an operand"))
+    };
+    let two = || match args {
+        [a, b, ..] => Ok((a, b)),
+        _ => Err(format!("`{name}` needs two operands")),
+    };
+    match name {
+        "abs" => lanewise1(one()?, &|x| {
+            Ok(match x {
+                Scalar::Int(v, t) => Scalar::Int(t.wrap(v.abs()), t),
+                Scalar::F32(v) => Scalar::F32(v.abs()),
+                Scalar::F64(v) => Scalar::F64(v.abs()),
+                Scalar::Bool(_) => return Err("expects numbers".into()),
+            })
+        }),
+        "min" | "max" => {
+            let (a, b) = two()?;
+            min_max(a, b, name == "max")
+        }
+        "sqrt" => float1(one()?, f32::sqrt, f64::sqrt),
+        "rsqrt" => float1(one()?, |x| 1.0 / x.sqrt(), |x| 1.0 / x.sqrt()),
+        "floor" => float1(one()?, f32::floor, f64::floor),
+        "ceil" => float1(one()?, f32::ceil, f64::ceil),
+        "round" => float1(one()?, f32::round, f64::round),
+        "trunc" => float1(one()?, f32::trunc, f64::trunc),
+        "exp" => float1(one()?, f32::exp, f64::exp),
+        "log" => float1(one()?, f32::ln, f64::ln),
+        "sin" => float1(one()?, f32::sin, f64::sin),
+        "cos" => float1(one()?, f32::cos, f64::cos),
+        "fma" => match args {
+            [a, b, c] => fma3(a, b, c),
+            _ => Err("`fma` needs three operands".into()),
+        },
+        "popcount" | "clz" | "ctz" => lanewise1(one()?, &|x| match x {
+            Scalar::Int(v, t) => {
+                let w = t.bits();
+                let raw = (v as u128) & ((1u128 << w) - 1);
+                let n = match name {
+                    "popcount" => raw.count_ones(),
+                    "clz" => raw.leading_zeros() - (128 - w),
+                    _ => raw.trailing_zeros().min(w),
+                };
+                Ok(Scalar::Int(n as i128, t))
+            }
+            _ => Err("expects integers".into()),
+        }),
+        "isnan" => lanewise1(one()?, &|x| match x {
+            Scalar::F32(v) => Ok(Scalar::Bool(v.is_nan())),
+            Scalar::F64(v) => Ok(Scalar::Bool(v.is_nan())),
+            _ => Err("expects floats".into()),
+        }),
+        "dot" => {
+            let (a, b) = two()?;
+            dot(a, b)
+        }
+        "length" => {
+            let a = one()?;
+            float1(&dot(a, a)?, f32::sqrt, f64::sqrt)
+        }
+        "normalize" => {
+            let a = one()?;
+            let len = float1(&dot(a, a)?, f32::sqrt, f64::sqrt)?;
+            let l = lanes(a)?;
+            let out: Result<Vec<Val>, String> = l
+                .iter()
+                .map(|x| {
+                    lanewise2(x, &len, &|p, q| {
+                        crate::tree::scalar::binary(crate::tree::Op::Div, p, q)
+                            .ok_or_else(|| "bad operands".into())
+                    })
+                })
+                .collect();
+            Ok(Val::Vector(out?))
+        }
+        "cross" => {
+            let (a, b) = two()?;
+            let (x, y) = (lanes(a)?, lanes(b)?);
+            if x.len() != 3 || y.len() != 3 {
+                return Err("`cross` needs 3-lane vectors".into());
+            }
+            let c = |i: usize, j: usize| -> R { sub(&mul(&x[i], &y[j])?, &mul(&x[j], &y[i])?) };
+            Ok(Val::Vector(vec![c(1, 2)?, c(2, 0)?, c(0, 1)?]))
+        }
+        "hmin" => fold_lanes(one()?, &|a, b| min_max(a, b, false)),
+        "hmax" => fold_lanes(one()?, &|a, b| min_max(a, b, true)),
+        "hsum" => fold_lanes(one()?, &add),
+        "len" => match (one()?, scalar_type(m, result)) {
+            (Val::Array(a), Type::Int(t)) => Ok(Val::Int(t.wrap(a.len() as i128), *t)),
+            _ => Err("`len` takes an array and gives an integer".into()),
+        },
+        "some" => Ok(Val::Option(Some(Box::new(one()?.clone())))),
+        "none" => Ok(Val::Option(None)),
+        "is_some" => match one()? {
+            Val::Option(o) => Ok(Val::Bool(o.is_some())),
+            _ => Err("expects an option".into()),
+        },
+        "unwrap" => match one()? {
+            Val::Option(Some(v)) => Ok((**v).clone()),
+            Val::Option(None) => Err("`unwrap` of `none`".into()),
+            _ => Err("expects an option".into()),
+        },
+        "set_empty" => Ok(Val::Set(Rc::new(Vec::new()))),
+        "set_insert" => match two()? {
+            (Val::Set(s), v) => {
+                let mut items = (**s).clone();
+                if let Err(pos) = items.binary_search_by(|x| x.total_cmp(v)) {
+                    items.insert(pos, v.clone());
+                }
+                Ok(Val::Set(Rc::new(items)))
+            }
+            _ => Err("expects a set".into()),
+        },
+        "set_contains" => match two()? {
+            (Val::Set(s), v) => Ok(Val::Bool(s.binary_search_by(|x| x.total_cmp(v)).is_ok())),
+            _ => Err("expects a set".into()),
+        },
+        _ => Err(format!("unknown intrinsic `{name}`")),
+    }
+}
+
+/// `a * b + c` rounded once, lane-wise.
+fn fma3(a: &Val, b: &Val, c: &Val) -> R {
+    match (a, b, c) {
+        (Val::Vector(x), Val::Vector(y), Val::Vector(z))
+            if x.len() == y.len() && y.len() == z.len() =>
+        {
+            x.iter()
+                .zip(y)
+                .zip(z)
+                .map(|((p, q), r)| fma3(p, q, r))
+                .collect::<Result<_, _>>()
+                .map(Val::Vector)
+        }
+        (Val::F32(p), Val::F32(q), Val::F32(r)) => Ok(Val::F32(p.mul_add(*q, *r))),
+        (Val::F64(p), Val::F64(q), Val::F64(r)) => Ok(Val::F64(p.mul_add(*q, *r))),
+        _ => Err("`fma` expects floats of one type".into()),
+    }
+}
