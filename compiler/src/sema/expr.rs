@@ -143,7 +143,14 @@ impl Checker<'_> {
                     });
                     return Ty::Error;
                 }
-                match self.lookup(&name.name) {
+                // `parent.x` may name any member of the layout (the parent is a node of the
+                // same layout), also from a reference component's default.
+                let found = self.lookup(&name.name).or_else(|| {
+                    let l = self.current_layout()?;
+                    let i = l.members.iter().position(|m| m.name == name.name)?;
+                    Some(Binding::Member(super::typed::MemberId(i as u32)))
+                });
+                match found {
                     Some(Binding::Member(m)) => {
                         self.out
                             .resolutions

@@ -240,23 +240,20 @@ impl<'a> Checker<'a> {
                 );
             }
             Tail::NoValue => {
+                // Without a declared result, falling off the end makes the result `()`.
                 let r = self.shallow(&info.ret);
-                if declared_ret && !r.is_unit() && r != Ty::Error {
+                let missing = if declared_ret {
+                    !r.is_unit() && r != Ty::Error
+                } else {
+                    self.unify(&info.ret, &Ty::unit()).is_err()
+                };
+                if missing {
                     let ret = self.show(&info.ret);
                     self.error(SemaError::MissingValue {
                         func: info.name.clone(),
                         ret,
                         span: decl.body.span,
                     });
-                } else if !declared_ret {
-                    if self.unify(&info.ret, &Ty::unit()).is_err() {
-                        let ret = self.show(&info.ret);
-                        self.error(SemaError::MissingValue {
-                            func: info.name.clone(),
-                            ret,
-                            span: decl.body.span,
-                        });
-                    }
                 }
             }
         }

@@ -85,6 +85,7 @@ impl Checker<'_> {
         if let Some(adt) = adt {
             self.resolve_arm_variants(layout_idx, adt, &decl.members, &mut 0);
         }
+        self.seed_derived_types(layout_idx);
         self.ctx = Ctx::Layout { layout: layout_idx };
         self.scopes.clear();
         self.push_scope();
@@ -196,11 +197,23 @@ impl Checker<'_> {
         if let Some(b) = build {
             used.extend(b.variants.iter().map(|v| v.name.name.clone()));
         }
+        // The sum types naming the most of the variants used; then those whose fields the
+        // build's parameters name; then those with the most logical fields named by members.
+        let score =
+            |d: &super::types::AdtDef| used.iter().filter(|u| d.variant_index(u).is_some()).count();
+        let best = self
+            .adts
+            .adts
+            .iter()
+            .filter(|d| d.is_sum())
+            .map(score)
+            .max()
+            .unwrap_or(0);
         let mut cands: Vec<AdtId> = (0..self.adts.adts.len() as u32)
             .map(AdtId)
             .filter(|a| {
                 let d = &self.adts.adts[a.0 as usize];
-                d.is_sum() && !used.is_empty() && used.iter().all(|u| d.variant_index(u).is_some())
+                best > 0 && d.is_sum() && score(d) == best
             })
             .collect();
         if cands.len() > 1 {
@@ -226,6 +239,25 @@ impl Checker<'_> {
                     cands = matching;
                 }
             }
+        }
+        if cands.len() > 1 {
+            let mut names = Vec::new();
+            collect_names(&decl.members, &mut names);
+            let realized = |a: &AdtId| {
+                let d = &self.adts.adts[a.0 as usize];
+                let mut fields: Vec<&str> = d.fields.iter().map(|f| f.name.as_str()).collect();
+                for v in d.variants() {
+                    fields.extend(v.fields.iter().map(|f| f.name.as_str()));
+                }
+                fields.sort_unstable();
+                fields.dedup();
+                fields
+                    .iter()
+                    .filter(|f| names.iter().any(|n| n == *f))
+                    .count()
+            };
+            let top = cands.iter().map(realized).max().unwrap_or(0);
+            cands.retain(|a| realized(a) == top);
         }
         match cands.len() {
             1 => Some(cands[0]),
@@ -331,7 +363,13 @@ impl Checker<'_> {
                     let t = self.infer_expr(value);
                     if let Some(id) = ids.get(&key(m)) {
                         let want = self.out.layouts[layout].members[id.0 as usize].ty.clone();
-                        self.expect(&t, &want, value.span, "the derived field's other uses");
+                        if self.logical_expectation(layout, id.0 as usize).is_some() {
+                            if self.unify(&t, &want).is_err() {
+                                self.physical_error(layout, id.0 as usize, &t);
+                            }
+                        } else {
+                            self.expect(&t, &want, value.span, "the derived field's other uses");
+                        }
                     }
                 }
                 MemberKind::Let { value, name, .. } => {
@@ -427,42 +465,75 @@ impl Checker<'_> {
         }
     }
 
-    /// Checks "physical types preserve logical types" on every typed layout (after inference).
+    /// The logical field that member `m` of layout `layout` realizes by name, and the physical
+    /// type it must therefore have.
+    fn logical_expectation(&self, layout: usize, m: usize) -> Option<(Ty, Ty)> {
+        let l = self.out.layouts.get(layout)?;
+        let adt = l.adt?;
+        let def = self.adts.get(adt)?;
+        let mi = l.members.get(m)?;
+        if !matches!(mi.kind, MemberKindInfo::Stored | MemberKindInfo::Derived) {
+            return None;
+        }
+        let variants: Vec<usize> = match mi.variant {
+            Some(v) => vec![v as usize],
+            None => (0..def.variants().len()).collect(),
+        };
+        let f = variants.iter().find_map(|v| {
+            def.variant_fields(*v)
+                .into_iter()
+                .find(|f| f.name == mi.name)
+                .cloned()
+        })?;
+        let expected = self.physical_of(&f.ty, adt, &l.ref_ty);
+        Some((f.ty, expected))
+    }
+
+    fn physical_error(&mut self, layout: usize, m: usize, found: &Ty) {
+        let Some((logical, expected)) = self.logical_expectation(layout, m) else {
+            return;
+        };
+        let show = |t: &Ty| t.display(&self.adts).to_string();
+        let mi = &self.out.layouts[layout].members[m];
+        let e = SemaError::PhysicalType {
+            field: mi.name.clone(),
+            logical: show(&logical),
+            expected: show(&expected),
+            found: self.show(found),
+            span: mi.span,
+        };
+        self.error(e);
+    }
+
+    /// Gives derived fields that realize a logical field its physical type up front, so that
+    /// literals and other uses are inferred from it.
+    fn seed_derived_types(&mut self, layout: usize) {
+        for m in 0..self.out.layouts[layout].members.len() {
+            if self.out.layouts[layout].members[m].kind != MemberKindInfo::Derived {
+                continue;
+            }
+            if let Some((_, expected)) = self.logical_expectation(layout, m) {
+                let t = self.out.layouts[layout].members[m].ty.clone();
+                self.unify(&t, &expected).ok();
+            }
+        }
+    }
+
+    /// Checks "physical types preserve logical types" on the stored fields of every layout
+    /// (derived fields are checked where their value is typed).
     pub(super) fn check_physical_types(&mut self) {
         for li in 0..self.out.layouts.len() {
-            let layout = self.out.layouts[li].clone();
-            let Some(adt) = layout.adt else { continue };
-            let Some(def) = self.adts.get(adt).cloned() else {
-                continue;
-            };
-            for m in &layout.members {
-                if !matches!(m.kind, MemberKindInfo::Stored | MemberKindInfo::Derived) {
+            for m in 0..self.out.layouts[li].members.len() {
+                if self.out.layouts[li].members[m].kind != MemberKindInfo::Stored {
                     continue;
                 }
-                let variants: Vec<usize> = match m.variant {
-                    Some(v) => vec![v as usize],
-                    None => (0..def.variants().len()).collect(),
+                let Some((_, expected)) = self.logical_expectation(li, m) else {
+                    continue;
                 };
-                let logical = variants.iter().find_map(|v| {
-                    def.variant_fields(*v)
-                        .into_iter()
-                        .find(|f| f.name == m.name)
-                        .cloned()
-                });
-                let Some(f) = logical else { continue };
-                let expected = self.physical_of(&f.ty, adt, &layout.ref_ty);
-                let found = self.zonk(&m.ty);
-                if found.has_error() || expected.has_error() || found == expected {
-                    continue;
+                let found = self.zonk(&self.out.layouts[li].members[m].ty);
+                if !found.has_error() && !expected.has_error() && found != expected {
+                    self.physical_error(li, m, &found);
                 }
-                let show = |t: &Ty| t.display(&self.adts).to_string();
-                self.error(SemaError::PhysicalType {
-                    field: m.name.clone(),
-                    logical: show(&f.ty),
-                    expected: show(&expected),
-                    found: show(&found),
-                    span: m.span,
-                });
             }
         }
     }
