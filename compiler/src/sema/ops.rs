@@ -485,7 +485,6 @@ impl Checker<'_> {
     /// Returns the common type, or `None` to wait.
     fn common_operand(
         &mut self,
-        op: BinaryOp,
         lhs: &(NodeId, Ty, Span),
         rhs: &(NodeId, Ty, Span),
         force: bool,
@@ -507,12 +506,17 @@ impl Checker<'_> {
         }
         if self.unify(&l, &r).is_err() {
             let (expected, found) = (self.show(&l), self.show(&r));
-            let _ = op;
+            let context = match (&l, &r) {
+                (Ty::Prim(p), Ty::Prim(q)) if p.is_int() && q.is_int() => {
+                    "the operator's other operand (integers of different signedness need `as`)"
+                }
+                _ => "the operator's other operand",
+            };
             self.error(SemaError::Mismatch {
                 expected,
                 found,
                 span: rhs.2,
-                context: "the operator's other operand",
+                context,
             });
             return Some(Ty::Error);
         }
@@ -558,7 +562,7 @@ impl Checker<'_> {
                 Progress::Done
             }
             _ => {
-                let Some(t) = self.common_operand(op, lhs, rhs, force) else {
+                let Some(t) = self.common_operand(lhs, rhs, force) else {
                     return Progress::Wait;
                 };
                 let t = self.shallow(&t);
