@@ -594,10 +594,19 @@ impl<'a> Checker<'a> {
                 span,
             });
         }
+        let mut bound: FxHashMap<&str, Span> = FxHashMap::default();
         for (i, (p, f)) in fields.iter().zip(all.iter()).enumerate() {
             match &p.kind {
                 PatternKind::Wildcard => {}
                 PatternKind::Bind { name, ty } => {
+                    if let Some(prev) = bound.insert(&name.name, name.span) {
+                        self.error(SemaError::Duplicate {
+                            what: "pattern binding",
+                            name: name.name.clone(),
+                            span: name.span,
+                            previous: prev,
+                        });
+                    }
                     if let Some(t) = ty {
                         let d = self.lower_type_local(t);
                         self.expect(&f.ty, &d, p.span, "the pattern's type annotation");

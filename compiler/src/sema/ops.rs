@@ -328,8 +328,11 @@ impl Checker<'_> {
                 }
                 let ok = match op {
                     UnaryOp::Neg => {
-                        matches!(class, Class::Int | Class::Float)
-                            || matches!(t, Ty::Vector(p, _) if p.is_numeric())
+                        let unsigned =
+                            matches!(t, Ty::Prim(p) | Ty::Vector(p, _) if p.is_unsigned_int());
+                        !unsigned
+                            && (matches!(class, Class::Int | Class::Float)
+                                || matches!(t, Ty::Vector(p, _) if p.is_numeric()))
                     }
                     UnaryOp::Not => t == Ty::bool() || t == Ty::Error,
                     UnaryOp::BitNot => {
@@ -338,7 +341,7 @@ impl Checker<'_> {
                 };
                 if !ok {
                     let (sym, expected) = match op {
-                        UnaryOp::Neg => ("-", "a number or a numeric vector"),
+                        UnaryOp::Neg => ("-", "a signed number or vector"),
                         UnaryOp::Not => ("!", "`bool`"),
                         UnaryOp::BitNot => ("~", "an integer"),
                     };

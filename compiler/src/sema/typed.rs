@@ -6,6 +6,23 @@
 //! `foreach` and patterns, and for layouts and builds the types of their members (paper §3-§6).
 //! No [`Ty::Var`] remains in a `TypedProgram`; where a type could not be found it is
 //! [`Ty::Error`] and a diagnostic was reported.
+//!
+//! Reading it (for `irgen`), by AST node:
+//!
+//! * every `Expr`: `expr_types[id]`; `Name`, `Call`, `Parent` and `Build` expressions also have
+//!   `resolutions[id]` ([`Resolution`]). A `Call` resolved to `Ctor`/`Variant`/`Func` may omit
+//!   trailing arguments whose field or parameter has a default: the default is the expression in
+//!   the declaring AST node (typed like any other expression).
+//! * `StmtKind::Let` and `StmtKind::Foreach`: `binders[stmt.id]` is the binding; a
+//!   `PatternKind::Bind`: `binders[pattern.id]`, whose [`BindingKind::Pattern`] says which field
+//!   (shared fields first) it binds; a `PatternKind::Variant`: `pattern_variants[pattern.id]`.
+//! * an arithmetic or comparison operand in `widenings` is converted to the wider integer type
+//!   before the operation (its own `expr_types` entry is the narrow type).
+//! * a `mut` parameter is passed by reference: an argument for a `mut` parameter is always a
+//!   `Name` resolving to a `mut` [`Resolution::Param`] of the caller.
+//! * the function declared by item `i` is `funcs[func_of_item(i)]`; `unique_name` tells overloads apart.
+//! * layouts: [`LayoutInfo::members`] in pre-order of named members; builds: `build x` statements
+//!   have `build_targets[stmt.id]`.
 
 use super::types::{AdtId, AdtTable, Prim, Ty};
 use crate::syntax::ast::NodeId;
