@@ -11,15 +11,117 @@
 
 /// Tokens that are inserted into mutated inputs, chosen to reach every parser and checker path.
 pub const DICTIONARY: &[&str] = &[
-    "type", "func", "layout", "build", "group", "indirect", "split", "by", "from", "let", "mut",
-    "match", "if", "elif", "else", "foreach", "in", "return", "as", "to", "this", "parent",
-    "true", "false", "inf", "root", "order", "pre", "post", "size", "align", "set", "option",
-    "append", "(", ")", "{", "}", "[", "]", ";", ":", ",", ".", "->", "---", "|", "||", "&&",
-    "=", "==", "!=", "<", "<=", ">", ">=", "<<", ">>", "+", "-", "*", "/", "%", "!", "~", "^",
-    "&", "_", "0", "1", "255", "65535", "4294967295", "18446744073709551616", "0x1F", "0b101",
-    "1.0", "1e-3", "1e40", "-0.0", "f32", "f32x3", "u16", "u32", "u64", "i32", "ptr", "bool",
-    "AABB", "Ray", "Triangle", "BVH", "Interior", "Leaf", "bounds", "left", "right", "nprims",
-    "data", "I", "N", "P", "x", "T[8]", "nodes[I]", "I[0:1]", "//", "\n", " ", "\"", "\u{e9}",
+    "type",
+    "func",
+    "layout",
+    "build",
+    "group",
+    "indirect",
+    "split",
+    "by",
+    "from",
+    "let",
+    "mut",
+    "match",
+    "if",
+    "elif",
+    "else",
+    "foreach",
+    "in",
+    "return",
+    "as",
+    "to",
+    "this",
+    "parent",
+    "true",
+    "false",
+    "inf",
+    "root",
+    "order",
+    "pre",
+    "post",
+    "size",
+    "align",
+    "set",
+    "option",
+    "append",
+    "(",
+    ")",
+    "{",
+    "}",
+    "[",
+    "]",
+    ";",
+    ":",
+    ",",
+    ".",
+    "->",
+    "---",
+    "|",
+    "||",
+    "&&",
+    "=",
+    "==",
+    "!=",
+    "<",
+    "<=",
+    ">",
+    ">=",
+    "<<",
+    ">>",
+    "+",
+    "-",
+    "*",
+    "/",
+    "%",
+    "!",
+    "~",
+    "^",
+    "&",
+    "_",
+    "0",
+    "1",
+    "255",
+    "65535",
+    "4294967295",
+    "18446744073709551616",
+    "0x1F",
+    "0b101",
+    "1.0",
+    "1e-3",
+    "1e40",
+    "-0.0",
+    "f32",
+    "f32x3",
+    "u16",
+    "u32",
+    "u64",
+    "i32",
+    "ptr",
+    "bool",
+    "AABB",
+    "Ray",
+    "Triangle",
+    "BVH",
+    "Interior",
+    "Leaf",
+    "bounds",
+    "left",
+    "right",
+    "nprims",
+    "data",
+    "I",
+    "N",
+    "P",
+    "x",
+    "T[8]",
+    "nodes[I]",
+    "I[0:1]",
+    "//",
+    "\n",
+    " ",
+    "\"",
+    "\u{e9}",
 ];
 
 /// A small deterministic random number generator (xorshift64*).
@@ -29,7 +131,11 @@ pub struct Rng(u64);
 impl Rng {
     /// A generator from a seed (0 is replaced by a fixed odd constant).
     pub fn new(seed: u64) -> Rng {
-        Rng(if seed == 0 { 0x9E37_79B9_7F4A_7C15 } else { seed })
+        Rng(if seed == 0 {
+            0x9E37_79B9_7F4A_7C15
+        } else {
+            seed
+        })
     }
 
     /// The next 64 random bits.
@@ -58,8 +164,14 @@ pub struct Mutator {
 impl Mutator {
     /// A mutator over `seeds` (must not be empty) with a fixed random seed.
     pub fn new(seeds: Vec<String>, seed: u64) -> Mutator {
-        assert!(!seeds.is_empty(), "the mutator needs at least one seed text");
-        Mutator { seeds, rng: Rng::new(seed) }
+        assert!(
+            !seeds.is_empty(),
+            "the mutator needs at least one seed text"
+        );
+        Mutator {
+            seeds,
+            rng: Rng::new(seed),
+        }
     }
 
     /// The next input: usually a seed with 1-8 mutations, sometimes a token soup.
@@ -67,7 +179,9 @@ impl Mutator {
         if self.rng.below(16) == 0 {
             return self.token_soup();
         }
-        let mut text = self.seeds[self.rng.below(self.seeds.len())].clone().into_bytes();
+        let mut text = self.seeds[self.rng.below(self.seeds.len())]
+            .clone()
+            .into_bytes();
         let rounds = 1 + self.rng.below(8);
         for _ in 0..rounds {
             self.mutate(&mut text);
@@ -114,7 +228,9 @@ impl Mutator {
                 text.splice(at..at, piece);
             }
             3 => {
-                let donor = self.seeds[self.rng.below(self.seeds.len())].as_bytes().to_vec();
+                let donor = self.seeds[self.rng.below(self.seeds.len())]
+                    .as_bytes()
+                    .to_vec();
                 let (a, b) = self.range(donor.len());
                 let at = self.rng.below(len + 1);
                 text.splice(at..at, donor[a..b].iter().copied());
@@ -126,14 +242,20 @@ impl Mutator {
             }
             _ => {
                 // Replace one whole line by a random dictionary token sequence.
-                let lines: Vec<usize> =
-                    text.iter().enumerate().filter(|(_, c)| **c == b'\n').map(|(i, _)| i).collect();
+                let lines: Vec<usize> = text
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, c)| **c == b'\n')
+                    .map(|(i, _)| i)
+                    .collect();
                 if lines.len() > 1 {
                     let k = self.rng.below(lines.len() - 1);
                     let (a, b) = (lines[k] + 1, lines[k + 1]);
                     let mut repl = Vec::new();
                     for _ in 0..self.rng.below(6) {
-                        repl.extend_from_slice(DICTIONARY[self.rng.below(DICTIONARY.len())].as_bytes());
+                        repl.extend_from_slice(
+                            DICTIONARY[self.rng.below(DICTIONARY.len())].as_bytes(),
+                        );
                         repl.push(b' ');
                     }
                     text.splice(a..b, repl);

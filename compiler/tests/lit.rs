@@ -8,9 +8,12 @@ use std::process::Command;
 
 fn main() {
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
-    let lit = ["/usr/lib/llvm-22/bin/lit", "lit"]
-        .into_iter()
-        .find(|p| Command::new(p).arg("--version").output().is_ok_and(|o| o.status.success()));
+    let lit = ["/usr/lib/llvm-22/bin/lit", "lit"].into_iter().find(|p| {
+        Command::new(p)
+            .arg("--version")
+            .output()
+            .is_ok_and(|o| o.status.success())
+    });
     let Some(lit) = lit else {
         eprintln!("lit not found: run scripts/setup.sh (installs Debian's llvm-22-tools)");
         std::process::exit(1);
