@@ -26,6 +26,8 @@ enum Want {
     Vector,
     /// Arrays, slices and sets.
     Collection,
+    /// Sets.
+    Set,
 }
 
 impl Want {
@@ -37,6 +39,7 @@ impl Want {
             Want::FloatVec3 => "a 3-lane float vector",
             Want::Vector => "a vector",
             Want::Collection => "an array, slice or set",
+            Want::Set => "a set",
         }
     }
 }
@@ -62,6 +65,7 @@ impl Checker<'_> {
             Want::FloatVec3 => matches!(s, Ty::Vector(p, 3) if p.is_float()),
             Want::Vector => matches!(s, Ty::Vector(..)),
             Want::Collection => matches!(s, Ty::Array(..) | Ty::Slice(_) | Ty::Set(_)),
+            Want::Set => matches!(s, Ty::Set(_)),
         })
     }
 
@@ -85,6 +89,7 @@ impl Checker<'_> {
             Cross => (Want::FloatVec3, true),
             WithAxis => (Want::Vector, false),
             Len | Append => (Want::Collection, false),
+            Insert => (Want::Set, false),
         };
         let Some((first, first_span)) = args.first().cloned() else {
             return Progress::Done;
@@ -134,6 +139,11 @@ impl Checker<'_> {
         let out = match kind {
             Dot | Length => elem,
             Len => Ty::Prim(Prim::U32),
+            Insert => {
+                let (x, xs) = args[1].clone();
+                self.expect(&x, &elem, xs, "the set's element type");
+                Ty::unit()
+            }
             WithAxis => {
                 let (k, ks) = args[1].clone();
                 let (x, xs) = args[2].clone();

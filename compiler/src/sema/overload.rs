@@ -141,6 +141,12 @@ impl Checker<'_> {
                     });
                     return Ty::Error;
                 }
+                if b == Builtin::Insert && !arg_info[0].mut_place {
+                    self.error(SemaError::MutArgNotPlace {
+                        param: "s".into(),
+                        span: arg_info[0].span,
+                    });
+                }
                 let result = self.fresh(VarKind::General);
                 let args = arg_info.into_iter().map(|a| (a.ty, a.span)).collect();
                 self.solve_or_defer(Obligation::Builtin {

@@ -20,7 +20,8 @@
 //!   before the operation (its own `expr_types` entry is the narrow type).
 //! * a `mut` parameter is passed by reference: an argument for a `mut` parameter is always a
 //!   `Name` resolving to a `mut` [`Resolution::Param`] of the caller.
-//! * the function declared by item `i` is `funcs[func_of_item(i)]`; `unique_name` tells overloads apart.
+//! * the function declared by item `i` is `funcs[func_of_item(i)]`; its `unique_name` tells
+//!   overloads apart.
 //! * layouts: [`LayoutInfo::members`] in pre-order of named members; builds: `build x` statements
 //!   have `build_targets[stmt.id]`.
 
@@ -91,6 +92,8 @@ pub enum Builtin {
     WithAxis,
     /// `len(a)`: element count of an array or slice, as `u32`.
     Len,
+    /// `insert(s, x)`: adds `x` to the set `s`, a `mut` parameter (passed by reference).
+    Insert,
     /// Build language: `append(x, n)` appends `n` elements of logical array `x` to the array the
     /// layout maps it to and yields the start index (`u32`).
     Append,
@@ -98,7 +101,7 @@ pub enum Builtin {
 
 impl Builtin {
     /// Every builtin of the traversal and layout languages (not `append`).
-    pub const TRAVERSAL: [Builtin; 20] = [
+    pub const TRAVERSAL: [Builtin; 21] = [
         Builtin::Min,
         Builtin::Max,
         Builtin::Clamp,
@@ -119,6 +122,7 @@ impl Builtin {
         Builtin::FmulRu,
         Builtin::WithAxis,
         Builtin::Len,
+        Builtin::Insert,
     ];
 
     /// The name as written.
@@ -144,6 +148,7 @@ impl Builtin {
             Builtin::FmulRu => "fmul_ru",
             Builtin::WithAxis => "with_axis",
             Builtin::Len => "len",
+            Builtin::Insert => "insert",
             Builtin::Append => "append",
         }
     }
