@@ -45,6 +45,7 @@ pub fn check_program(program: &Program) -> (TypedProgram, Diagnostics) {
     let mut cx = Checker::new(program);
     let mut globals: FxHashMap<String, Span> = FxHashMap::default();
     cx.collect_adts(program, &mut globals);
+    cx.check_record_cycles(program);
     cx.collect_funcs(program, &globals);
     cx.check_field_defaults(program);
     cx.check_param_defaults(program);
