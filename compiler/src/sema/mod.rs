@@ -129,13 +129,30 @@ impl Checker<'_> {
             let t = self.finalize(&t);
             self.out.expr_types.insert(id, t);
         }
-        for i in 0..self.out.bindings.len() {
-            let t = self.finalize(&self.out.bindings[i].ty);
-            self.out.bindings[i].ty = t;
-        }
+        let quiet = self.errors.iter().any(|e| e.to_diagnostic().is_error());
         for i in 0..self.out.funcs.len() {
+            if self.zonk(&self.out.funcs[i].ret).has_vars() && !quiet {
+                let span = self.out.funcs[i].span;
+                self.error(SemaError::CannotInfer {
+                    what: "function's result",
+                    span,
+                });
+                unsolved = false;
+            }
             let ret = self.finalize(&self.out.funcs[i].ret);
             self.out.funcs[i].ret = ret;
+        }
+        for i in 0..self.out.bindings.len() {
+            if self.zonk(&self.out.bindings[i].ty).has_vars() && !quiet {
+                let span = self.out.bindings[i].span;
+                self.error(SemaError::CannotInfer {
+                    what: "binding",
+                    span,
+                });
+                unsolved = false;
+            }
+            let t = self.finalize(&self.out.bindings[i].ty);
+            self.out.bindings[i].ty = t;
         }
         for l in 0..self.out.layouts.len() {
             for m in 0..self.out.layouts[l].members.len() {
