@@ -600,3 +600,30 @@ pub(super) fn layout_items(program: &Program) -> impl Iterator<Item = (usize, &L
             _ => None,
         })
 }
+
+/// The named members of a layout (stored fields, derived fields, lets, groups) in the order
+/// that numbers them: `named_members(decl)[i]` is the member with [`MemberId`]`(i)`.
+pub fn named_members(decl: &LayoutDecl) -> Vec<&Member> {
+    fn walk<'a>(members: &'a [Member], out: &mut Vec<&'a Member>) {
+        for m in members {
+            match &m.kind {
+                MemberKind::Split { arms, .. } => {
+                    for a in arms {
+                        if let SplitArmBody::Members { members, .. } = &a.body {
+                            walk(members, out);
+                        }
+                    }
+                }
+                MemberKind::Group(g) => {
+                    out.push(m);
+                    walk(&g.members, out);
+                }
+                MemberKind::Padding { .. } | MemberKind::Separator => {}
+                _ => out.push(m),
+            }
+        }
+    }
+    let mut out = Vec::new();
+    walk(&decl.members, &mut out);
+    out
+}

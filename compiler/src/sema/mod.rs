@@ -27,6 +27,7 @@ mod unify;
 #[cfg(test)]
 mod tests;
 
+pub use layout_types::named_members;
 pub use typed::{
     ArmInfo, BindingId, BindingInfo, BindingKind, BuildInfo, BuildTarget, BuildVariantInfo,
     Builtin, FuncId, FuncInfo, LayoutId, LayoutInfo, MemberId, MemberInfo, MemberKindInfo,
