@@ -407,6 +407,7 @@ impl Checker<'_> {
             });
             return Ty::Prim(Prim::U32);
         }
+        // The start index is an integer of the type the context asks for, `u32` otherwise.
         let ok = match &args[0].kind {
             ExprKind::Name(n) => matches!(self.build_field(&n.name), Some((_, Ty::Slice(_), _))),
             _ => false,
@@ -434,6 +435,8 @@ impl Checker<'_> {
             let v = self.fresh(VarKind::Int);
             self.unify(&n, &v).ok();
         }
-        Ty::Prim(Prim::U32)
+        let start = self.fresh(VarKind::Int);
+        self.append_results.push(start.clone());
+        start
     }
 }

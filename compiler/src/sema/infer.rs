@@ -77,11 +77,13 @@ pub(crate) struct Checker<'a> {
     pub pending: Vec<Obligation>,
     /// Function ids by name (overload sets).
     pub overloads: FxHashMap<String, Vec<FuncId>>,
-    /// Unknown layout names in scope, innermost last.
+    /// Names in scope, innermost last.
     pub scopes: Vec<FxHashMap<String, Binding>>,
     pub ctx: Ctx,
     /// Integer literals: id, value and type, checked for range after inference.
     pub int_literals: Vec<(NodeId, u128, Span)>,
+    /// Results of `append(x, n)`: integers that default to `u32` rather than `i32`.
+    pub append_results: Vec<Ty>,
 }
 
 impl<'a> Checker<'a> {
@@ -98,6 +100,7 @@ impl<'a> Checker<'a> {
             scopes: Vec::new(),
             ctx: Ctx::Const,
             int_literals: Vec::new(),
+            append_results: Vec::new(),
         }
     }
 

@@ -80,12 +80,10 @@ impl Checker<'_> {
             arm: 0,
         };
         self.collect_members(layout_idx, &decl.members, None, None, &all_names, &mut walk);
-        let adt = self.layout_adt(decl);
-        self.out.layouts[layout_idx].adt = adt;
-        if let Some(adt) = adt {
-            self.resolve_arm_variants(layout_idx, adt, &decl.members, &mut 0);
+        let cands = self.layout_adt_candidates(decl);
+        if cands.len() == 1 {
+            self.choose_adt(layout_idx, decl, cands[0]);
         }
-        self.seed_derived_types(layout_idx);
         self.ctx = Ctx::Layout { layout: layout_idx };
         self.scopes.clear();
         self.push_scope();
@@ -103,6 +101,21 @@ impl Checker<'_> {
         self.type_members(layout_idx, &decl.members, &walk.ids, &mut walk.arm);
         self.scopes.clear();
         self.ctx = Ctx::Const;
+        if cands.len() > 1 {
+            // Types of the members tell the candidates apart (`bounds = DOP14(...)`).
+            self.run_pending(false);
+            if let Some(adt) = self.pick_adt_by_types(layout_idx, decl, &cands) {
+                self.choose_adt(layout_idx, decl, adt);
+            }
+        }
+    }
+
+    /// Records that layout `layout` realizes `adt`: split arms get their variants, and derived
+    /// fields that realize logical fields get their physical types.
+    fn choose_adt(&mut self, layout: usize, decl: &LayoutDecl, adt: AdtId) {
+        self.out.layouts[layout].adt = Some(adt);
+        self.resolve_arm_variants(layout, adt, &decl.members, &mut 0);
+        self.seed_derived_types(layout);
     }
 
     /// First pass: one [`MemberInfo`] per named member, in pre-order.
@@ -184,10 +197,10 @@ impl Checker<'_> {
         }
     }
 
-    /// The sum type a layout realizes: the one whose variants include every variant named by the
-    /// layout's split arms and its build, preferring the one whose fields match the build's
-    /// parameter names.
-    fn layout_adt(&mut self, decl: &LayoutDecl) -> Option<AdtId> {
+    /// The sum types a layout may realize: those whose variants include most of the variants
+    /// named by the layout's split arms and its build, narrowed by the build's parameter names
+    /// and by the logical fields the members name.
+    fn layout_adt_candidates(&mut self, decl: &LayoutDecl) -> Vec<AdtId> {
         let mut used: Vec<String> = Vec::new();
         arm_variant_names(&decl.members, &mut used);
         let build = self.program.items.iter().find_map(|i| match i {
@@ -259,30 +272,66 @@ impl Checker<'_> {
             let top = cands.iter().map(realized).max().unwrap_or(0);
             cands.retain(|a| realized(a) == top);
         }
-        match cands.len() {
-            1 => Some(cands[0]),
-            0 => {
-                if !used.is_empty() {
-                    self.error(SemaError::LayoutAdtUnknown {
-                        layout: decl.name.name.clone(),
-                        span: decl.name.span,
-                    });
-                }
-                None
-            }
-            _ => {
-                let candidates = cands
-                    .iter()
-                    .map(|a| self.adts.adts[a.0 as usize].name.clone())
-                    .collect();
-                self.error(SemaError::LayoutAdtAmbiguous {
-                    layout: decl.name.name.clone(),
-                    candidates,
-                    span: decl.name.span,
-                });
-                None
-            }
+        if cands.is_empty() && !used.is_empty() {
+            self.error(SemaError::LayoutAdtUnknown {
+                layout: decl.name.name.clone(),
+                span: decl.name.span,
+            });
         }
+        cands
+    }
+
+    /// Among several candidate sum types, the one whose logical field types the layout's typed
+    /// members agree with most; reports an ambiguity when that does not decide.
+    fn pick_adt_by_types(
+        &mut self,
+        layout: usize,
+        decl: &LayoutDecl,
+        cands: &[AdtId],
+    ) -> Option<AdtId> {
+        let ref_ty = self.out.layouts[layout].ref_ty.clone();
+        let members: Vec<(String, Ty)> = self.out.layouts[layout]
+            .members
+            .iter()
+            .filter(|m| matches!(m.kind, MemberKindInfo::Stored | MemberKindInfo::Derived))
+            .map(|m| (m.name.clone(), self.zonk(&m.ty)))
+            .collect();
+        let agree = |cx: &Self, a: AdtId| {
+            let Some(d) = cx.adts.get(a) else { return 0 };
+            let mut fields: Vec<&super::types::FieldDef> = d.fields.iter().collect();
+            for v in d.variants() {
+                fields.extend(v.fields.iter());
+            }
+            members
+                .iter()
+                .filter(|(n, t)| {
+                    fields
+                        .iter()
+                        .any(|f| &f.name == n && cx.physical_of(&f.ty, a, &ref_ty) == *t)
+                })
+                .count()
+        };
+        let scores: Vec<usize> = cands.iter().map(|a| agree(self, *a)).collect();
+        let best = scores.iter().copied().max().unwrap_or(0);
+        let top: Vec<AdtId> = cands
+            .iter()
+            .zip(scores.iter())
+            .filter(|(_, s)| **s == best)
+            .map(|(a, _)| *a)
+            .collect();
+        if top.len() == 1 {
+            return Some(top[0]);
+        }
+        let candidates = top
+            .iter()
+            .map(|a| self.adts.adts[a.0 as usize].name.clone())
+            .collect();
+        self.error(SemaError::LayoutAdtAmbiguous {
+            layout: decl.name.name.clone(),
+            candidates,
+            span: decl.name.span,
+        });
+        None
     }
 
     /// Fills in the variant of every split arm and of the members inside arms.
@@ -514,7 +563,9 @@ impl Checker<'_> {
             }
             if let Some((_, expected)) = self.logical_expectation(layout, m) {
                 let t = self.out.layouts[layout].members[m].ty.clone();
-                self.unify(&t, &expected).ok();
+                if self.unify(&t, &expected).is_err() {
+                    self.physical_error(layout, m, &t);
+                }
             }
         }
     }

@@ -91,6 +91,11 @@ impl Checker<'_> {
     /// Solves deferred obligations: to a fixpoint, then with literals defaulted, then forcing.
     fn solve_all(&mut self) {
         self.run_pending(false);
+        for t in std::mem::take(&mut self.append_results) {
+            if self.is_unknown(&t) {
+                self.unify(&t, &Ty::Prim(Prim::U32)).ok();
+            }
+        }
         self.default_literals();
         self.run_pending(false);
         self.run_pending(true);

@@ -92,6 +92,18 @@ pub enum Builtin {
     WithAxis,
     /// `len(a)`: element count of an array or slice, as `u32`.
     Len,
+    /// `frame_origin(lo)`: the origin of a quantization frame whose low corner is `lo` (rounded
+    /// down to 0 or a normal float).
+    FrameOrigin,
+    /// `frame_step(origin, hi, m)`: the smallest grid step with which `m` steps from `origin`
+    /// reach `hi`.
+    FrameStep,
+    /// `quant_lo(v, origin, step, m)`: the largest code in `[0, m]` whose decoded plane is at or
+    /// below `v`, lane-wise (`u32` lanes).
+    QuantLo,
+    /// `quant_hi(v, origin, step, m)`: the smallest code in `[0, m]` whose decoded plane is at
+    /// or above `v`, lane-wise (`u32` lanes).
+    QuantHi,
     /// `insert(s, x)`: adds `x` to the set `s`, a `mut` parameter (passed by reference).
     Insert,
     /// Build language: `append(x, n)` appends `n` elements of logical array `x` to the array the
@@ -101,7 +113,7 @@ pub enum Builtin {
 
 impl Builtin {
     /// Every builtin of the traversal and layout languages (not `append`).
-    pub const TRAVERSAL: [Builtin; 21] = [
+    pub const TRAVERSAL: [Builtin; 25] = [
         Builtin::Min,
         Builtin::Max,
         Builtin::Clamp,
@@ -123,6 +135,10 @@ impl Builtin {
         Builtin::WithAxis,
         Builtin::Len,
         Builtin::Insert,
+        Builtin::FrameOrigin,
+        Builtin::FrameStep,
+        Builtin::QuantLo,
+        Builtin::QuantHi,
     ];
 
     /// The name as written.
@@ -149,6 +165,10 @@ impl Builtin {
             Builtin::WithAxis => "with_axis",
             Builtin::Len => "len",
             Builtin::Insert => "insert",
+            Builtin::FrameOrigin => "frame_origin",
+            Builtin::FrameStep => "frame_step",
+            Builtin::QuantLo => "quant_lo",
+            Builtin::QuantHi => "quant_hi",
             Builtin::Append => "append",
         }
     }
@@ -167,8 +187,10 @@ impl Builtin {
             | Builtin::Ceil
             | Builtin::Length
             | Builtin::Normalize
-            | Builtin::Len => 1,
-            Builtin::Clamp | Builtin::Fma | Builtin::WithAxis => 3,
+            | Builtin::Len
+            | Builtin::FrameOrigin => 1,
+            Builtin::Clamp | Builtin::Fma | Builtin::WithAxis | Builtin::FrameStep => 3,
+            Builtin::QuantLo | Builtin::QuantHi => 4,
             _ => 2,
         }
     }
