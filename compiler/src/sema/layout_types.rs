@@ -82,7 +82,7 @@ impl Checker<'_> {
         self.collect_members(layout_idx, &decl.members, None, None, &all_names, &mut walk);
         let cands = self.layout_adt_candidates(decl);
         if cands.len() == 1 {
-            self.choose_adt(layout_idx, decl, cands[0]);
+            self.choose_adt(layout_idx, decl, cands[0], &walk.ids);
         }
         self.ctx = Ctx::Layout { layout: layout_idx };
         self.scopes.clear();
@@ -105,16 +105,22 @@ impl Checker<'_> {
             // Types of the members tell the candidates apart (`bounds = DOP14(...)`).
             self.run_pending(false);
             if let Some(adt) = self.pick_adt_by_types(layout_idx, decl, &cands) {
-                self.choose_adt(layout_idx, decl, adt);
+                self.choose_adt(layout_idx, decl, adt, &walk.ids);
             }
         }
     }
 
     /// Records that layout `layout` realizes `adt`: split arms get their variants, and derived
     /// fields that realize logical fields get their physical types.
-    fn choose_adt(&mut self, layout: usize, decl: &LayoutDecl, adt: AdtId) {
+    fn choose_adt(
+        &mut self,
+        layout: usize,
+        decl: &LayoutDecl,
+        adt: AdtId,
+        ids: &FxHashMap<usize, MemberId>,
+    ) {
         self.out.layouts[layout].adt = Some(adt);
-        self.resolve_arm_variants(layout, adt, &decl.members, &mut 0);
+        self.resolve_arm_variants(layout, adt, &decl.members, ids, &mut 0);
         self.seed_derived_types(layout);
     }
 
@@ -340,11 +346,14 @@ impl Checker<'_> {
         layout: usize,
         adt: AdtId,
         members: &[Member],
+        ids: &FxHashMap<usize, MemberId>,
         arm_ix: &mut usize,
     ) {
         for m in members {
             match &m.kind {
-                MemberKind::Group(g) => self.resolve_arm_variants(layout, adt, &g.members, arm_ix),
+                MemberKind::Group(g) => {
+                    self.resolve_arm_variants(layout, adt, &g.members, ids, arm_ix)
+                }
                 MemberKind::Split { arms, .. } => {
                     for arm in arms {
                         let (vname, inner) = match &arm.body {
@@ -366,16 +375,16 @@ impl Checker<'_> {
                         }
                         *arm_ix += 1;
                         if let Some(inner) = inner {
-                            let mut names: Vec<(String, Span)> = Vec::new();
-                            collect_spans(inner, &mut names);
-                            for mi in self.out.layouts[layout].members.iter_mut() {
-                                if mi.variant.is_none()
-                                    && names.iter().any(|(n, s)| &mi.name == n && mi.span == *s)
+                            let mut own = Vec::new();
+                            arm_members(inner, ids, &mut own);
+                            for id in own {
+                                if let Some(mi) =
+                                    self.out.layouts[layout].members.get_mut(id.0 as usize)
                                 {
                                     mi.variant = v;
                                 }
                             }
-                            self.resolve_arm_variants(layout, adt, inner, arm_ix);
+                            self.resolve_arm_variants(layout, adt, inner, ids, arm_ix);
                         }
                     }
                 }
@@ -609,13 +618,14 @@ fn collect_names(members: &[Member], out: &mut Vec<String>) {
     }
 }
 
-fn collect_spans(members: &[Member], out: &mut Vec<(String, Span)>) {
+/// The members of a split arm and of the groups inside it (not those of nested splits).
+fn arm_members(members: &[Member], ids: &FxHashMap<usize, MemberId>, out: &mut Vec<MemberId>) {
     for m in members {
-        if let Some((n, s)) = member_name(m) {
-            out.push((n.to_string(), s));
+        if let Some(id) = ids.get(&key(m)) {
+            out.push(*id);
         }
         if let MemberKind::Group(g) = &m.kind {
-            collect_spans(&g.members, out);
+            arm_members(&g.members, ids, out);
         }
     }
 }
