@@ -13,6 +13,7 @@
 
 mod build_types;
 mod builtins;
+mod dump;
 pub mod errors;
 mod expr;
 mod infer;
@@ -27,6 +28,7 @@ mod unify;
 #[cfg(test)]
 mod tests;
 
+pub use dump::dump_types;
 pub use layout_types::named_members;
 pub use typed::{
     ArmInfo, BindingId, BindingInfo, BindingKind, BuildInfo, BuildTarget, BuildVariantInfo,
