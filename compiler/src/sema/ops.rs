@@ -279,6 +279,20 @@ impl Checker<'_> {
                     Some(false) => self.bad_operand("[]", index, "an integer index", *index_span),
                     Some(true) => {}
                 }
+                let len = match &b {
+                    Ty::Array(_, n) => Some(*n),
+                    Ty::Vector(_, n) => Some(*n as u64),
+                    _ => None,
+                };
+                if let (Some(i), Some(len)) = (literal, len) {
+                    if *i >= len as u128 {
+                        self.error(SemaError::IndexRange {
+                            index: *i,
+                            len,
+                            span: *index_span,
+                        });
+                    }
+                }
                 self.unify(result, &elem).ok();
                 Done
             }
