@@ -8,7 +8,8 @@
 //! expression builds the child in recursive field `x` and yields its reference (the physical
 //! type of `x`); `append(x, n)` yields `u32`; `build x = e` needs `e` to have the stored field's
 //! type (an integer literal must fit it); `build x` copies logical field `x` into the stored
-//! field `x` when their types agree.
+//! field `x` when their types agree. `build root { ... }` sees the layout's globals and the
+//! shared fields of the root node.
 
 use super::errors::SemaError;
 use super::infer::{Binding, Checker, Ctx};
@@ -45,15 +46,30 @@ impl Checker<'_> {
         };
         let ref_ty = self.out.layouts[layout].ref_ty.clone();
         if let Some(root) = &decl.root {
+            // The root block sees the globals and the shared fields of the root node.
+            let shared: Vec<(String, Ty)> = self.out.layouts[layout]
+                .adt
+                .and_then(|a| self.adts.get(a))
+                .map(|d| {
+                    d.fields
+                        .iter()
+                        .map(|f| (f.name.clone(), f.ty.clone()))
+                        .collect()
+                })
+                .unwrap_or_default();
             self.ctx = Ctx::Build {
                 layout,
                 variant: None,
-                fields: Vec::new(),
+                fields: shared.clone(),
                 ret: ref_ty.clone(),
             };
             self.scopes.clear();
             self.push_scope();
             self.define_visible_members(layout, None);
+            self.push_scope();
+            for (i, f) in shared.iter().enumerate() {
+                self.define(&f.0, Binding::BuildField(i as u32));
+            }
             self.push_scope();
             for s in &root.body {
                 self.check_stmt(s, false);
@@ -391,6 +407,7 @@ impl Checker<'_> {
             });
             return Ty::Prim(Prim::U32);
         }
+        // The start index is an integer of the type the context asks for, `u32` otherwise.
         let ok = match &args[0].kind {
             ExprKind::Name(n) => matches!(self.build_field(&n.name), Some((_, Ty::Slice(_), _))),
             _ => false,
@@ -418,6 +435,8 @@ impl Checker<'_> {
             let v = self.fresh(VarKind::Int);
             self.unify(&n, &v).ok();
         }
-        Ty::Prim(Prim::U32)
+        let start = self.fresh(VarKind::Int);
+        self.append_results.push(start.clone());
+        start
     }
 }

@@ -26,6 +26,8 @@ enum Want {
     Vector,
     /// Arrays, slices and sets.
     Collection,
+    /// Sets.
+    Set,
 }
 
 impl Want {
@@ -37,6 +39,7 @@ impl Want {
             Want::FloatVec3 => "a 3-lane float vector",
             Want::Vector => "a vector",
             Want::Collection => "an array, slice or set",
+            Want::Set => "a set",
         }
     }
 }
@@ -62,6 +65,7 @@ impl Checker<'_> {
             Want::FloatVec3 => matches!(s, Ty::Vector(p, 3) if p.is_float()),
             Want::Vector => matches!(s, Ty::Vector(..)),
             Want::Collection => matches!(s, Ty::Array(..) | Ty::Slice(_) | Ty::Set(_)),
+            Want::Set => matches!(s, Ty::Set(_)),
         })
     }
 
@@ -75,23 +79,47 @@ impl Checker<'_> {
     ) -> Progress {
         use Builtin::*;
         let name = kind.name();
-        // Builtins whose arguments all share one type.
-        let (want, uniform) = match kind {
-            Min | Max | Clamp | Abs => (Want::Numeric, true),
+        // The class of the first argument, how many leading arguments share its type, and which
+        // arguments are integers of any type.
+        let all = args.len();
+        let (want, shared, ints): (Want, usize, &[usize]) = match kind {
+            Min | Max | Clamp | Abs => (Want::Numeric, all, &[]),
             Sqrt | Floor | Ceil | Fma | FaddRd | FaddRu | FsubRd | FsubRu | FmulRd | FmulRu => {
-                (Want::Float, true)
+                (Want::Float, all, &[])
             }
-            Dot | Length | Normalize => (Want::FloatVec, true),
-            Cross => (Want::FloatVec3, true),
-            WithAxis => (Want::Vector, false),
-            Len | Append => (Want::Collection, false),
+            Dot | Length | Normalize | FrameOrigin => (Want::FloatVec, all, &[]),
+            Cross => (Want::FloatVec3, all, &[]),
+            FrameStep => (Want::FloatVec, 2, &[2]),
+            QuantLo | QuantHi => (Want::FloatVec, 3, &[3]),
+            WithAxis => (Want::Vector, 1, &[1]),
+            Len | Append => (Want::Collection, 1, &[]),
+            Insert => (Want::Set, 1, &[]),
         };
         let Some((first, first_span)) = args.first().cloned() else {
             return Progress::Done;
         };
-        if uniform {
-            for (t, s) in &args[1..] {
-                self.expect(t, &first, *s, "the builtin's other arguments");
+        for (t, s) in args.iter().take(shared).skip(1) {
+            self.expect(t, &first, *s, "the builtin's other arguments");
+        }
+        for &i in ints {
+            let Some((k, ks)) = args.get(i).cloned() else {
+                continue;
+            };
+            match self.class(&k) {
+                Class::Unknown if !force => return Progress::Wait,
+                Class::Int | Class::Unknown => {
+                    let v = self.fresh(super::unify::VarKind::Int);
+                    self.unify(&k, &v).ok();
+                }
+                _ => {
+                    let ty = self.show(&k);
+                    self.error(SemaError::BuiltinArg {
+                        name: name.to_string(),
+                        ty,
+                        expected: "an integer",
+                        span: ks,
+                    });
+                }
             }
         }
         match self.belongs(&first, want) {
@@ -134,28 +162,20 @@ impl Checker<'_> {
         let out = match kind {
             Dot | Length => elem,
             Len => Ty::Prim(Prim::U32),
+            Insert => {
+                let (x, xs) = args[1].clone();
+                self.expect(&x, &elem, xs, "the set's element type");
+                Ty::unit()
+            }
             WithAxis => {
-                let (k, ks) = args[1].clone();
                 let (x, xs) = args[2].clone();
-                match self.class(&k) {
-                    Class::Unknown if !force => return Progress::Wait,
-                    Class::Int | Class::Unknown => {
-                        let v = self.fresh(super::unify::VarKind::Int);
-                        self.unify(&k, &v).ok();
-                    }
-                    _ => {
-                        let ty = self.show(&k);
-                        self.error(SemaError::BuiltinArg {
-                            name: name.to_string(),
-                            ty,
-                            expected: "an integer lane index",
-                            span: ks,
-                        });
-                    }
-                }
                 self.expect(&x, &elem, xs, "the vector's element type");
                 first
             }
+            QuantLo | QuantHi => match self.shallow(&first) {
+                Ty::Vector(_, n) => Ty::Vector(Prim::U32, n),
+                _ => Ty::Error,
+            },
             _ => first,
         };
         self.unify(result, &out).ok();

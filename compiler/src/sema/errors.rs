@@ -158,6 +158,10 @@ pub enum SemaError {
     InfiniteType { span: Span },
     /// E0236
     ReturnValueInUnit { span: Span },
+    /// E0237
+    RecursiveRecord { name: String, span: Span },
+    /// E0238
+    IndexRange { index: u128, len: u64, span: Span },
     /// E0350
     LayoutAdtUnknown { layout: String, span: Span },
     /// E0351
@@ -329,6 +333,8 @@ impl SemaError {
             VariantNeedsArgs { .. } => "E0234",
             InfiniteType { .. } => "E0235",
             ReturnValueInUnit { .. } => "E0236",
+            RecursiveRecord { .. } => "E0237",
+            IndexRange { .. } => "E0238",
             LayoutAdtUnknown { .. } => "E0350",
             LayoutAdtAmbiguous { .. } => "E0351",
             SplitUnknownVariant { .. } => "E0352",
@@ -459,6 +465,11 @@ impl SemaError {
                 .with_primary(*span, "type refers to itself"),
             ReturnValueInUnit { span } => e("`return` without a value in a function that returns a value".to_string())
                 .with_primary(*span, "missing value"),
+            RecursiveRecord { name, span } => e(format!("record `{name}` contains itself"))
+                .with_primary(*span, "infinitely large")
+                .with_note("only sum types may be recursive; store the value through a sum type or a slice"),
+            IndexRange { index, len, span } => e(format!("index {index} is out of range for {len} elements"))
+                .with_primary(*span, "out of range"),
             LayoutAdtUnknown { layout, span } => e(format!("cannot tell which type layout `{layout}` stores"))
                 .with_primary(*span, "no sum type has the variants this layout and its build name")
                 .with_note("a layout realizes the sum type whose variants its `split` arms and its build name"),

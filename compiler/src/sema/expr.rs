@@ -143,7 +143,14 @@ impl Checker<'_> {
                     });
                     return Ty::Error;
                 }
-                match self.lookup(&name.name) {
+                // `parent.x` may name any member of the layout (the parent is a node of the
+                // same layout), also from a reference component's default.
+                let found = self.lookup(&name.name).or_else(|| {
+                    let l = self.current_layout()?;
+                    let i = l.members.iter().position(|m| m.name == name.name)?;
+                    Some(Binding::Member(super::typed::MemberId(i as u32)))
+                });
+                match found {
                     Some(Binding::Member(m)) => {
                         self.out
                             .resolutions
@@ -182,36 +189,49 @@ impl Checker<'_> {
             return self.binding_ty(b);
         }
         // A field-less variant used as a value.
-        let cands = self.adts.variants_named(name);
-        if let Some(&(adt, v)) = cands.first() {
-            let has_fields = self
-                .adts
-                .get(adt)
-                .is_some_and(|d| !d.variant_fields(v).is_empty());
-            if has_fields {
+        let all = self.adts.variants_named(name);
+        let fieldless: Vec<(super::types::AdtId, usize)> = all
+            .iter()
+            .copied()
+            .filter(|(a, v)| {
+                self.adts
+                    .get(*a)
+                    .is_some_and(|d| d.variant_fields(*v).is_empty())
+            })
+            .collect();
+        match fieldless.as_slice() {
+            [] if !all.is_empty() => {
                 self.error(SemaError::VariantNeedsArgs {
                     name: name.to_string(),
                     span: e.span,
                 });
                 return Ty::Error;
             }
-            if cands.len() == 1 {
+            [] => {}
+            [(adt, v)] => {
                 self.out
                     .resolutions
-                    .insert(e.id, Resolution::Variant(adt, v as u32));
-                return Ty::Adt(adt);
+                    .insert(e.id, Resolution::Variant(*adt, *v as u32));
+                return Ty::Adt(*adt);
             }
-            let names = cands
-                .iter()
-                .filter_map(|(a, _)| self.adts.get(*a))
-                .map(|d| format!("{}.{}", d.name, name))
-                .collect();
-            self.error(SemaError::AmbiguousOverload {
-                name: name.to_string(),
-                candidates: names,
-                span: e.span,
-            });
-            return Ty::Error;
+            _ => {
+                // Variants of several types share the name: the expected type decides.
+                let result = self.fresh(VarKind::General);
+                let cands = fieldless
+                    .iter()
+                    .map(|(a, v)| super::overload::Callee::Variant(*a, *v as u32))
+                    .collect();
+                let ob = super::overload::CallOb {
+                    id: e.id,
+                    name: name.to_string(),
+                    span: e.span,
+                    cands,
+                    args: Vec::new(),
+                    result: result.clone(),
+                };
+                self.solve_or_defer(Obligation::Call(ob));
+                return result;
+            }
         }
         self.error(SemaError::UnknownName {
             name: name.to_string(),

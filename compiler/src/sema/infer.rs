@@ -77,11 +77,13 @@ pub(crate) struct Checker<'a> {
     pub pending: Vec<Obligation>,
     /// Function ids by name (overload sets).
     pub overloads: FxHashMap<String, Vec<FuncId>>,
-    /// Unknown layout names in scope, innermost last.
+    /// Names in scope, innermost last.
     pub scopes: Vec<FxHashMap<String, Binding>>,
     pub ctx: Ctx,
     /// Integer literals: id, value and type, checked for range after inference.
     pub int_literals: Vec<(NodeId, u128, Span)>,
+    /// Results of `append(x, n)`: integers that default to `u32` rather than `i32`.
+    pub append_results: Vec<Ty>,
 }
 
 impl<'a> Checker<'a> {
@@ -98,6 +100,7 @@ impl<'a> Checker<'a> {
             scopes: Vec::new(),
             ctx: Ctx::Const,
             int_literals: Vec::new(),
+            append_results: Vec::new(),
         }
     }
 
@@ -240,23 +243,20 @@ impl<'a> Checker<'a> {
                 );
             }
             Tail::NoValue => {
+                // Without a declared result, falling off the end makes the result `()`.
                 let r = self.shallow(&info.ret);
-                if declared_ret && !r.is_unit() && r != Ty::Error {
+                let missing = if declared_ret {
+                    !r.is_unit() && r != Ty::Error
+                } else {
+                    self.unify(&info.ret, &Ty::unit()).is_err()
+                };
+                if missing {
                     let ret = self.show(&info.ret);
                     self.error(SemaError::MissingValue {
                         func: info.name.clone(),
                         ret,
                         span: decl.body.span,
                     });
-                } else if !declared_ret {
-                    if self.unify(&info.ret, &Ty::unit()).is_err() {
-                        let ret = self.show(&info.ret);
-                        self.error(SemaError::MissingValue {
-                            func: info.name.clone(),
-                            ret,
-                            span: decl.body.span,
-                        });
-                    }
                 }
             }
         }
@@ -597,10 +597,19 @@ impl<'a> Checker<'a> {
                 span,
             });
         }
+        let mut bound: FxHashMap<&str, Span> = FxHashMap::default();
         for (i, (p, f)) in fields.iter().zip(all.iter()).enumerate() {
             match &p.kind {
                 PatternKind::Wildcard => {}
                 PatternKind::Bind { name, ty } => {
+                    if let Some(prev) = bound.insert(&name.name, name.span) {
+                        self.error(SemaError::Duplicate {
+                            what: "pattern binding",
+                            name: name.name.clone(),
+                            span: name.span,
+                            previous: prev,
+                        });
+                    }
                     if let Some(t) = ty {
                         let d = self.lower_type_local(t);
                         self.expect(&f.ty, &d, p.span, "the pattern's type annotation");

@@ -80,10 +80,9 @@ impl Checker<'_> {
             arm: 0,
         };
         self.collect_members(layout_idx, &decl.members, None, None, &all_names, &mut walk);
-        let adt = self.layout_adt(decl);
-        self.out.layouts[layout_idx].adt = adt;
-        if let Some(adt) = adt {
-            self.resolve_arm_variants(layout_idx, adt, &decl.members, &mut 0);
+        let cands = self.layout_adt_candidates(decl);
+        if cands.len() == 1 {
+            self.choose_adt(layout_idx, decl, cands[0], &walk.ids);
         }
         self.ctx = Ctx::Layout { layout: layout_idx };
         self.scopes.clear();
@@ -102,6 +101,27 @@ impl Checker<'_> {
         self.type_members(layout_idx, &decl.members, &walk.ids, &mut walk.arm);
         self.scopes.clear();
         self.ctx = Ctx::Const;
+        if cands.len() > 1 {
+            // Types of the members tell the candidates apart (`bounds = DOP14(...)`).
+            self.run_pending(false);
+            if let Some(adt) = self.pick_adt_by_types(layout_idx, decl, &cands) {
+                self.choose_adt(layout_idx, decl, adt, &walk.ids);
+            }
+        }
+    }
+
+    /// Records that layout `layout` realizes `adt`: split arms get their variants, and derived
+    /// fields that realize logical fields get their physical types.
+    fn choose_adt(
+        &mut self,
+        layout: usize,
+        decl: &LayoutDecl,
+        adt: AdtId,
+        ids: &FxHashMap<usize, MemberId>,
+    ) {
+        self.out.layouts[layout].adt = Some(adt);
+        self.resolve_arm_variants(layout, adt, &decl.members, ids, &mut 0);
+        self.seed_derived_types(layout);
     }
 
     /// First pass: one [`MemberInfo`] per named member, in pre-order.
@@ -183,10 +203,10 @@ impl Checker<'_> {
         }
     }
 
-    /// The sum type a layout realizes: the one whose variants include every variant named by the
-    /// layout's split arms and its build, preferring the one whose fields match the build's
-    /// parameter names.
-    fn layout_adt(&mut self, decl: &LayoutDecl) -> Option<AdtId> {
+    /// The sum types a layout may realize: those whose variants include most of the variants
+    /// named by the layout's split arms and its build, narrowed by the build's parameter names
+    /// and by the logical fields the members name.
+    fn layout_adt_candidates(&mut self, decl: &LayoutDecl) -> Vec<AdtId> {
         let mut used: Vec<String> = Vec::new();
         arm_variant_names(&decl.members, &mut used);
         let build = self.program.items.iter().find_map(|i| match i {
@@ -196,11 +216,23 @@ impl Checker<'_> {
         if let Some(b) = build {
             used.extend(b.variants.iter().map(|v| v.name.name.clone()));
         }
+        // The sum types naming the most of the variants used; then those whose fields the
+        // build's parameters name; then those with the most logical fields named by members.
+        let score =
+            |d: &super::types::AdtDef| used.iter().filter(|u| d.variant_index(u).is_some()).count();
+        let best = self
+            .adts
+            .adts
+            .iter()
+            .filter(|d| d.is_sum())
+            .map(score)
+            .max()
+            .unwrap_or(0);
         let mut cands: Vec<AdtId> = (0..self.adts.adts.len() as u32)
             .map(AdtId)
             .filter(|a| {
                 let d = &self.adts.adts[a.0 as usize];
-                d.is_sum() && !used.is_empty() && used.iter().all(|u| d.variant_index(u).is_some())
+                best > 0 && d.is_sum() && score(d) == best
             })
             .collect();
         if cands.len() > 1 {
@@ -227,30 +259,85 @@ impl Checker<'_> {
                 }
             }
         }
-        match cands.len() {
-            1 => Some(cands[0]),
-            0 => {
-                if !used.is_empty() {
-                    self.error(SemaError::LayoutAdtUnknown {
-                        layout: decl.name.name.clone(),
-                        span: decl.name.span,
-                    });
+        if cands.len() > 1 {
+            let mut names = Vec::new();
+            collect_names(&decl.members, &mut names);
+            let realized = |a: &AdtId| {
+                let d = &self.adts.adts[a.0 as usize];
+                let mut fields: Vec<&str> = d.fields.iter().map(|f| f.name.as_str()).collect();
+                for v in d.variants() {
+                    fields.extend(v.fields.iter().map(|f| f.name.as_str()));
                 }
-                None
-            }
-            _ => {
-                let candidates = cands
+                fields.sort_unstable();
+                fields.dedup();
+                fields
                     .iter()
-                    .map(|a| self.adts.adts[a.0 as usize].name.clone())
-                    .collect();
-                self.error(SemaError::LayoutAdtAmbiguous {
-                    layout: decl.name.name.clone(),
-                    candidates,
-                    span: decl.name.span,
-                });
-                None
-            }
+                    .filter(|f| names.iter().any(|n| n == *f))
+                    .count()
+            };
+            let top = cands.iter().map(realized).max().unwrap_or(0);
+            cands.retain(|a| realized(a) == top);
         }
+        if cands.is_empty() && !used.is_empty() {
+            self.error(SemaError::LayoutAdtUnknown {
+                layout: decl.name.name.clone(),
+                span: decl.name.span,
+            });
+        }
+        cands
+    }
+
+    /// Among several candidate sum types, the one whose logical field types the layout's typed
+    /// members agree with most; reports an ambiguity when that does not decide.
+    fn pick_adt_by_types(
+        &mut self,
+        layout: usize,
+        decl: &LayoutDecl,
+        cands: &[AdtId],
+    ) -> Option<AdtId> {
+        let ref_ty = self.out.layouts[layout].ref_ty.clone();
+        let members: Vec<(String, Ty)> = self.out.layouts[layout]
+            .members
+            .iter()
+            .filter(|m| matches!(m.kind, MemberKindInfo::Stored | MemberKindInfo::Derived))
+            .map(|m| (m.name.clone(), self.zonk(&m.ty)))
+            .collect();
+        let agree = |cx: &Self, a: AdtId| {
+            let Some(d) = cx.adts.get(a) else { return 0 };
+            let mut fields: Vec<&super::types::FieldDef> = d.fields.iter().collect();
+            for v in d.variants() {
+                fields.extend(v.fields.iter());
+            }
+            members
+                .iter()
+                .filter(|(n, t)| {
+                    fields
+                        .iter()
+                        .any(|f| &f.name == n && cx.physical_of(&f.ty, a, &ref_ty) == *t)
+                })
+                .count()
+        };
+        let scores: Vec<usize> = cands.iter().map(|a| agree(self, *a)).collect();
+        let best = scores.iter().copied().max().unwrap_or(0);
+        let top: Vec<AdtId> = cands
+            .iter()
+            .zip(scores.iter())
+            .filter(|(_, s)| **s == best)
+            .map(|(a, _)| *a)
+            .collect();
+        if top.len() == 1 {
+            return Some(top[0]);
+        }
+        let candidates = top
+            .iter()
+            .map(|a| self.adts.adts[a.0 as usize].name.clone())
+            .collect();
+        self.error(SemaError::LayoutAdtAmbiguous {
+            layout: decl.name.name.clone(),
+            candidates,
+            span: decl.name.span,
+        });
+        None
     }
 
     /// Fills in the variant of every split arm and of the members inside arms.
@@ -259,11 +346,14 @@ impl Checker<'_> {
         layout: usize,
         adt: AdtId,
         members: &[Member],
+        ids: &FxHashMap<usize, MemberId>,
         arm_ix: &mut usize,
     ) {
         for m in members {
             match &m.kind {
-                MemberKind::Group(g) => self.resolve_arm_variants(layout, adt, &g.members, arm_ix),
+                MemberKind::Group(g) => {
+                    self.resolve_arm_variants(layout, adt, &g.members, ids, arm_ix)
+                }
                 MemberKind::Split { arms, .. } => {
                     for arm in arms {
                         let (vname, inner) = match &arm.body {
@@ -285,16 +375,16 @@ impl Checker<'_> {
                         }
                         *arm_ix += 1;
                         if let Some(inner) = inner {
-                            let mut names: Vec<(String, Span)> = Vec::new();
-                            collect_spans(inner, &mut names);
-                            for mi in self.out.layouts[layout].members.iter_mut() {
-                                if mi.variant.is_none()
-                                    && names.iter().any(|(n, s)| &mi.name == n && mi.span == *s)
+                            let mut own = Vec::new();
+                            arm_members(inner, ids, &mut own);
+                            for id in own {
+                                if let Some(mi) =
+                                    self.out.layouts[layout].members.get_mut(id.0 as usize)
                                 {
                                     mi.variant = v;
                                 }
                             }
-                            self.resolve_arm_variants(layout, adt, inner, arm_ix);
+                            self.resolve_arm_variants(layout, adt, inner, ids, arm_ix);
                         }
                     }
                 }
@@ -331,7 +421,13 @@ impl Checker<'_> {
                     let t = self.infer_expr(value);
                     if let Some(id) = ids.get(&key(m)) {
                         let want = self.out.layouts[layout].members[id.0 as usize].ty.clone();
-                        self.expect(&t, &want, value.span, "the derived field's other uses");
+                        if self.logical_expectation(layout, id.0 as usize).is_some() {
+                            if self.unify(&t, &want).is_err() {
+                                self.physical_error(layout, id.0 as usize, &t);
+                            }
+                        } else {
+                            self.expect(&t, &want, value.span, "the derived field's other uses");
+                        }
                     }
                 }
                 MemberKind::Let { value, name, .. } => {
@@ -427,42 +523,77 @@ impl Checker<'_> {
         }
     }
 
-    /// Checks "physical types preserve logical types" on every typed layout (after inference).
+    /// The logical field that member `m` of layout `layout` realizes by name, and the physical
+    /// type it must therefore have.
+    fn logical_expectation(&self, layout: usize, m: usize) -> Option<(Ty, Ty)> {
+        let l = self.out.layouts.get(layout)?;
+        let adt = l.adt?;
+        let def = self.adts.get(adt)?;
+        let mi = l.members.get(m)?;
+        if !matches!(mi.kind, MemberKindInfo::Stored | MemberKindInfo::Derived) {
+            return None;
+        }
+        let variants: Vec<usize> = match mi.variant {
+            Some(v) => vec![v as usize],
+            None => (0..def.variants().len()).collect(),
+        };
+        let f = variants.iter().find_map(|v| {
+            def.variant_fields(*v)
+                .into_iter()
+                .find(|f| f.name == mi.name)
+                .cloned()
+        })?;
+        let expected = self.physical_of(&f.ty, adt, &l.ref_ty);
+        Some((f.ty, expected))
+    }
+
+    fn physical_error(&mut self, layout: usize, m: usize, found: &Ty) {
+        let Some((logical, expected)) = self.logical_expectation(layout, m) else {
+            return;
+        };
+        let show = |t: &Ty| t.display(&self.adts).to_string();
+        let mi = &self.out.layouts[layout].members[m];
+        let e = SemaError::PhysicalType {
+            field: mi.name.clone(),
+            logical: show(&logical),
+            expected: show(&expected),
+            found: self.show(found),
+            span: mi.span,
+        };
+        self.error(e);
+    }
+
+    /// Gives derived fields that realize a logical field its physical type up front, so that
+    /// literals and other uses are inferred from it.
+    fn seed_derived_types(&mut self, layout: usize) {
+        for m in 0..self.out.layouts[layout].members.len() {
+            if self.out.layouts[layout].members[m].kind != MemberKindInfo::Derived {
+                continue;
+            }
+            if let Some((_, expected)) = self.logical_expectation(layout, m) {
+                let t = self.out.layouts[layout].members[m].ty.clone();
+                if self.unify(&t, &expected).is_err() {
+                    self.physical_error(layout, m, &t);
+                }
+            }
+        }
+    }
+
+    /// Checks "physical types preserve logical types" on the stored fields of every layout
+    /// (derived fields are checked where their value is typed).
     pub(super) fn check_physical_types(&mut self) {
         for li in 0..self.out.layouts.len() {
-            let layout = self.out.layouts[li].clone();
-            let Some(adt) = layout.adt else { continue };
-            let Some(def) = self.adts.get(adt).cloned() else {
-                continue;
-            };
-            for m in &layout.members {
-                if !matches!(m.kind, MemberKindInfo::Stored | MemberKindInfo::Derived) {
+            for m in 0..self.out.layouts[li].members.len() {
+                if self.out.layouts[li].members[m].kind != MemberKindInfo::Stored {
                     continue;
                 }
-                let variants: Vec<usize> = match m.variant {
-                    Some(v) => vec![v as usize],
-                    None => (0..def.variants().len()).collect(),
+                let Some((_, expected)) = self.logical_expectation(li, m) else {
+                    continue;
                 };
-                let logical = variants.iter().find_map(|v| {
-                    def.variant_fields(*v)
-                        .into_iter()
-                        .find(|f| f.name == m.name)
-                        .cloned()
-                });
-                let Some(f) = logical else { continue };
-                let expected = self.physical_of(&f.ty, adt, &layout.ref_ty);
-                let found = self.zonk(&m.ty);
-                if found.has_error() || expected.has_error() || found == expected {
-                    continue;
+                let found = self.zonk(&self.out.layouts[li].members[m].ty);
+                if !found.has_error() && !expected.has_error() && found != expected {
+                    self.physical_error(li, m, &found);
                 }
-                let show = |t: &Ty| t.display(&self.adts).to_string();
-                self.error(SemaError::PhysicalType {
-                    field: m.name.clone(),
-                    logical: show(&f.ty),
-                    expected: show(&expected),
-                    found: show(&found),
-                    span: m.span,
-                });
             }
         }
     }
@@ -487,13 +618,14 @@ fn collect_names(members: &[Member], out: &mut Vec<String>) {
     }
 }
 
-fn collect_spans(members: &[Member], out: &mut Vec<(String, Span)>) {
+/// The members of a split arm and of the groups inside it (not those of nested splits).
+fn arm_members(members: &[Member], ids: &FxHashMap<usize, MemberId>, out: &mut Vec<MemberId>) {
     for m in members {
-        if let Some((n, s)) = member_name(m) {
-            out.push((n.to_string(), s));
+        if let Some(id) = ids.get(&key(m)) {
+            out.push(*id);
         }
         if let MemberKind::Group(g) = &m.kind {
-            collect_spans(&g.members, out);
+            arm_members(&g.members, ids, out);
         }
     }
 }
@@ -528,4 +660,31 @@ pub(super) fn layout_items(program: &Program) -> impl Iterator<Item = (usize, &L
             Item::Layout(l) => Some((i, l)),
             _ => None,
         })
+}
+
+/// The named members of a layout (stored fields, derived fields, lets, groups) in the order
+/// that numbers them: `named_members(decl)[i]` is the member with [`MemberId`]`(i)`.
+pub fn named_members(decl: &LayoutDecl) -> Vec<&Member> {
+    fn walk<'a>(members: &'a [Member], out: &mut Vec<&'a Member>) {
+        for m in members {
+            match &m.kind {
+                MemberKind::Split { arms, .. } => {
+                    for a in arms {
+                        if let SplitArmBody::Members { members, .. } = &a.body {
+                            walk(members, out);
+                        }
+                    }
+                }
+                MemberKind::Group(g) => {
+                    out.push(m);
+                    walk(&g.members, out);
+                }
+                MemberKind::Padding { .. } | MemberKind::Separator => {}
+                _ => out.push(m),
+            }
+        }
+    }
+    let mut out = Vec::new();
+    walk(&decl.members, &mut out);
+    out
 }

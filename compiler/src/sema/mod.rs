@@ -13,6 +13,7 @@
 
 mod build_types;
 mod builtins;
+mod dump;
 pub mod errors;
 mod expr;
 mod infer;
@@ -27,6 +28,8 @@ mod unify;
 #[cfg(test)]
 mod tests;
 
+pub use dump::dump_types;
+pub use layout_types::named_members;
 pub use typed::{
     ArmInfo, BindingId, BindingInfo, BindingKind, BuildInfo, BuildTarget, BuildVariantInfo,
     Builtin, FuncId, FuncInfo, LayoutId, LayoutInfo, MemberId, MemberInfo, MemberKindInfo,
@@ -45,6 +48,7 @@ pub fn check_program(program: &Program) -> (TypedProgram, Diagnostics) {
     let mut cx = Checker::new(program);
     let mut globals: FxHashMap<String, Span> = FxHashMap::default();
     cx.collect_adts(program, &mut globals);
+    cx.check_record_cycles(program);
     cx.collect_funcs(program, &globals);
     cx.check_field_defaults(program);
     cx.check_param_defaults(program);
@@ -89,6 +93,11 @@ impl Checker<'_> {
     /// Solves deferred obligations: to a fixpoint, then with literals defaulted, then forcing.
     fn solve_all(&mut self) {
         self.run_pending(false);
+        for t in std::mem::take(&mut self.append_results) {
+            if self.is_unknown(&t) {
+                self.unify(&t, &Ty::Prim(Prim::U32)).ok();
+            }
+        }
         self.default_literals();
         self.run_pending(false);
         self.run_pending(true);
@@ -128,13 +137,30 @@ impl Checker<'_> {
             let t = self.finalize(&t);
             self.out.expr_types.insert(id, t);
         }
-        for i in 0..self.out.bindings.len() {
-            let t = self.finalize(&self.out.bindings[i].ty);
-            self.out.bindings[i].ty = t;
-        }
+        let quiet = self.errors.iter().any(|e| e.to_diagnostic().is_error());
         for i in 0..self.out.funcs.len() {
+            if self.zonk(&self.out.funcs[i].ret).has_vars() && !quiet {
+                let span = self.out.funcs[i].span;
+                self.error(SemaError::CannotInfer {
+                    what: "function's result",
+                    span,
+                });
+                unsolved = false;
+            }
             let ret = self.finalize(&self.out.funcs[i].ret);
             self.out.funcs[i].ret = ret;
+        }
+        for i in 0..self.out.bindings.len() {
+            if self.zonk(&self.out.bindings[i].ty).has_vars() && !quiet {
+                let span = self.out.bindings[i].span;
+                self.error(SemaError::CannotInfer {
+                    what: "binding",
+                    span,
+                });
+                unsolved = false;
+            }
+            let t = self.finalize(&self.out.bindings[i].ty);
+            self.out.bindings[i].ty = t;
         }
         for l in 0..self.out.layouts.len() {
             for m in 0..self.out.layouts[l].members.len() {

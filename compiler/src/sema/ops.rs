@@ -279,6 +279,20 @@ impl Checker<'_> {
                     Some(false) => self.bad_operand("[]", index, "an integer index", *index_span),
                     Some(true) => {}
                 }
+                let len = match &b {
+                    Ty::Array(_, n) => Some(*n),
+                    Ty::Vector(_, n) => Some(*n as u64),
+                    _ => None,
+                };
+                if let (Some(i), Some(len)) = (literal, len) {
+                    if *i >= len as u128 {
+                        self.error(SemaError::IndexRange {
+                            index: *i,
+                            len,
+                            span: *index_span,
+                        });
+                    }
+                }
                 self.unify(result, &elem).ok();
                 Done
             }
@@ -328,8 +342,11 @@ impl Checker<'_> {
                 }
                 let ok = match op {
                     UnaryOp::Neg => {
-                        matches!(class, Class::Int | Class::Float)
-                            || matches!(t, Ty::Vector(p, _) if p.is_numeric())
+                        let unsigned =
+                            matches!(t, Ty::Prim(p) | Ty::Vector(p, _) if p.is_unsigned_int());
+                        !unsigned
+                            && (matches!(class, Class::Int | Class::Float)
+                                || matches!(t, Ty::Vector(p, _) if p.is_numeric()))
                     }
                     UnaryOp::Not => t == Ty::bool() || t == Ty::Error,
                     UnaryOp::BitNot => {
@@ -338,7 +355,7 @@ impl Checker<'_> {
                 };
                 if !ok {
                     let (sym, expected) = match op {
-                        UnaryOp::Neg => ("-", "a number or a numeric vector"),
+                        UnaryOp::Neg => ("-", "a signed number or vector"),
                         UnaryOp::Not => ("!", "`bool`"),
                         UnaryOp::BitNot => ("~", "an integer"),
                     };
@@ -485,7 +502,6 @@ impl Checker<'_> {
     /// Returns the common type, or `None` to wait.
     fn common_operand(
         &mut self,
-        op: BinaryOp,
         lhs: &(NodeId, Ty, Span),
         rhs: &(NodeId, Ty, Span),
         force: bool,
@@ -507,12 +523,17 @@ impl Checker<'_> {
         }
         if self.unify(&l, &r).is_err() {
             let (expected, found) = (self.show(&l), self.show(&r));
-            let _ = op;
+            let context = match (&l, &r) {
+                (Ty::Prim(p), Ty::Prim(q)) if p.is_int() && q.is_int() => {
+                    "the operator's other operand (integers of different signedness need `as`)"
+                }
+                _ => "the operator's other operand",
+            };
             self.error(SemaError::Mismatch {
                 expected,
                 found,
                 span: rhs.2,
-                context: "the operator's other operand",
+                context,
             });
             return Some(Ty::Error);
         }
@@ -558,7 +579,7 @@ impl Checker<'_> {
                 Progress::Done
             }
             _ => {
-                let Some(t) = self.common_operand(op, lhs, rhs, force) else {
+                let Some(t) = self.common_operand(lhs, rhs, force) else {
                     return Progress::Wait;
                 };
                 let t = self.shallow(&t);

@@ -141,6 +141,12 @@ impl Checker<'_> {
                     });
                     return Ty::Error;
                 }
+                if b == Builtin::Insert && !arg_info[0].mut_place {
+                    self.error(SemaError::MutArgNotPlace {
+                        param: "s".into(),
+                        span: arg_info[0].span,
+                    });
+                }
                 let result = self.fresh(VarKind::General);
                 let args = arg_info.into_iter().map(|a| (a.ty, a.span)).collect();
                 self.solve_or_defer(Obligation::Builtin {
@@ -260,44 +266,56 @@ impl Checker<'_> {
             self.apply_call(c, c.cands[0]);
             return Progress::Done;
         }
-        let viable: Vec<Callee> = c
+        let by_args: Vec<Callee> = c
             .cands
             .iter()
             .copied()
             .filter(|k| self.viable(*k, &c.args))
             .collect();
-        match viable.len() {
-            1 => {
-                self.apply_call(c, viable[0]);
-                Progress::Done
-            }
-            0 => {
-                let args: Vec<String> = c.args.iter().map(|a| self.show(&a.ty)).collect();
-                let candidates = c.cands.iter().map(|k| self.describe(*k)).collect();
-                self.error(SemaError::NoOverload {
-                    name: c.name.clone(),
-                    args: format!("({})", args.join(", ")),
-                    candidates,
-                    span: c.span,
-                });
-                self.unify(&c.result, &Ty::Error).ok();
-                Progress::Done
-            }
-            _ => {
-                let known = c.args.iter().all(|a| !self.zonk(&a.ty).has_vars());
-                if !known && !force {
-                    return Progress::Wait;
-                }
-                let candidates = viable.iter().map(|k| self.describe(*k)).collect();
-                self.error(SemaError::AmbiguousOverload {
-                    name: c.name.clone(),
-                    candidates,
-                    span: c.span,
-                });
-                self.unify(&c.result, &Ty::Error).ok();
-                Progress::Done
-            }
+        if by_args.is_empty() {
+            let args: Vec<String> = c.args.iter().map(|a| self.show(&a.ty)).collect();
+            let candidates = c.cands.iter().map(|k| self.describe(*k)).collect();
+            self.error(SemaError::NoOverload {
+                name: c.name.clone(),
+                args: format!("({})", args.join(", ")),
+                candidates,
+                span: c.span,
+            });
+            self.unify(&c.result, &Ty::Error).ok();
+            return Progress::Done;
         }
+        if by_args.len() == 1 {
+            self.apply_call(c, by_args[0]);
+            return Progress::Done;
+        }
+        // Several candidates take these arguments: the expected result type may decide.
+        let by_result: Vec<Callee> = by_args
+            .iter()
+            .copied()
+            .filter(|k| self.compatible(&c.result, &self.signature(*k).1))
+            .collect();
+        if by_result.len() == 1 {
+            self.apply_call(c, by_result[0]);
+            return Progress::Done;
+        }
+        let known =
+            c.args.iter().all(|a| !self.zonk(&a.ty).has_vars()) && !self.zonk(&c.result).has_vars();
+        if !known && !force {
+            return Progress::Wait;
+        }
+        let remaining = if by_result.is_empty() {
+            &by_args
+        } else {
+            &by_result
+        };
+        let candidates = remaining.iter().map(|k| self.describe(*k)).collect();
+        self.error(SemaError::AmbiguousOverload {
+            name: c.name.clone(),
+            candidates,
+            span: c.span,
+        });
+        self.unify(&c.result, &Ty::Error).ok();
+        Progress::Done
     }
 
     fn apply_call(&mut self, c: &CallOb, k: Callee) {

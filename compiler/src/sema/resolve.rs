@@ -18,6 +18,16 @@ use crate::syntax::ast::{ArrayLen, FieldDecl, Item, Program, TypeExprKind};
 use rustc_hash::FxHashMap;
 use scion_ir::diag::Span;
 
+/// The declared types a value of `ty` holds inline (not through a slice or a set).
+fn record_parts(ty: &Ty) -> Vec<AdtId> {
+    match ty {
+        Ty::Adt(a) => vec![*a],
+        Ty::Tuple(ts) => ts.iter().flat_map(record_parts).collect(),
+        Ty::Array(e, _) | Ty::Option(e) => record_parts(e),
+        _ => Vec::new(),
+    }
+}
+
 /// How the length name of a dependent array `T[x]` is checked.
 pub(super) enum LenScope<'s> {
     /// `x` must be one of these names (earlier fields or parameters).
@@ -238,7 +248,46 @@ impl Checker<'_> {
                 }
             }
         }
-        let _ = AdtId(0);
+    }
+
+    /// A record may not contain itself, directly or through other records: its values would be
+    /// infinitely large. Sums may (that is what a tree is).
+    pub(super) fn check_record_cycles(&mut self, program: &Program) {
+        for a in 0..self.adts.adts.len() {
+            if self.adts.adts[a].is_sum() {
+                continue;
+            }
+            let me = AdtId(a as u32);
+            let mut stack: Vec<AdtId> = vec![me];
+            let mut seen: Vec<AdtId> = Vec::new();
+            let mut cyclic = false;
+            while let Some(r) = stack.pop() {
+                let Some(def) = self.adts.get(r) else {
+                    continue;
+                };
+                for f in &def.fields {
+                    for inner in record_parts(&f.ty) {
+                        if inner == me {
+                            cyclic = true;
+                        } else if !seen.contains(&inner)
+                            && self.adts.get(inner).is_some_and(|d| !d.is_sum())
+                        {
+                            seen.push(inner);
+                            stack.push(inner);
+                        }
+                    }
+                }
+            }
+            if cyclic {
+                let item = self.adts.adts[a].item;
+                if let Some(Item::Type(d)) = program.items.get(item) {
+                    self.error(SemaError::RecursiveRecord {
+                        name: d.name.name.clone(),
+                        span: d.name.span,
+                    });
+                }
+            }
+        }
     }
 
     /// Collects every function signature, building the overload sets.

@@ -6,6 +6,24 @@
 //! `foreach` and patterns, and for layouts and builds the types of their members (paper §3-§6).
 //! No [`Ty::Var`] remains in a `TypedProgram`; where a type could not be found it is
 //! [`Ty::Error`] and a diagnostic was reported.
+//!
+//! Reading it (for `irgen`), by AST node:
+//!
+//! * every `Expr`: `expr_types[id]`; `Name`, `Call`, `Parent` and `Build` expressions also have
+//!   `resolutions[id]` ([`Resolution`]). A `Call` resolved to `Ctor`/`Variant`/`Func` may omit
+//!   trailing arguments whose field or parameter has a default: the default is the expression in
+//!   the declaring AST node (typed like any other expression).
+//! * `StmtKind::Let` and `StmtKind::Foreach`: `binders[stmt.id]` is the binding; a
+//!   `PatternKind::Bind`: `binders[pattern.id]`, whose [`BindingKind::Pattern`] says which field
+//!   (shared fields first) it binds; a `PatternKind::Variant`: `pattern_variants[pattern.id]`.
+//! * an arithmetic or comparison operand in `widenings` is converted to the wider integer type
+//!   before the operation (its own `expr_types` entry is the narrow type).
+//! * a `mut` parameter is passed by reference: an argument for a `mut` parameter is always a
+//!   `Name` resolving to a `mut` [`Resolution::Param`] of the caller.
+//! * the function declared by item `i` is `funcs[func_of_item(i)]`; its `unique_name` tells
+//!   overloads apart.
+//! * layouts: [`LayoutInfo::members`] in pre-order of named members; builds: `build x` statements
+//!   have `build_targets[stmt.id]`.
 
 use super::types::{AdtId, AdtTable, Prim, Ty};
 use crate::syntax::ast::NodeId;
@@ -74,6 +92,20 @@ pub enum Builtin {
     WithAxis,
     /// `len(a)`: element count of an array or slice, as `u32`.
     Len,
+    /// `frame_origin(lo)`: the origin of a quantization frame whose low corner is `lo` (rounded
+    /// down to 0 or a normal float).
+    FrameOrigin,
+    /// `frame_step(origin, hi, m)`: the smallest grid step with which `m` steps from `origin`
+    /// reach `hi`.
+    FrameStep,
+    /// `quant_lo(v, origin, step, m)`: the largest code in `[0, m]` whose decoded plane is at or
+    /// below `v`, lane-wise (`u32` lanes).
+    QuantLo,
+    /// `quant_hi(v, origin, step, m)`: the smallest code in `[0, m]` whose decoded plane is at
+    /// or above `v`, lane-wise (`u32` lanes).
+    QuantHi,
+    /// `insert(s, x)`: adds `x` to the set `s`, a `mut` parameter (passed by reference).
+    Insert,
     /// Build language: `append(x, n)` appends `n` elements of logical array `x` to the array the
     /// layout maps it to and yields the start index (`u32`).
     Append,
@@ -81,7 +113,7 @@ pub enum Builtin {
 
 impl Builtin {
     /// Every builtin of the traversal and layout languages (not `append`).
-    pub const TRAVERSAL: [Builtin; 20] = [
+    pub const TRAVERSAL: [Builtin; 25] = [
         Builtin::Min,
         Builtin::Max,
         Builtin::Clamp,
@@ -102,6 +134,11 @@ impl Builtin {
         Builtin::FmulRu,
         Builtin::WithAxis,
         Builtin::Len,
+        Builtin::Insert,
+        Builtin::FrameOrigin,
+        Builtin::FrameStep,
+        Builtin::QuantLo,
+        Builtin::QuantHi,
     ];
 
     /// The name as written.
@@ -127,6 +164,11 @@ impl Builtin {
             Builtin::FmulRu => "fmul_ru",
             Builtin::WithAxis => "with_axis",
             Builtin::Len => "len",
+            Builtin::Insert => "insert",
+            Builtin::FrameOrigin => "frame_origin",
+            Builtin::FrameStep => "frame_step",
+            Builtin::QuantLo => "quant_lo",
+            Builtin::QuantHi => "quant_hi",
             Builtin::Append => "append",
         }
     }
@@ -145,8 +187,10 @@ impl Builtin {
             | Builtin::Ceil
             | Builtin::Length
             | Builtin::Normalize
-            | Builtin::Len => 1,
-            Builtin::Clamp | Builtin::Fma | Builtin::WithAxis => 3,
+            | Builtin::Len
+            | Builtin::FrameOrigin => 1,
+            Builtin::Clamp | Builtin::Fma | Builtin::WithAxis | Builtin::FrameStep => 3,
+            Builtin::QuantLo | Builtin::QuantHi => 4,
             _ => 2,
         }
     }
