@@ -3,7 +3,9 @@
 use crate::layout::fixtures::*;
 use crate::layout::model::{GroupKind, LayoutModel, Storage};
 use crate::layout::plan::{BufferPlan, Count};
-use crate::layout::resolve::{resolve_field, Dep, FieldPath, Index, ResolveError, Resolver};
+use crate::layout::resolve::{
+    evaluation_order, resolve_field, Dep, FieldPath, Index, ResolveError, Resolver,
+};
 use crate::syntax::ast::{ExprKind, Item, Program};
 
 fn model(prog: &Program, name: &str) -> LayoutModel {
@@ -363,4 +365,35 @@ fn buffer_plans_of_soaos_and_indirect_groups() {
         40,
         "P @0, top @8, scene @16..40"
     );
+}
+
+#[test]
+fn derived_fields_have_an_evaluation_order() {
+    let p = program(&[SG_EQ]);
+    let m = model(&p, "SgEq");
+    let mut r = Resolver::new(&m);
+    let route = r.routes("Leaf").0[0].clone();
+    let order = evaluation_order(&m, &route).expect("acyclic");
+    let names: Vec<String> = order
+        .iter()
+        .map(|x| m.members[*x].kind.value_name().unwrap().name.clone())
+        .collect();
+    let pos = |n: &str| names.iter().position(|x| x == n).unwrap();
+    assert!(
+        pos("lo") < pos("bounds") && pos("hi") < pos("bounds"),
+        "{names:?}"
+    );
+    assert!(pos("nprims") < pos("data"), "{names:?}");
+
+    let cyclic = PBRT.replace("left = I + 1;", "left = I + k; k = left;");
+    let p = program(&[&cyclic]);
+    let decl = p.items.iter().find_map(|i| match i {
+        Item::Layout(l) => Some(l),
+        _ => None,
+    });
+    let m = LayoutModel::from_ast(decl.unwrap(), &p);
+    let mut r = Resolver::new(&m);
+    let route = r.routes("Interior").0[0].clone();
+    let stuck = evaluation_order(&m, &route).unwrap_err();
+    assert_eq!(stuck.len(), 2);
 }
