@@ -621,11 +621,23 @@ impl<'a, 'm> VariantCheck<'a, 'm> {
             }
         }
         let Some(members) = self.reachable.get(name).cloned() else {
+            let derived = matches!(
+                self.resolver.resolve(&self.variant, name),
+                Ok(FieldPath::Derived { .. })
+            );
             let (msg, label) =
                 if self.facts.scalars.contains_key(name) || self.facts.arrays.contains(name) {
                     (
                         format!("global `{name}` cannot be written by a variant build"),
                         "write globals in `build root`",
+                    )
+                } else if derived {
+                    (
+                        format!(
+                            "`{name}` is derived in layout `{}`, not stored",
+                            self.m.name.name
+                        ),
+                        "build the stored fields its definition reads instead",
                     )
                 } else {
                     (

@@ -356,6 +356,15 @@ fn e0406_build_target_exists() {
         &pbrt_with("build nprims = 0;", "build nprims = 0; build N = 1;"),
         PBRT,
     );
+    let derived = PBRT_SOAOS.replacen("build low = bounds.low;", "build bounds;", 1);
+    let d = diags(&[&derived]);
+    assert!(
+        d.list
+            .iter()
+            .any(|d| d.code.as_deref() == Some("E0406") && d.message.contains("derived")),
+        "{:#?}",
+        d.list
+    );
 }
 
 #[test]
