@@ -397,3 +397,33 @@ fn derived_fields_have_an_evaluation_order() {
     let stuck = evaluation_order(&m, &route).unwrap_err();
     assert_eq!(stuck.len(), 2);
 }
+
+#[test]
+fn case_study_layouts_have_catalog_sizes() {
+    let p = program(&[SHARED_SLAB, DOP_SPLIT]);
+    let slab = model(&p, "SharedSlab");
+    assert_eq!(
+        slab.reference.size, 28,
+        "the reference carries the node's box"
+    );
+    assert_eq!(slab.node_bytes(), 16);
+    assert_eq!(elem(&slab, "pl"), (0, 0));
+    assert_eq!(elem(&slab, "pr"), (0, 4));
+    assert_eq!(elem(&slab, "c_o"), (0, 8));
+    assert_eq!(elem(&slab, "nprims"), (0, 12));
+    assert_eq!(elem(&slab, "axis"), (0, 14));
+    let dop = model(&p, "DopSplit");
+    assert_eq!(
+        dop.groups[0]
+            .arrays
+            .iter()
+            .map(|a| a.stride)
+            .collect::<Vec<_>>(),
+        vec![32, 32]
+    );
+    assert_eq!(dop.adt.as_ref().unwrap().name, "DopBVH");
+    match resolve_field(&dop, "Leaf", "bounds").unwrap() {
+        FieldPath::Derived { deps, .. } => assert_eq!(deps.len(), 4),
+        other => panic!("{other:?}"),
+    }
+}

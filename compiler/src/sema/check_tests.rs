@@ -54,6 +54,8 @@ fn catalog_layouts_pass_every_check() {
         vec![SG_EQ],
         vec![BVH8_TYPE, BVH8_Q8],
         vec![BVH8_TYPE, a16.as_str()],
+        vec![SHARED_SLAB],
+        vec![DOP_SPLIT],
     ] {
         let d = diags(&srcs);
         assert!(d.is_empty(), "{:#?}", d.list);
