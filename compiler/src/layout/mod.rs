@@ -10,6 +10,7 @@
 
 pub mod adt;
 pub mod domain;
+pub mod dump;
 pub mod model;
 mod place;
 pub mod plan;
@@ -37,6 +38,7 @@ mod check_tests;
 #[path = "../sema/check_robustness.rs"]
 mod check_robustness;
 
+pub use dump::byte_map;
 pub use model::LayoutModel;
 pub use plan::BufferPlan;
 pub use resolve::{resolve_field, FieldPath, Resolver};

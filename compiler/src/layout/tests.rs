@@ -427,3 +427,61 @@ fn case_study_layouts_have_catalog_sizes() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn byte_map_of_pbrt() {
+    let p = program(&[PBRT]);
+    let m = model(&p, "LinearBVH");
+    expect_test::expect![[r#"
+        layout LinearBVH(I: u32): reference 4 B
+        realizes BVH
+        globals: 8 B, align 4
+          @0     P: u32 (4 B)
+          @4     N: u32 (4 B)
+          array  primitives: Triangle[P] (40 B each)
+        group nodes (direct)
+          array 0: 30 B, align 32, stride 32
+            @0     bounds: AABB (24 B)
+            @24    split (4 B)
+              > 0 -> Leaf
+                @24    p_o: u32 (4 B)
+                       data = ...
+              0 -> Interior
+                @24    c_o: u32 (4 B)
+                       left = ...
+                       right = ...
+            @28    nprims: u16 (2 B)
+    "#]]
+    .assert_eq(&crate::layout::byte_map(&m));
+}
+
+#[test]
+fn byte_map_of_soaos() {
+    let p = program(&[PBRT_SOAOS]);
+    let m = model(&p, "PbrtSoAoS");
+    expect_test::expect![[r#"
+        layout PbrtSoAoS(I: u32): reference 4 B
+        realizes BVH
+        globals: 8 B, align 4
+          @0     P: u32 (4 B)
+          @4     N: u32 (4 B)
+          array  primitives: Triangle[P] (40 B each)
+        group nodes (direct)
+          array 0: 16 B, align 4, stride 16
+            @0     low: f32x3 (12 B)
+            @12    split (4 B)
+              > 0 -> Leaf
+                @12    p_o: u32 (4 B)
+                       data = ...
+              0 -> Interior
+                @12    c_o: u32 (4 B)
+                       left = ...
+                       right = ...
+          array 1: 16 B, align 4, stride 16
+            @0     high: f32x3 (12 B)
+            @12    nprims: u16 (2 B)
+            @14    padding (2 B)
+                   bounds = ...
+    "#]]
+    .assert_eq(&crate::layout::byte_map(&m));
+}
