@@ -365,6 +365,15 @@ fn buffer_plans_of_soaos_and_indirect_groups() {
         40,
         "P @0, top @8, scene @16..40"
     );
+    // Both arms realizing Leaf slice `primitives`, so its length is the total of `data`.
+    assert_eq!(
+        plan.buffer("primitives").unwrap().count,
+        Count::LogicalLength {
+            field: "data".into(),
+            variants: vec!["Leaf".into()],
+            len_global: "P".into()
+        }
+    );
 }
 
 #[test]

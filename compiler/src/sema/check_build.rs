@@ -11,7 +11,7 @@
 //! recursive child built exactly once, and every path must end in `return`. `build root`
 //! writes the globals that are neither array sizes (set by the constructor) nor arrays (filled
 //! by `append`), each exactly once. `append(x, n)` appends a logical array field; `this[a:b]`
-//! stays within the reference's bits.
+//! stays within the reference's bits; a body reads no field that only other variants have.
 
 use crate::layout::model::{LayoutModel, LogicalField, MemberId, MemberModel, Storage};
 use crate::layout::resolve::{names_in, FieldPath, Resolver};
@@ -321,6 +321,8 @@ struct VariantCheck<'a, 'm> {
     variant: String,
     /// Stored fields (not globals) on some route, by name.
     reachable: FxHashMap<String, Vec<MemberId>>,
+    /// Every name declared on some route of the variant (stored, derived, let).
+    on_route: FxHashSet<String>,
     /// Stored fields on every route: each must be written exactly once.
     required: Vec<MemberId>,
     locals: FxHashSet<String>,
@@ -340,9 +342,13 @@ impl<'a, 'm> VariantCheck<'a, 'm> {
         let (routes, _) = resolver.routes(variant).clone();
         let mut reachable: FxHashMap<String, Vec<MemberId>> = FxHashMap::default();
         let mut per_route: Vec<FxHashSet<MemberId>> = Vec::new();
+        let mut on_route = FxHashSet::default();
         for r in &routes {
             let mut set = FxHashSet::default();
             for mid in r.members(m) {
+                if let Some(n) = m.members[mid].kind.value_name() {
+                    on_route.insert(n.name.clone());
+                }
                 if m.members[mid].scope == 0 {
                     continue;
                 }
@@ -372,6 +378,7 @@ impl<'a, 'm> VariantCheck<'a, 'm> {
             fields,
             variant: variant.to_string(),
             reachable,
+            on_route,
             required,
             locals: FxHashSet::default(),
             first_write: FxHashMap::default(),
@@ -708,6 +715,21 @@ impl<'a, 'm> VariantCheck<'a, 'm> {
         match &e.kind {
             ExprKind::Name(n) => {
                 if self.locals.contains(&n.name) {
+                    return;
+                }
+                if !self.on_route.contains(&n.name) {
+                    let elsewhere = self.m.members.iter().any(|i| {
+                        i.scope != 0 && i.kind.value_name().is_some_and(|x| x.name == n.name)
+                    });
+                    if elsewhere {
+                        self.d.push(
+                            Diagnostic::error(
+                                "E0418",
+                                format!("`{}` is a field of another variant in layout `{}`", n.name, self.m.name.name),
+                            )
+                            .with_primary(n.span, format!("`{}` does not have it", self.variant)),
+                        );
+                    }
                     return;
                 }
                 if let Some(ms) = self.reachable.get(&n.name) {

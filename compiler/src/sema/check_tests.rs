@@ -531,3 +531,12 @@ fn loops_count_as_many_writes() {
         "{got:?}"
     );
 }
+
+#[test]
+fn e0418_fields_of_other_variants() {
+    let bad = pbrt_with(
+        "build p_o = append(data, nprims);",
+        "build p_o = append(data, nprims) + c_o;",
+    );
+    rejects_and_accepts("E0418", &bad, PBRT);
+}
