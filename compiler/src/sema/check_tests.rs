@@ -540,3 +540,98 @@ fn e0418_fields_of_other_variants() {
     );
     rejects_and_accepts("E0418", &bad, PBRT);
 }
+
+#[test]
+fn e0323_cyclic_from() {
+    let src = r#"
+type T = Node(a: u32) | Empty;
+layout L(R: u32) {
+  indirect group g { k: u32; a: u32; split k { _ -> Node from g[k]; }; };
+  split R { 0 -> Empty { }; _ -> Node from g[R]; };
+};
+"#;
+    let got = codes(&[src]);
+    assert!(got.contains(&"E0323".to_string()), "{got:?}");
+    let ok = src.replace("split k { _ -> Node from g[k]; };", "");
+    assert!(diags(&[&ok]).is_empty(), "{:#?}", diags(&[&ok]).list);
+}
+
+#[test]
+fn e0324_too_many_routes() {
+    // Nine splits in a row, each realizing `Node` with two arms: 512 routes.
+    let mut body = String::new();
+    for i in 0..9 {
+        body.push_str(&format!(
+            "f{i}: u8; split f{i} {{ 0 -> Node {{ }}; _ -> Node {{ }}; }};\n"
+        ));
+    }
+    let src = format!("type T = Node(a: u8);\nlayout L(I: u32) {{ N: u32; group g[size=N] by I {{ a: u8; {body} }}; }};");
+    let got = codes(&[&src]);
+    assert!(got.contains(&"E0324".to_string()), "{got:?}");
+    let few = src
+        .replace("f8: u8; split f8 { 0 -> Node { }; _ -> Node { }; };", "")
+        .replace("f7: u8; split f7 { 0 -> Node { }; _ -> Node { }; };", "");
+    assert!(!codes(&[&few]).contains(&"E0324".to_string()));
+}
+
+#[test]
+fn nested_splits_give_alternative_paths() {
+    let src = r#"
+type T = Node(a: u32) | Empty;
+layout L(I: u32) {
+  N: u32;
+  group g[size=N, align=8] by I {
+    tag: u8;
+    split tag {
+      0 -> Empty { };
+      _ -> Node {
+        wide: u8;
+        split wide {
+          0 -> Node { a: u32; };
+          _ -> Node { big: u64; a = big as u32; };
+        };
+      };
+    };
+  };
+};
+"#;
+    assert!(diags(&[src]).is_empty(), "{:#?}", diags(&[src]).list);
+    let p = program(&[src]);
+    let crate::syntax::ast::Item::Layout(l) = p.items.last().unwrap() else {
+        panic!()
+    };
+    let m = crate::layout::LayoutModel::from_ast(l, &p);
+    match crate::layout::resolve_field(&m, "Node", "a").unwrap() {
+        crate::layout::FieldPath::Alternatives(cases) => {
+            assert_eq!(cases.len(), 2);
+            assert!(matches!(
+                cases[0].1,
+                crate::layout::FieldPath::Stored { .. }
+            ));
+            assert!(matches!(
+                cases[1].1,
+                crate::layout::FieldPath::Derived { .. }
+            ));
+        }
+        other => panic!("{other:?}"),
+    }
+    // Like a C union, a split is aligned to its most aligned arm: the outer overlay starts at
+    // 8 (its Node arm holds a u64), so tag @0, wide @8, the inner overlay @16, 24 bytes.
+    assert_eq!(
+        m.offset_of("wide"),
+        Some(crate::layout::model::Storage::Element {
+            group: 0,
+            array: 0,
+            offset: 8
+        })
+    );
+    assert_eq!(
+        m.offset_of("big"),
+        Some(crate::layout::model::Storage::Element {
+            group: 0,
+            array: 0,
+            offset: 16
+        })
+    );
+    assert_eq!(m.groups[0].arrays[0].stride, 24);
+}
