@@ -197,61 +197,7 @@ fn check_root(
     d: &mut Diagnostics,
 ) {
     let mut written: FxHashMap<String, Span> = FxHashMap::default();
-    let mut stack: Vec<&Stmt> = body.iter().rev().collect();
-    while let Some(s) = stack.pop() {
-        let mut reads: Vec<&Expr> = Vec::new();
-        crate::layout::resolve::stmt_exprs(s, &mut |e| reads.push(e));
-        if let StmtKind::Build { field, .. } = &s.kind {
-            // The value is read before the field is written.
-            for e in &reads {
-                root_reads(facts, e, &written, d);
-            }
-            let name = &field.name;
-            if facts.sizes.contains(name) {
-                d.push(
-                    Diagnostic::error(
-                        "E0416",
-                        format!("global `{name}` is set by the constructor"),
-                    )
-                    .with_primary(field.span, "do not write it")
-                    .with_note(
-                        "globals that size arrays or groups get their element count automatically",
-                    ),
-                );
-            } else if facts.arrays.contains(name) {
-                d.push(
-                    Diagnostic::error(
-                        "E0416",
-                        format!("global array `{name}` is filled by `append`"),
-                    )
-                    .with_primary(field.span, "cannot be written here"),
-                );
-            } else if !facts.scalars.contains_key(name) {
-                d.push(
-                    Diagnostic::error(
-                        "E0416",
-                        format!("`{name}` is not a global of layout `{}`", m.name.name),
-                    )
-                    .with_primary(field.span, "`build root` writes globals only"),
-                );
-            } else if let Some(first) = written.get(name) {
-                d.push(
-                    Diagnostic::error("E0408", format!("global `{name}` is written twice"))
-                        .with_primary(field.span, "second write")
-                        .with_secondary(*first, "first write"),
-                );
-            } else {
-                written.insert(name.clone(), field.span);
-            }
-        } else {
-            for e in &reads {
-                root_reads(facts, e, &written, d);
-            }
-            if let StmtKind::Block(b) = &s.kind {
-                stack.extend(b.iter().rev());
-            }
-        }
-    }
+    root_stmts(m, facts, body, &mut written, d, 0);
     let mut missing: Vec<(&String, &MemberId)> = facts
         .scalars
         .iter()
@@ -264,6 +210,112 @@ fn check_root(
                 .with_primary(span, format!("`build root` must write `{name}`"))
                 .with_secondary(m.members[*mid].span, "declared here"),
         );
+    }
+}
+
+/// Walks `build root`'s statements in order; writes inside branches and loops count as writes
+/// (the root block is straight-line code in practice, so it is not path-sensitive).
+fn root_stmts(
+    m: &LayoutModel,
+    facts: &GlobalFacts,
+    body: &[Stmt],
+    written: &mut FxHashMap<String, Span>,
+    d: &mut Diagnostics,
+    depth: u32,
+) {
+    if depth > 256 {
+        return;
+    }
+    for s in body {
+        match &s.kind {
+            StmtKind::Block(b) => root_stmts(m, facts, b, written, d, depth + 1),
+            StmtKind::If {
+                branches,
+                otherwise,
+            } => {
+                for (c, b) in branches {
+                    root_reads(facts, c, written, d);
+                    root_stmts(m, facts, std::slice::from_ref(b), written, d, depth + 1);
+                }
+                if let Some(o) = otherwise {
+                    root_stmts(m, facts, std::slice::from_ref(o), written, d, depth + 1);
+                }
+            }
+            StmtKind::Match { scrutinee, arms } => {
+                root_reads(facts, scrutinee, written, d);
+                for a in arms {
+                    root_stmts(
+                        m,
+                        facts,
+                        std::slice::from_ref(&a.body),
+                        written,
+                        d,
+                        depth + 1,
+                    );
+                }
+            }
+            StmtKind::Foreach { iter, body, .. } => {
+                root_reads(facts, iter, written, d);
+                root_stmts(m, facts, std::slice::from_ref(body), written, d, depth + 1);
+            }
+            StmtKind::Build { field, value } => {
+                if let Some(v) = value {
+                    root_reads(facts, v, written, d);
+                }
+                root_write(m, facts, field, written, d);
+            }
+            _ => {
+                let mut reads: Vec<&Expr> = Vec::new();
+                crate::layout::resolve::stmt_exprs(s, &mut |e| reads.push(e));
+                for e in reads {
+                    root_reads(facts, e, written, d);
+                }
+            }
+        }
+    }
+}
+
+fn root_write(
+    m: &LayoutModel,
+    facts: &GlobalFacts,
+    field: &Ident,
+    written: &mut FxHashMap<String, Span>,
+    d: &mut Diagnostics,
+) {
+    let name = &field.name;
+    if facts.sizes.contains(name) {
+        d.push(
+            Diagnostic::error(
+                "E0416",
+                format!("global `{name}` is set by the constructor"),
+            )
+            .with_primary(field.span, "do not write it")
+            .with_note("globals that size arrays or groups get their element count automatically"),
+        );
+    } else if facts.arrays.contains(name) {
+        d.push(
+            Diagnostic::error(
+                "E0416",
+                format!("global array `{name}` is filled by `append`"),
+            )
+            .with_primary(field.span, "cannot be written here"),
+        );
+    } else if !facts.scalars.contains_key(name) {
+        d.push(
+            Diagnostic::error(
+                "E0416",
+                format!("`{name}` is not a global of layout `{}`", m.name.name),
+            )
+            .with_primary(field.span, "`build root` writes globals only"),
+        );
+    } else if let Some(first) = written.get(name) {
+        d.push(
+            Diagnostic::error("E0408", format!("global `{name}` is written twice"))
+                .with_primary(field.span, "second write")
+                .with_secondary(*first, "first write"),
+        );
+    } else {
+        written.insert(name.clone(), field.span);
     }
 }
 

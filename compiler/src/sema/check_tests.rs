@@ -635,3 +635,30 @@ layout L(I: u32) {
     );
     assert_eq!(m.groups[0].arrays[0].stride, 24);
 }
+
+#[test]
+fn root_writes_inside_blocks_count_once() {
+    let nested = PBRT_Q16.replace(
+        "build wstep = frame_step(wlo, bounds.high, 65535);",
+        "if true { build wstep = frame_step(wlo, bounds.high, 65535); }",
+    );
+    assert!(
+        diags(&[&nested]).is_empty(),
+        "{:#?}",
+        diags(&[&nested]).list
+    );
+    let early = PBRT_Q16.replace(
+        "build wlo = frame_origin(bounds.low);",
+        "{ let z: f32x3 = wlo; };\n    build wlo = frame_origin(bounds.low);",
+    );
+    let d = diags(&[&early]);
+    assert_eq!(
+        d.list
+            .iter()
+            .filter(|d| d.code.as_deref() == Some("E0409"))
+            .count(),
+        1,
+        "{:#?}",
+        d.list
+    );
+}
