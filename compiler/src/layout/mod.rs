@@ -30,6 +30,9 @@ pub mod check_layout;
 #[path = "../sema/check_build.rs"]
 pub mod check_build;
 
+#[path = "../sema/check_build_root.rs"]
+mod check_build_root;
+
 #[cfg(test)]
 #[path = "../sema/check_tests.rs"]
 mod check_tests;
