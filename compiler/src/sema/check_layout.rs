@@ -57,6 +57,7 @@ pub fn check_layout(decl: &LayoutDecl, program: &Program) -> Diagnostics {
     c.parents();
     c.group_exprs();
     c.splits();
+    c.bit_slices();
     c.variants();
     c.d
 }
@@ -246,6 +247,60 @@ impl Checker<'_> {
                 _ => Ok(None),
             },
             _ => Ok(None),
+        }
+    }
+
+    /// E0325: a literal bit slice `x[a:b]` of an integer stays within `x`'s bits, with a < b.
+    fn bit_slices(&mut self) {
+        let mut found: Vec<(ScopeId, &Expr)> = Vec::new();
+        for info in &self.m.members {
+            match &info.kind {
+                MemberModel::Derived { value, .. } | MemberModel::Let { value, .. } => {
+                    found.push((info.scope, value))
+                }
+                MemberModel::Split(sp) => {
+                    let split = &self.m.splits[*sp];
+                    found.push((split.scope, &split.discriminant));
+                    for a in &split.arms {
+                        if let ArmBody::From { key, .. } = &a.body {
+                            found.push((split.scope, key));
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+        let mut slices = Vec::new();
+        for (scope, e) in found {
+            collect_slices(e, scope, &mut slices, 0);
+        }
+        for (scope, e) in slices {
+            let ExprKind::Slice { base, lo, hi } = &e.kind else {
+                continue;
+            };
+            let (ExprKind::Name(x), ExprKind::Int(a), ExprKind::Int(b)) =
+                (&base.kind, &lo.kind, &hi.kind)
+            else {
+                continue;
+            };
+            let Some(TypeExprKind::Named(t)) = self.type_of_name(scope, &x.name).map(|t| &t.kind)
+            else {
+                continue;
+            };
+            let Some(shape) = crate::layout::types::primitive(&t.name) else {
+                continue;
+            };
+            if integer_domain(&t.name).is_none() {
+                continue;
+            }
+            let bits = u128::from(shape.size * 8);
+            if a >= b || *b > bits {
+                self.d.push(
+                    Diagnostic::error("E0325", format!("bit range [{a}:{b}] of `{}` does not fit its {bits} bits", x.name))
+                        .with_primary(e.span, "out of range")
+                        .with_note("bit ranges are half-open, low bit 0: `x[a:b]` needs a < b <= the width of x"),
+                );
+            }
         }
     }
 
@@ -592,5 +647,37 @@ impl Checker<'_> {
         }
         self.d
             .push(d.with_note("derived fields and lets must be computable in some order"));
+    }
+}
+
+fn collect_slices<'e>(e: &'e Expr, scope: ScopeId, out: &mut Vec<(ScopeId, &'e Expr)>, depth: u32) {
+    if depth > 256 {
+        return;
+    }
+    let d = depth + 1;
+    match &e.kind {
+        ExprKind::Slice { base, lo, hi } => {
+            out.push((scope, e));
+            for x in [base, lo, hi] {
+                collect_slices(x, scope, out, d);
+            }
+        }
+        ExprKind::Call { args, .. } | ExprKind::Tuple(args) => {
+            args.iter().for_each(|a| collect_slices(a, scope, out, d))
+        }
+        ExprKind::Field { base, .. } => collect_slices(base, scope, out, d),
+        ExprKind::Index { base, index } => {
+            collect_slices(base, scope, out, d);
+            collect_slices(index, scope, out, d);
+        }
+        ExprKind::Unary { operand, .. } => collect_slices(operand, scope, out, d),
+        ExprKind::Binary { lhs, rhs, .. } => {
+            collect_slices(lhs, scope, out, d);
+            collect_slices(rhs, scope, out, d);
+        }
+        ExprKind::Cast { expr, .. } | ExprKind::BitCast { expr, .. } => {
+            collect_slices(expr, scope, out, d)
+        }
+        _ => {}
     }
 }

@@ -662,3 +662,13 @@ fn root_writes_inside_blocks_count_once() {
         d.list
     );
 }
+
+#[test]
+fn e0325_bit_slices_fit() {
+    let bad = PBRT_Q16.replace("p_o = w[0:28];", "p_o = w[0:40];");
+    let got = codes(&[&bad]);
+    assert!(got.contains(&"E0325".to_string()), "{got:?}");
+    let bad = PBRT_Q16.replace("split w[28:32]", "split w[28:28]");
+    assert!(codes(&[&bad]).contains(&"E0325".to_string()));
+    assert!(diags(&[PBRT_Q16]).is_empty());
+}
