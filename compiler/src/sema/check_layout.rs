@@ -443,7 +443,7 @@ impl Checker<'_> {
                     Err(ResolveError::Missing { guards, .. }) => {
                         let at = guards
                             .last()
-                            .map(|(s, a)| m.splits[*s].arms[*a].span)
+                            .map(|(s, a)| m.splits[*s].arms[*a].variant.span)
                             .unwrap_or(m.name.span);
                         self.d.push(
                             Diagnostic::error("E0312", format!("field `{}` of variant `{vname}` has no physical path in layout `{}`", f.name.name, m.name.name))
