@@ -10,7 +10,6 @@
 //! an error.
 
 use crate::layout::model::{Adt, AdtVariant, LogicalField};
-use crate::layout::types::TypeEnv;
 use crate::syntax::ast::{
     Ident, Item, LayoutDecl, Member, MemberKind, Program, SplitArmBody, TypeExpr, TypeExprKind,
 };
@@ -25,7 +24,6 @@ fn err(code: &str, msg: impl Into<String>, span: Span, label: &str) -> Diagnosti
 pub(crate) fn find_adt(
     decl: &LayoutDecl,
     program: &Program,
-    env: &TypeEnv<'_>,
     diags: &mut Diagnostics,
 ) -> Option<Adt> {
     let mut named: Vec<Ident> = Vec::new();
@@ -183,7 +181,6 @@ pub(crate) fn find_adt(
                 .collect(),
         })
         .collect();
-    let _ = env;
     Some(Adt {
         name: t.name.name.clone(),
         variants,

@@ -30,7 +30,7 @@ pub fn byte_map(model: &LayoutModel) -> String {
         model.globals.size, model.globals.align
     );
     members(model, 0, 1, None, &mut out);
-    for (gid, g) in model.groups.iter().enumerate() {
+    for g in &model.groups {
         if g.kind == GroupKind::Nested {
             continue;
         }
@@ -48,7 +48,6 @@ pub fn byte_map(model: &LayoutModel) -> String {
             );
             members(model, g.scope, 2, Some(k), &mut out);
         }
-        let _ = gid;
     }
     out
 }

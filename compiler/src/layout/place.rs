@@ -41,7 +41,7 @@ pub(crate) fn build(decl: &LayoutDecl, program: &Program) -> LayoutModel {
         env,
     };
     b.components(decl);
-    b.m.adt = find_adt(decl, program, &b.env, &mut b.m.diagnostics);
+    b.m.adt = find_adt(decl, program, &mut b.m.diagnostics);
     if let Some(adt) = &b.m.adt {
         b.env.reference = Some((adt.name.clone(), b.m.reference));
     }

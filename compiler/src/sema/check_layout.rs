@@ -306,7 +306,7 @@ impl Checker<'_> {
 
     /// E0316, W0317, E0320: coverage of every split.
     fn splits(&mut self) {
-        for (sid, sp) in self.m.splits.iter().enumerate() {
+        for sp in &self.m.splits {
             let patterns: Vec<SplitPatternKind> =
                 sp.arms.iter().map(|a| a.pattern.kind.clone()).collect();
             let has_wild = patterns.contains(&SplitPatternKind::Wildcard);
@@ -355,7 +355,6 @@ impl Checker<'_> {
                         .with_note("earlier arms already match every value this pattern accepts"),
                 );
             }
-            let _ = sid;
         }
     }
 
