@@ -494,3 +494,49 @@ fn byte_map_of_soaos() {
     "#]]
     .assert_eq(&crate::layout::byte_map(&m));
 }
+
+fn member_text() -> impl proptest::strategy::Strategy<Value = String> {
+    use proptest::prelude::*;
+    prop_oneof![
+        prop::sample::select(vec![
+            "u8", "u16", "u32", "u64", "f32x3", "u16x3", "ptr", "AABB", "u8[5]"
+        ])
+        .prop_map(|t| format!("FIELD: {t};")),
+        (1u64..9).prop_map(|n| format!("{n};")),
+    ]
+}
+
+proptest::proptest! {
+    /// Placement invariants on random groups: fields at their natural alignment, in textual
+    /// order, never overlapping; the stride a multiple of the element alignment covering them.
+    #[test]
+    fn random_groups_are_placed_consistently(
+        members in proptest::collection::vec(member_text(), 1..12),
+        align in proptest::sample::select(vec![0u64, 1, 2, 4, 8, 16, 32]),
+    ) {
+        let mut body = String::new();
+        for (i, m) in members.iter().enumerate() {
+            body.push_str(&m.replace("FIELD", &format!("f{i}")));
+            body.push(' ');
+        }
+        let attr = if align == 0 { String::new() } else { format!(", align={align}") };
+        let src = format!("type T = One(x: u8);\nlayout L(I: u32) {{ N: u32; group g[size=N{attr}] by I {{ {body} }}; }};");
+        let p = program(&[&src]);
+        let m = model(&p, "L");
+        let arr = m.groups[0].arrays[0];
+        let mut end = 0;
+        for info in &m.members {
+            if let crate::layout::model::MemberModel::Stored(s) = &info.kind {
+                if let Storage::Element { offset, .. } = s.storage {
+                    proptest::prop_assert_eq!(offset % s.align, 0);
+                    proptest::prop_assert!(offset >= end, "overlap at {}", s.name.name);
+                    end = offset + s.size;
+                }
+            }
+        }
+        proptest::prop_assert!(arr.size >= end);
+        proptest::prop_assert_eq!(arr.stride % arr.align, 0);
+        proptest::prop_assert!(arr.stride >= arr.size && arr.stride < arr.size + arr.align);
+        proptest::prop_assert!(arr.align >= align.max(1));
+    }
+}
