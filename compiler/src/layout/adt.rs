@@ -5,11 +5,11 @@
 //! The ADT is the sum type that has every variant the split arms name; a layout without splits
 //! realizes the type whose variants its build names, or else the program's only one-variant sum
 //! type. When several sum types have the named variants (`BVH` and `BVH8` both have `Interior`
-//! and `Leaf`), the one whose logical field names the layout declares best is chosen; a tie is
+//! and `Leaf`), the one whose logical field names the layout declares best is chosen, then the
+//! one whose field types the layout's stored fields and constructor calls agree with; a tie is
 //! an error.
 
 use crate::layout::model::{Adt, AdtVariant, LogicalField};
-use crate::layout::types::TypeEnv;
 use crate::syntax::ast::{
     Ident, Item, LayoutDecl, Member, MemberKind, Program, SplitArmBody, TypeExpr, TypeExprKind,
 };
@@ -24,7 +24,6 @@ fn err(code: &str, msg: impl Into<String>, span: Span, label: &str) -> Diagnosti
 pub(crate) fn find_adt(
     decl: &LayoutDecl,
     program: &Program,
-    env: &TypeEnv<'_>,
     diags: &mut Diagnostics,
 ) -> Option<Adt> {
     let mut named: Vec<Ident> = Vec::new();
@@ -94,17 +93,31 @@ pub(crate) fn find_adt(
         if all.len() > 1 {
             // Several types have these variant names (BVH and BVH8 both have Interior and
             // Leaf): keep those whose logical fields the layout declares best.
-            let mut declared: Vec<&str> = Vec::new();
+            // Ties (BVH over AABB and DopBVH over DOP14 have the same field names) go to the
+            // type whose field types the layout agrees with: a stored field of the logical
+            // type, or a derived field built by the type's constructor.
+            let mut declared: Vec<(&str, Evidence<'_>)> = Vec::new();
             collect_member_names(&decl.members, &mut declared, 0);
             let score = |t: &crate::syntax::ast::TypeDecl| {
-                let mut fields: Vec<&str> = t.fields.iter().map(|f| f.name.name.as_str()).collect();
+                let mut fields: Vec<&crate::syntax::ast::FieldDecl> = t.fields.iter().collect();
                 for v in t.variants.iter().flatten() {
-                    fields.extend(v.fields.iter().map(|f| f.name.name.as_str()));
+                    fields.extend(v.fields.iter());
                 }
-                let found = fields.iter().filter(|f| declared.contains(f)).count();
-                (found * 1000) / fields.len().max(1)
+                let found = fields
+                    .iter()
+                    .filter(|f| declared.iter().any(|(n, _)| *n == f.name.name))
+                    .count();
+                let agree = fields
+                    .iter()
+                    .filter(|f| {
+                        declared
+                            .iter()
+                            .any(|(n, e)| *n == f.name.name && e.agrees(&f.ty))
+                    })
+                    .count();
+                ((found * 1000) / fields.len().max(1), agree)
             };
-            let best = all.iter().map(|t| score(t)).max().unwrap_or(0);
+            let best = all.iter().map(|t| score(t)).max().unwrap_or((0, 0));
             all.retain(|t| score(t) == best);
         }
         match all.len() {
@@ -168,7 +181,6 @@ pub(crate) fn find_adt(
                 .collect(),
         })
         .collect();
-    let _ = env;
     Some(Adt {
         name: t.name.name.clone(),
         variants,
@@ -186,14 +198,41 @@ fn mentions_type(ty: &TypeExpr, name: &str) -> bool {
     }
 }
 
-fn collect_member_names<'a>(members: &'a [Member], out: &mut Vec<&'a str>, depth: u32) {
+/// What a layout member says about the type of the logical field of the same name.
+enum Evidence<'a> {
+    Stored(&'a TypeExpr),
+    Derived(Option<&'a str>),
+}
+
+impl Evidence<'_> {
+    fn agrees(&self, ty: &TypeExpr) -> bool {
+        match self {
+            Evidence::Stored(t) => crate::layout::types::same_type(t, ty),
+            Evidence::Derived(Some(ctor)) => {
+                matches!(&ty.kind, TypeExprKind::Named(n) if n.name == *ctor)
+            }
+            Evidence::Derived(None) => false,
+        }
+    }
+}
+
+fn collect_member_names<'a>(
+    members: &'a [Member],
+    out: &mut Vec<(&'a str, Evidence<'a>)>,
+    depth: u32,
+) {
     if depth > 64 {
         return;
     }
     for m in members {
         match &m.kind {
-            MemberKind::Field { name, .. } | MemberKind::Derived { name, .. } => {
-                out.push(&name.name)
+            MemberKind::Field { name, ty } => out.push((&name.name, Evidence::Stored(ty))),
+            MemberKind::Derived { name, value } => {
+                let ctor = match &value.kind {
+                    crate::syntax::ast::ExprKind::Call { callee, .. } => Some(callee.name.as_str()),
+                    _ => None,
+                };
+                out.push((&name.name, Evidence::Derived(ctor)))
             }
             MemberKind::Group(g) => collect_member_names(&g.members, out, depth + 1),
             MemberKind::Split { arms, .. } => {

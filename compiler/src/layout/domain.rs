@@ -200,4 +200,57 @@ mod tests {
         let c = coverage(&[Eq(70000), Wildcard], U16);
         assert_eq!(c.unreachable, vec![0]);
     }
+
+    fn matches(p: &SplitPatternKind, v: i128) -> bool {
+        match *p {
+            Eq(n) => v == n,
+            Ne(n) => v != n,
+            Lt(n) => v < n,
+            Le(n) => v <= n,
+            Gt(n) => v > n,
+            Ge(n) => v >= n,
+            Wildcard => true,
+        }
+    }
+
+    fn pattern() -> impl proptest::strategy::Strategy<Value = SplitPatternKind> {
+        use proptest::prelude::*;
+        let lit = -3i128..260;
+        prop_oneof![
+            lit.clone().prop_map(Eq),
+            lit.clone().prop_map(Ne),
+            lit.clone().prop_map(Lt),
+            lit.clone().prop_map(Le),
+            lit.clone().prop_map(Gt),
+            lit.prop_map(Ge),
+            Just(Wildcard),
+        ]
+    }
+
+    proptest::proptest! {
+        /// Interval arithmetic agrees with trying every value of a `u8` discriminant.
+        #[test]
+        fn coverage_matches_brute_force(patterns in proptest::collection::vec(pattern(), 0..6)) {
+            let c = coverage(&patterns, Some((0, 255)));
+            let mut used = vec![false; patterns.len()];
+            let mut first_uncovered = None;
+            for v in 0..=255i128 {
+                match patterns.iter().position(|p| matches(p, v)) {
+                    Some(i) => used[i] = true,
+                    None => {
+                        if first_uncovered.is_none() {
+                            first_uncovered = Some(v);
+                        }
+                    }
+                }
+            }
+            let unreachable: Vec<usize> = (0..patterns.len()).filter(|i| !used[*i]).collect();
+            proptest::prop_assert_eq!(c.unreachable, unreachable);
+            let expected = match first_uncovered {
+                Some(v) => Uncovered::Value(v),
+                None => Uncovered::No,
+            };
+            proptest::prop_assert_eq!(c.uncovered, expected);
+        }
+    }
 }

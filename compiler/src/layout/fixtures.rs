@@ -185,3 +185,40 @@ pub fn program(sources: &[&str]) -> crate::syntax::ast::Program {
     }
     crate::layout::testparse::parse(&text)
 }
+
+/// Catalog §8.6: the shared slab (tree-carried box in a 28-byte reference), 16 B nodes.
+pub const SHARED_SLAB: &str = r#"
+layout SharedSlab(I: u32, lo: f32x3, hi: f32x3) {
+  P: u32; N: u32; primitives: Triangle[P]; scene: AABB;
+  group nodes[size=N, align=16] by I {
+    bounds = AABB(lo, hi);
+    split nprims {
+      0   -> Interior { pl: f32; pr: f32;
+                        left  = (I + 1,   lo, with_axis(hi, axis, pl));
+                        right = (I + c_o, with_axis(lo, axis, pr), hi); };
+      > 0 -> Leaf     { p_o: u32; 4; data = primitives[p_o : p_o + nprims]; };
+    };
+    c_o: u32; nprims: u16; axis: u8; 1;
+  };
+};
+"#;
+
+/// Catalog §8.6: DOP-14 split into a hot and a cold array (32 + 32 B). The catalog's `BVH`
+/// over `DOP14` is renamed `DopBVH` so that it can sit beside the prelude's `BVH`.
+pub const DOP_SPLIT: &str = r#"
+type DOP14(lo1: f32x3, hi1: f32x3, lo2: f32x4, hi2: f32x4);
+type DopBVH(bounds: DOP14) = Interior(left: DopBVH, right: DopBVH) | Leaf(nprims: u16, data: Triangle[nprims]);
+layout DopSplit(I: u32) {
+  P: u32; N: u32; primitives: Triangle[P];
+  group nodes[size=N, align=32] by I {
+    lo1: f32x3; hi1: f32x3; c0: u32; c1: u32;
+    split c1[31:32] {
+      0 -> Interior { left = c0; right = c1; };
+      1 -> Leaf     { nprims = c1[0:31] as u16; data = primitives[c0 : c0 + nprims]; };
+    };
+    ---
+    lo2: f32x4; hi2: f32x4;
+    bounds = DOP14(lo1, hi1, lo2, hi2);
+  };
+};
+"#;

@@ -10,6 +10,7 @@
 
 pub mod adt;
 pub mod domain;
+pub mod dump;
 pub mod model;
 mod place;
 pub mod plan;
@@ -29,6 +30,9 @@ pub mod check_layout;
 #[path = "../sema/check_build.rs"]
 pub mod check_build;
 
+#[path = "../sema/check_build_root.rs"]
+mod check_build_root;
+
 #[cfg(test)]
 #[path = "../sema/check_tests.rs"]
 mod check_tests;
@@ -37,6 +41,7 @@ mod check_tests;
 #[path = "../sema/check_robustness.rs"]
 mod check_robustness;
 
+pub use dump::byte_map;
 pub use model::LayoutModel;
 pub use plan::BufferPlan;
 pub use resolve::{resolve_field, FieldPath, Resolver};

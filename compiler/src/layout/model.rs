@@ -68,6 +68,8 @@ pub struct Component {
     pub default: Option<Expr>,
     /// `Some(x)` for a tree-carried component whose default is `parent.x`.
     pub carried: Option<Ident>,
+    /// Byte offset inside the reference (components laid out as a record).
+    pub offset: u64,
 }
 
 /// A member with the facts placement established.

@@ -41,7 +41,7 @@ pub(crate) fn build(decl: &LayoutDecl, program: &Program) -> LayoutModel {
         env,
     };
     b.components(decl);
-    b.m.adt = find_adt(decl, program, &b.env, &mut b.m.diagnostics);
+    b.m.adt = find_adt(decl, program, &mut b.m.diagnostics);
     if let Some(adt) = &b.m.adt {
         b.env.reference = Some((adt.name.clone(), b.m.reference));
     }
@@ -78,6 +78,7 @@ fn err(code: &str, msg: impl Into<String>, span: Span, label: &str) -> Diagnosti
 impl Builder<'_> {
     fn components(&mut self, decl: &LayoutDecl) {
         let mut shapes = Vec::new();
+        let mut end = 0u64;
         for p in &decl.params {
             let shape = match self.env.shape(&p.ty) {
                 Ok(s) => Some(s),
@@ -91,7 +92,10 @@ impl Builder<'_> {
                     None
                 }
             };
-            shapes.push(shape.unwrap_or(Shape { size: 0, align: 1 }));
+            let sh = shape.unwrap_or(Shape { size: 0, align: 1 });
+            let offset = round_up(end, sh.align);
+            end = offset.saturating_add(sh.size);
+            shapes.push(sh);
             let carried = match &p.default {
                 Some(Expr {
                     kind: ExprKind::Parent(x),
@@ -105,6 +109,7 @@ impl Builder<'_> {
                 shape,
                 default: p.default.clone(),
                 carried,
+                offset,
             });
         }
         self.m.reference = if shapes.len() == 1 {

@@ -204,15 +204,23 @@ fn logical_length(
     let mut found: Option<(String, Vec<String>)> = None;
     for v in &adt.variants {
         for f in v.fields.iter().filter(|f| f.array && !f.recursive) {
-            let Ok(FieldPath::Derived { value, .. }) = resolver.resolve(&v.name.name, &f.name.name)
-            else {
+            let Ok(path) = resolver.resolve(&v.name.name, &f.name.name) else {
                 continue;
             };
-            let base = match &value.kind {
-                ExprKind::Slice { base, .. } | ExprKind::Index { base, .. } => base,
-                _ => continue,
+            let cases: Vec<&FieldPath> = match &path {
+                FieldPath::Alternatives(cs) => cs.iter().map(|(_, p)| p).collect(),
+                p => vec![p],
             };
-            if matches!(&base.kind, ExprKind::Name(n) if n.name == array) {
+            let slices_it = |p: &FieldPath| match p {
+                FieldPath::Derived { value, .. } => match &value.kind {
+                    ExprKind::Slice { base, .. } | ExprKind::Index { base, .. } => {
+                        matches!(&base.kind, ExprKind::Name(n) if n.name == array)
+                    }
+                    _ => false,
+                },
+                _ => false,
+            };
+            if cases.iter().all(|p| slices_it(p)) {
                 let entry = found.get_or_insert_with(|| (f.name.name.clone(), Vec::new()));
                 if entry.0 == f.name.name && !entry.1.contains(&v.name.name) {
                     entry.1.push(v.name.name.clone());

@@ -564,6 +564,61 @@ fn expand(
     }
 }
 
+/// The derived fields and lets of `route` in an order where each comes after everything it
+/// reads (Kahn's algorithm, ties broken by declaration order); `Err` holds the members left on
+/// or behind a cycle.
+pub fn evaluation_order(
+    model: &LayoutModel,
+    route: &Route,
+) -> Result<Vec<MemberId>, Vec<MemberId>> {
+    let nodes: Vec<MemberId> = route
+        .members(model)
+        .filter(|m| {
+            matches!(
+                model.members[*m].kind,
+                MemberModel::Derived { .. } | MemberModel::Let { .. }
+            )
+        })
+        .collect();
+    let mut indegree: FxHashMap<MemberId, usize> = nodes.iter().map(|n| (*n, 0)).collect();
+    let mut readers: FxHashMap<MemberId, Vec<MemberId>> = FxHashMap::default();
+    for &n in &nodes {
+        let value = match &model.members[n].kind {
+            MemberModel::Derived { value, .. } | MemberModel::Let { value, .. } => value,
+            _ => continue,
+        };
+        let mut seen = Vec::new();
+        for id in names_in(value) {
+            if let Dep::Member(t) = dep_of(model, route, &id) {
+                if indegree.contains_key(&t) && !seen.contains(&t) {
+                    seen.push(t);
+                    readers.entry(t).or_default().push(n);
+                    *indegree.get_mut(&n).expect("node") += 1;
+                }
+            }
+        }
+    }
+    let mut ready: Vec<MemberId> = nodes.iter().copied().filter(|n| indegree[n] == 0).collect();
+    ready.sort_unstable_by(|a, b| b.cmp(a));
+    let mut order = Vec::new();
+    while let Some(n) = ready.pop() {
+        order.push(n);
+        for r in readers.get(&n).cloned().unwrap_or_default() {
+            let d = indegree.get_mut(&r).expect("node");
+            *d -= 1;
+            if *d == 0 {
+                ready.push(r);
+                ready.sort_unstable_by(|a, b| b.cmp(a));
+            }
+        }
+    }
+    if order.len() == nodes.len() {
+        Ok(order)
+    } else {
+        Err(nodes.into_iter().filter(|n| !order.contains(n)).collect())
+    }
+}
+
 /// The scope kind's split, for an arm scope.
 pub fn arm_of_scope(model: &LayoutModel, scope: ScopeId) -> Option<(SplitId, usize)> {
     match model.scopes[scope].kind {

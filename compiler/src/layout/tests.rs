@@ -3,7 +3,9 @@
 use crate::layout::fixtures::*;
 use crate::layout::model::{GroupKind, LayoutModel, Storage};
 use crate::layout::plan::{BufferPlan, Count};
-use crate::layout::resolve::{resolve_field, Dep, FieldPath, Index, ResolveError, Resolver};
+use crate::layout::resolve::{
+    evaluation_order, resolve_field, Dep, FieldPath, Index, ResolveError, Resolver,
+};
 use crate::syntax::ast::{ExprKind, Item, Program};
 
 fn model(prog: &Program, name: &str) -> LayoutModel {
@@ -363,4 +365,178 @@ fn buffer_plans_of_soaos_and_indirect_groups() {
         40,
         "P @0, top @8, scene @16..40"
     );
+    // Both arms realizing Leaf slice `primitives`, so its length is the total of `data`.
+    assert_eq!(
+        plan.buffer("primitives").unwrap().count,
+        Count::LogicalLength {
+            field: "data".into(),
+            variants: vec!["Leaf".into()],
+            len_global: "P".into()
+        }
+    );
+}
+
+#[test]
+fn derived_fields_have_an_evaluation_order() {
+    let p = program(&[SG_EQ]);
+    let m = model(&p, "SgEq");
+    let mut r = Resolver::new(&m);
+    let route = r.routes("Leaf").0[0].clone();
+    let order = evaluation_order(&m, &route).expect("acyclic");
+    let names: Vec<String> = order
+        .iter()
+        .map(|x| m.members[*x].kind.value_name().unwrap().name.clone())
+        .collect();
+    let pos = |n: &str| names.iter().position(|x| x == n).unwrap();
+    assert!(
+        pos("lo") < pos("bounds") && pos("hi") < pos("bounds"),
+        "{names:?}"
+    );
+    assert!(pos("nprims") < pos("data"), "{names:?}");
+
+    let cyclic = PBRT.replace("left = I + 1;", "left = I + k; k = left;");
+    let p = program(&[&cyclic]);
+    let decl = p.items.iter().find_map(|i| match i {
+        Item::Layout(l) => Some(l),
+        _ => None,
+    });
+    let m = LayoutModel::from_ast(decl.unwrap(), &p);
+    let mut r = Resolver::new(&m);
+    let route = r.routes("Interior").0[0].clone();
+    let stuck = evaluation_order(&m, &route).unwrap_err();
+    assert_eq!(stuck.len(), 2);
+}
+
+#[test]
+fn case_study_layouts_have_catalog_sizes() {
+    let p = program(&[SHARED_SLAB, DOP_SPLIT]);
+    let slab = model(&p, "SharedSlab");
+    assert_eq!(
+        slab.reference.size, 28,
+        "the reference carries the node's box"
+    );
+    assert_eq!(slab.node_bytes(), 16);
+    assert_eq!(elem(&slab, "pl"), (0, 0));
+    assert_eq!(elem(&slab, "pr"), (0, 4));
+    assert_eq!(elem(&slab, "c_o"), (0, 8));
+    assert_eq!(elem(&slab, "nprims"), (0, 12));
+    assert_eq!(elem(&slab, "axis"), (0, 14));
+    let dop = model(&p, "DopSplit");
+    assert_eq!(
+        dop.groups[0]
+            .arrays
+            .iter()
+            .map(|a| a.stride)
+            .collect::<Vec<_>>(),
+        vec![32, 32]
+    );
+    assert_eq!(dop.adt.as_ref().unwrap().name, "DopBVH");
+    match resolve_field(&dop, "Leaf", "bounds").unwrap() {
+        FieldPath::Derived { deps, .. } => assert_eq!(deps.len(), 4),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn byte_map_of_pbrt() {
+    let p = program(&[PBRT]);
+    let m = model(&p, "LinearBVH");
+    expect_test::expect![[r#"
+        layout LinearBVH(I: u32): reference 4 B
+        realizes BVH
+        globals: 8 B, align 4
+          @0     P: u32 (4 B)
+          @4     N: u32 (4 B)
+          array  primitives: Triangle[P] (40 B each)
+        group nodes (direct)
+          array 0: 30 B, align 32, stride 32
+            @0     bounds: AABB (24 B)
+            @24    split (4 B)
+              > 0 -> Leaf
+                @24    p_o: u32 (4 B)
+                       data = ...
+              0 -> Interior
+                @24    c_o: u32 (4 B)
+                       left = ...
+                       right = ...
+            @28    nprims: u16 (2 B)
+    "#]]
+    .assert_eq(&crate::layout::byte_map(&m));
+}
+
+#[test]
+fn byte_map_of_soaos() {
+    let p = program(&[PBRT_SOAOS]);
+    let m = model(&p, "PbrtSoAoS");
+    expect_test::expect![[r#"
+        layout PbrtSoAoS(I: u32): reference 4 B
+        realizes BVH
+        globals: 8 B, align 4
+          @0     P: u32 (4 B)
+          @4     N: u32 (4 B)
+          array  primitives: Triangle[P] (40 B each)
+        group nodes (direct)
+          array 0: 16 B, align 4, stride 16
+            @0     low: f32x3 (12 B)
+            @12    split (4 B)
+              > 0 -> Leaf
+                @12    p_o: u32 (4 B)
+                       data = ...
+              0 -> Interior
+                @12    c_o: u32 (4 B)
+                       left = ...
+                       right = ...
+          array 1: 16 B, align 4, stride 16
+            @0     high: f32x3 (12 B)
+            @12    nprims: u16 (2 B)
+            @14    padding (2 B)
+                   bounds = ...
+    "#]]
+    .assert_eq(&crate::layout::byte_map(&m));
+}
+
+fn member_text() -> impl proptest::strategy::Strategy<Value = String> {
+    use proptest::prelude::*;
+    prop_oneof![
+        prop::sample::select(vec![
+            "u8", "u16", "u32", "u64", "f32x3", "u16x3", "ptr", "AABB", "u8[5]"
+        ])
+        .prop_map(|t| format!("FIELD: {t};")),
+        (1u64..9).prop_map(|n| format!("{n};")),
+    ]
+}
+
+proptest::proptest! {
+    /// Placement invariants on random groups: fields at their natural alignment, in textual
+    /// order, never overlapping; the stride a multiple of the element alignment covering them.
+    #[test]
+    fn random_groups_are_placed_consistently(
+        members in proptest::collection::vec(member_text(), 1..12),
+        align in proptest::sample::select(vec![0u64, 1, 2, 4, 8, 16, 32]),
+    ) {
+        let mut body = String::new();
+        for (i, m) in members.iter().enumerate() {
+            body.push_str(&m.replace("FIELD", &format!("f{i}")));
+            body.push(' ');
+        }
+        let attr = if align == 0 { String::new() } else { format!(", align={align}") };
+        let src = format!("type T = One(x: u8);\nlayout L(I: u32) {{ N: u32; group g[size=N{attr}] by I {{ {body} }}; }};");
+        let p = program(&[&src]);
+        let m = model(&p, "L");
+        let arr = m.groups[0].arrays[0];
+        let mut end = 0;
+        for info in &m.members {
+            if let crate::layout::model::MemberModel::Stored(s) = &info.kind {
+                if let Storage::Element { offset, .. } = s.storage {
+                    proptest::prop_assert_eq!(offset % s.align, 0);
+                    proptest::prop_assert!(offset >= end, "overlap at {}", s.name.name);
+                    end = offset + s.size;
+                }
+            }
+        }
+        proptest::prop_assert!(arr.size >= end);
+        proptest::prop_assert_eq!(arr.stride % arr.align, 0);
+        proptest::prop_assert!(arr.stride >= arr.size && arr.stride < arr.size + arr.align);
+        proptest::prop_assert!(arr.align >= align.max(1));
+    }
 }

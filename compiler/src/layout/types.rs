@@ -197,6 +197,37 @@ pub fn record_shape(fields: &[Shape]) -> Shape {
     }
 }
 
+/// Structural equality of written types, ignoring spans.
+pub fn same_type(a: &TypeExpr, b: &TypeExpr) -> bool {
+    match (&a.kind, &b.kind) {
+        (TypeExprKind::Named(x), TypeExprKind::Named(y)) => x.name == y.name,
+        (
+            TypeExprKind::Vector {
+                elem: e1,
+                lanes: l1,
+            },
+            TypeExprKind::Vector {
+                elem: e2,
+                lanes: l2,
+            },
+        ) => e1.name == e2.name && l1 == l2,
+        (TypeExprKind::Array { elem: e1, len: n1 }, TypeExprKind::Array { elem: e2, len: n2 }) => {
+            same_type(e1, e2)
+                && match (n1, n2) {
+                    (ArrayLen::Const(x, _), ArrayLen::Const(y, _)) => x == y,
+                    (ArrayLen::Name(x), ArrayLen::Name(y)) => x.name == y.name,
+                    _ => false,
+                }
+        }
+        (TypeExprKind::Tuple(x), TypeExprKind::Tuple(y)) => {
+            x.len() == y.len() && x.iter().zip(y).all(|(a, b)| same_type(a, b))
+        }
+        (TypeExprKind::Set(x), TypeExprKind::Set(y))
+        | (TypeExprKind::Option(x), TypeExprKind::Option(y)) => same_type(x, y),
+        _ => false,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

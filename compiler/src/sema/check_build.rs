@@ -11,10 +11,11 @@
 //! recursive child built exactly once, and every path must end in `return`. `build root`
 //! writes the globals that are neither array sizes (set by the constructor) nor arrays (filled
 //! by `append`), each exactly once. `append(x, n)` appends a logical array field; `this[a:b]`
-//! stays within the reference's bits.
+//! stays within the reference's bits; a body reads no field that only other variants have.
 
-use crate::layout::model::{LayoutModel, LogicalField, MemberId, MemberModel, Storage};
-use crate::layout::resolve::{names_in, FieldPath, Resolver};
+use crate::layout::check_build_root::{check_root, GlobalFacts};
+use crate::layout::model::{LayoutModel, LogicalField, MemberId, MemberModel};
+use crate::layout::resolve::{FieldPath, Resolver};
 use crate::syntax::ast::{
     BuildDecl, BuildVariant, Expr, ExprKind, Ident, Item, Program, Stmt, StmtKind,
 };
@@ -146,149 +147,6 @@ pub fn check_build(build: &BuildDecl, program: &Program) -> Diagnostics {
     d
 }
 
-/// Facts about the layout's globals.
-struct GlobalFacts {
-    /// Scalar globals (in the globals block) by name.
-    scalars: FxHashMap<String, MemberId>,
-    /// Globals that size a group or a global array: the constructor writes them.
-    sizes: FxHashSet<String>,
-    /// Global arrays (filled by `append`).
-    arrays: FxHashSet<String>,
-}
-
-impl GlobalFacts {
-    fn of(m: &LayoutModel) -> GlobalFacts {
-        let mut scalars = FxHashMap::default();
-        let mut arrays = FxHashSet::default();
-        for &mid in &m.scopes[0].members {
-            if let MemberModel::Stored(s) = &m.members[mid].kind {
-                match s.storage {
-                    Storage::Globals { .. } => {
-                        scalars.insert(s.name.name.clone(), mid);
-                    }
-                    Storage::GlobalArray(_) => {
-                        arrays.insert(s.name.name.clone());
-                    }
-                    _ => {}
-                }
-            }
-        }
-        let mut sizes: FxHashSet<String> =
-            m.global_arrays.iter().map(|g| g.len.name.clone()).collect();
-        for g in &m.groups {
-            if let Some(e) = &g.size {
-                sizes.extend(names_in(e).into_iter().map(|i| i.name));
-            }
-        }
-        GlobalFacts {
-            scalars,
-            sizes,
-            arrays,
-        }
-    }
-}
-
-/// `build root`: writes each non-size scalar global exactly once; nothing else.
-fn check_root(
-    m: &LayoutModel,
-    facts: &GlobalFacts,
-    body: &[Stmt],
-    span: Span,
-    d: &mut Diagnostics,
-) {
-    let mut written: FxHashMap<String, Span> = FxHashMap::default();
-    let mut stack: Vec<&Stmt> = body.iter().rev().collect();
-    while let Some(s) = stack.pop() {
-        let mut reads: Vec<&Expr> = Vec::new();
-        crate::layout::resolve::stmt_exprs(s, &mut |e| reads.push(e));
-        if let StmtKind::Build { field, .. } = &s.kind {
-            // The value is read before the field is written.
-            for e in &reads {
-                root_reads(facts, e, &written, d);
-            }
-            let name = &field.name;
-            if facts.sizes.contains(name) {
-                d.push(
-                    Diagnostic::error(
-                        "E0416",
-                        format!("global `{name}` is set by the constructor"),
-                    )
-                    .with_primary(field.span, "do not write it")
-                    .with_note(
-                        "globals that size arrays or groups get their element count automatically",
-                    ),
-                );
-            } else if facts.arrays.contains(name) {
-                d.push(
-                    Diagnostic::error(
-                        "E0416",
-                        format!("global array `{name}` is filled by `append`"),
-                    )
-                    .with_primary(field.span, "cannot be written here"),
-                );
-            } else if !facts.scalars.contains_key(name) {
-                d.push(
-                    Diagnostic::error(
-                        "E0416",
-                        format!("`{name}` is not a global of layout `{}`", m.name.name),
-                    )
-                    .with_primary(field.span, "`build root` writes globals only"),
-                );
-            } else if let Some(first) = written.get(name) {
-                d.push(
-                    Diagnostic::error("E0408", format!("global `{name}` is written twice"))
-                        .with_primary(field.span, "second write")
-                        .with_secondary(*first, "first write"),
-                );
-            } else {
-                written.insert(name.clone(), field.span);
-            }
-        } else {
-            for e in &reads {
-                root_reads(facts, e, &written, d);
-            }
-            if let StmtKind::Block(b) = &s.kind {
-                stack.extend(b.iter().rev());
-            }
-        }
-    }
-    let mut missing: Vec<(&String, &MemberId)> = facts
-        .scalars
-        .iter()
-        .filter(|(n, _)| !facts.sizes.contains(*n) && !written.contains_key(*n))
-        .collect();
-    missing.sort_by_key(|(_, m)| **m);
-    for (name, mid) in missing {
-        d.push(
-            Diagnostic::error("E0407", format!("global `{name}` is never written"))
-                .with_primary(span, format!("`build root` must write `{name}`"))
-                .with_secondary(m.members[*mid].span, "declared here"),
-        );
-    }
-}
-
-fn root_reads(
-    facts: &GlobalFacts,
-    e: &Expr,
-    written: &FxHashMap<String, Span>,
-    d: &mut Diagnostics,
-) {
-    for id in names_in(e) {
-        if facts.scalars.contains_key(&id.name)
-            && !facts.sizes.contains(&id.name)
-            && !written.contains_key(&id.name)
-        {
-            d.push(
-                Diagnostic::error(
-                    "E0409",
-                    format!("global `{}` is read before it is written", id.name),
-                )
-                .with_primary(id.span, "not written yet"),
-            );
-        }
-    }
-}
-
 /// Write counts along all paths: `[min, max]`, `max` saturating at 2 ("many").
 type Counts = FxHashMap<Key, (u8, u8)>;
 
@@ -321,6 +179,8 @@ struct VariantCheck<'a, 'm> {
     variant: String,
     /// Stored fields (not globals) on some route, by name.
     reachable: FxHashMap<String, Vec<MemberId>>,
+    /// Every name declared on some route of the variant (stored, derived, let).
+    on_route: FxHashSet<String>,
     /// Stored fields on every route: each must be written exactly once.
     required: Vec<MemberId>,
     locals: FxHashSet<String>,
@@ -340,9 +200,13 @@ impl<'a, 'm> VariantCheck<'a, 'm> {
         let (routes, _) = resolver.routes(variant).clone();
         let mut reachable: FxHashMap<String, Vec<MemberId>> = FxHashMap::default();
         let mut per_route: Vec<FxHashSet<MemberId>> = Vec::new();
+        let mut on_route = FxHashSet::default();
         for r in &routes {
             let mut set = FxHashSet::default();
             for mid in r.members(m) {
+                if let Some(n) = m.members[mid].kind.value_name() {
+                    on_route.insert(n.name.clone());
+                }
                 if m.members[mid].scope == 0 {
                     continue;
                 }
@@ -372,6 +236,7 @@ impl<'a, 'm> VariantCheck<'a, 'm> {
             fields,
             variant: variant.to_string(),
             reachable,
+            on_route,
             required,
             locals: FxHashSet::default(),
             first_write: FxHashMap::default(),
@@ -621,11 +486,23 @@ impl<'a, 'm> VariantCheck<'a, 'm> {
             }
         }
         let Some(members) = self.reachable.get(name).cloned() else {
+            let derived = matches!(
+                self.resolver.resolve(&self.variant, name),
+                Ok(FieldPath::Derived { .. })
+            );
             let (msg, label) =
                 if self.facts.scalars.contains_key(name) || self.facts.arrays.contains(name) {
                     (
                         format!("global `{name}` cannot be written by a variant build"),
                         "write globals in `build root`",
+                    )
+                } else if derived {
+                    (
+                        format!(
+                            "`{name}` is derived in layout `{}`, not stored",
+                            self.m.name.name
+                        ),
+                        "build the stored fields its definition reads instead",
                     )
                 } else {
                     (
@@ -696,6 +573,21 @@ impl<'a, 'm> VariantCheck<'a, 'm> {
         match &e.kind {
             ExprKind::Name(n) => {
                 if self.locals.contains(&n.name) {
+                    return;
+                }
+                if !self.on_route.contains(&n.name) {
+                    let elsewhere = self.m.members.iter().any(|i| {
+                        i.scope != 0 && i.kind.value_name().is_some_and(|x| x.name == n.name)
+                    });
+                    if elsewhere {
+                        self.d.push(
+                            Diagnostic::error(
+                                "E0418",
+                                format!("`{}` is a field of another variant in layout `{}`", n.name, self.m.name.name),
+                            )
+                            .with_primary(n.span, format!("`{}` does not have it", self.variant)),
+                        );
+                    }
                     return;
                 }
                 if let Some(ms) = self.reachable.get(&n.name) {

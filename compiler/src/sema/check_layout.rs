@@ -57,6 +57,7 @@ pub fn check_layout(decl: &LayoutDecl, program: &Program) -> Diagnostics {
     c.parents();
     c.group_exprs();
     c.splits();
+    c.bit_slices();
     c.variants();
     c.d
 }
@@ -249,9 +250,63 @@ impl Checker<'_> {
         }
     }
 
+    /// E0325: a literal bit slice `x[a:b]` of an integer stays within `x`'s bits, with a < b.
+    fn bit_slices(&mut self) {
+        let mut found: Vec<(ScopeId, &Expr)> = Vec::new();
+        for info in &self.m.members {
+            match &info.kind {
+                MemberModel::Derived { value, .. } | MemberModel::Let { value, .. } => {
+                    found.push((info.scope, value))
+                }
+                MemberModel::Split(sp) => {
+                    let split = &self.m.splits[*sp];
+                    found.push((split.scope, &split.discriminant));
+                    for a in &split.arms {
+                        if let ArmBody::From { key, .. } = &a.body {
+                            found.push((split.scope, key));
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+        let mut slices = Vec::new();
+        for (scope, e) in found {
+            collect_slices(e, scope, &mut slices, 0);
+        }
+        for (scope, e) in slices {
+            let ExprKind::Slice { base, lo, hi } = &e.kind else {
+                continue;
+            };
+            let (ExprKind::Name(x), ExprKind::Int(a), ExprKind::Int(b)) =
+                (&base.kind, &lo.kind, &hi.kind)
+            else {
+                continue;
+            };
+            let Some(TypeExprKind::Named(t)) = self.type_of_name(scope, &x.name).map(|t| &t.kind)
+            else {
+                continue;
+            };
+            let Some(shape) = crate::layout::types::primitive(&t.name) else {
+                continue;
+            };
+            if integer_domain(&t.name).is_none() {
+                continue;
+            }
+            let bits = u128::from(shape.size * 8);
+            if a >= b || *b > bits {
+                self.d.push(
+                    Diagnostic::error("E0325", format!("bit range [{a}:{b}] of `{}` does not fit its {bits} bits", x.name))
+                        .with_primary(e.span, "out of range")
+                        .with_note("bit ranges are half-open, low bit 0: `x[a:b]` needs a < b <= the width of x"),
+                );
+            }
+        }
+    }
+
     /// E0316, W0317, E0320: coverage of every split.
     fn splits(&mut self) {
-        for (sid, sp) in self.m.splits.iter().enumerate() {
+        for sp in &self.m.splits {
             let patterns: Vec<SplitPatternKind> =
                 sp.arms.iter().map(|a| a.pattern.kind.clone()).collect();
             let has_wild = patterns.contains(&SplitPatternKind::Wildcard);
@@ -300,7 +355,6 @@ impl Checker<'_> {
                         .with_note("earlier arms already match every value this pattern accepts"),
                 );
             }
-            let _ = sid;
         }
     }
 
@@ -388,7 +442,7 @@ impl Checker<'_> {
                     Err(ResolveError::Missing { guards, .. }) => {
                         let at = guards
                             .last()
-                            .map(|(s, a)| m.splits[*s].arms[*a].span)
+                            .map(|(s, a)| m.splits[*s].arms[*a].variant.span)
                             .unwrap_or(m.name.span);
                         self.d.push(
                             Diagnostic::error("E0312", format!("field `{}` of variant `{vname}` has no physical path in layout `{}`", f.name.name, m.name.name))
@@ -460,7 +514,7 @@ impl Checker<'_> {
             }
             return;
         }
-        if !same_type(&f.ty, ty) && self.once(format!("type {member}")) {
+        if !crate::layout::types::same_type(&f.ty, ty) && self.once(format!("type {member}")) {
             self.d.push(
                 Diagnostic::error("E0327", format!("stored field `{}` does not have the logical field's type", f.name.name))
                     .with_primary(ty.span, "physical type")
@@ -595,34 +649,34 @@ impl Checker<'_> {
     }
 }
 
-/// Structural equality of written types, ignoring spans.
-pub fn same_type(a: &TypeExpr, b: &TypeExpr) -> bool {
-    use crate::syntax::ast::ArrayLen;
-    match (&a.kind, &b.kind) {
-        (TypeExprKind::Named(x), TypeExprKind::Named(y)) => x.name == y.name,
-        (
-            TypeExprKind::Vector {
-                elem: e1,
-                lanes: l1,
-            },
-            TypeExprKind::Vector {
-                elem: e2,
-                lanes: l2,
-            },
-        ) => e1.name == e2.name && l1 == l2,
-        (TypeExprKind::Array { elem: e1, len: n1 }, TypeExprKind::Array { elem: e2, len: n2 }) => {
-            same_type(e1, e2)
-                && match (n1, n2) {
-                    (ArrayLen::Const(x, _), ArrayLen::Const(y, _)) => x == y,
-                    (ArrayLen::Name(x), ArrayLen::Name(y)) => x.name == y.name,
-                    _ => false,
-                }
+fn collect_slices<'e>(e: &'e Expr, scope: ScopeId, out: &mut Vec<(ScopeId, &'e Expr)>, depth: u32) {
+    if depth > 256 {
+        return;
+    }
+    let d = depth + 1;
+    match &e.kind {
+        ExprKind::Slice { base, lo, hi } => {
+            out.push((scope, e));
+            for x in [base, lo, hi] {
+                collect_slices(x, scope, out, d);
+            }
         }
-        (TypeExprKind::Tuple(x), TypeExprKind::Tuple(y)) => {
-            x.len() == y.len() && x.iter().zip(y).all(|(a, b)| same_type(a, b))
+        ExprKind::Call { args, .. } | ExprKind::Tuple(args) => {
+            args.iter().for_each(|a| collect_slices(a, scope, out, d))
         }
-        (TypeExprKind::Set(x), TypeExprKind::Set(y))
-        | (TypeExprKind::Option(x), TypeExprKind::Option(y)) => same_type(x, y),
-        _ => false,
+        ExprKind::Field { base, .. } => collect_slices(base, scope, out, d),
+        ExprKind::Index { base, index } => {
+            collect_slices(base, scope, out, d);
+            collect_slices(index, scope, out, d);
+        }
+        ExprKind::Unary { operand, .. } => collect_slices(operand, scope, out, d),
+        ExprKind::Binary { lhs, rhs, .. } => {
+            collect_slices(lhs, scope, out, d);
+            collect_slices(rhs, scope, out, d);
+        }
+        ExprKind::Cast { expr, .. } | ExprKind::BitCast { expr, .. } => {
+            collect_slices(expr, scope, out, d)
+        }
+        _ => {}
     }
 }

@@ -54,6 +54,8 @@ fn catalog_layouts_pass_every_check() {
         vec![SG_EQ],
         vec![BVH8_TYPE, BVH8_Q8],
         vec![BVH8_TYPE, a16.as_str()],
+        vec![SHARED_SLAB],
+        vec![DOP_SPLIT],
     ] {
         let d = diags(&srcs);
         assert!(d.is_empty(), "{:#?}", d.list);
@@ -356,6 +358,15 @@ fn e0406_build_target_exists() {
         &pbrt_with("build nprims = 0;", "build nprims = 0; build N = 1;"),
         PBRT,
     );
+    let derived = PBRT_SOAOS.replacen("build low = bounds.low;", "build bounds;", 1);
+    let d = diags(&[&derived]);
+    assert!(
+        d.list
+            .iter()
+            .any(|d| d.code.as_deref() == Some("E0406") && d.message.contains("derived")),
+        "{:#?}",
+        d.list
+    );
 }
 
 #[test]
@@ -519,4 +530,145 @@ fn loops_count_as_many_writes() {
         got.contains(&"E0407".to_string()) || got.contains(&"E0408".to_string()),
         "{got:?}"
     );
+}
+
+#[test]
+fn e0418_fields_of_other_variants() {
+    let bad = pbrt_with(
+        "build p_o = append(data, nprims);",
+        "build p_o = append(data, nprims) + c_o;",
+    );
+    rejects_and_accepts("E0418", &bad, PBRT);
+}
+
+#[test]
+fn e0323_cyclic_from() {
+    let src = r#"
+type T = Node(a: u32) | Empty;
+layout L(R: u32) {
+  indirect group g { k: u32; a: u32; split k { _ -> Node from g[k]; }; };
+  split R { 0 -> Empty { }; _ -> Node from g[R]; };
+};
+"#;
+    let got = codes(&[src]);
+    assert!(got.contains(&"E0323".to_string()), "{got:?}");
+    let ok = src.replace("split k { _ -> Node from g[k]; };", "");
+    assert!(diags(&[&ok]).is_empty(), "{:#?}", diags(&[&ok]).list);
+}
+
+#[test]
+fn e0324_too_many_routes() {
+    // Nine splits in a row, each realizing `Node` with two arms: 512 routes.
+    let mut body = String::new();
+    for i in 0..9 {
+        body.push_str(&format!(
+            "f{i}: u8; split f{i} {{ 0 -> Node {{ }}; _ -> Node {{ }}; }};\n"
+        ));
+    }
+    let src = format!("type T = Node(a: u8);\nlayout L(I: u32) {{ N: u32; group g[size=N] by I {{ a: u8; {body} }}; }};");
+    let got = codes(&[&src]);
+    assert!(got.contains(&"E0324".to_string()), "{got:?}");
+    let few = src
+        .replace("f8: u8; split f8 { 0 -> Node { }; _ -> Node { }; };", "")
+        .replace("f7: u8; split f7 { 0 -> Node { }; _ -> Node { }; };", "");
+    assert!(!codes(&[&few]).contains(&"E0324".to_string()));
+}
+
+#[test]
+fn nested_splits_give_alternative_paths() {
+    let src = r#"
+type T = Node(a: u32) | Empty;
+layout L(I: u32) {
+  N: u32;
+  group g[size=N, align=8] by I {
+    tag: u8;
+    split tag {
+      0 -> Empty { };
+      _ -> Node {
+        wide: u8;
+        split wide {
+          0 -> Node { a: u32; };
+          _ -> Node { big: u64; a = big as u32; };
+        };
+      };
+    };
+  };
+};
+"#;
+    assert!(diags(&[src]).is_empty(), "{:#?}", diags(&[src]).list);
+    let p = program(&[src]);
+    let crate::syntax::ast::Item::Layout(l) = p.items.last().unwrap() else {
+        panic!()
+    };
+    let m = crate::layout::LayoutModel::from_ast(l, &p);
+    match crate::layout::resolve_field(&m, "Node", "a").unwrap() {
+        crate::layout::FieldPath::Alternatives(cases) => {
+            assert_eq!(cases.len(), 2);
+            assert!(matches!(
+                cases[0].1,
+                crate::layout::FieldPath::Stored { .. }
+            ));
+            assert!(matches!(
+                cases[1].1,
+                crate::layout::FieldPath::Derived { .. }
+            ));
+        }
+        other => panic!("{other:?}"),
+    }
+    // Like a C union, a split is aligned to its most aligned arm: the outer overlay starts at
+    // 8 (its Node arm holds a u64), so tag @0, wide @8, the inner overlay @16, 24 bytes.
+    assert_eq!(
+        m.offset_of("wide"),
+        Some(crate::layout::model::Storage::Element {
+            group: 0,
+            array: 0,
+            offset: 8
+        })
+    );
+    assert_eq!(
+        m.offset_of("big"),
+        Some(crate::layout::model::Storage::Element {
+            group: 0,
+            array: 0,
+            offset: 16
+        })
+    );
+    assert_eq!(m.groups[0].arrays[0].stride, 24);
+}
+
+#[test]
+fn root_writes_inside_blocks_count_once() {
+    let nested = PBRT_Q16.replace(
+        "build wstep = frame_step(wlo, bounds.high, 65535);",
+        "if true { build wstep = frame_step(wlo, bounds.high, 65535); }",
+    );
+    assert!(
+        diags(&[&nested]).is_empty(),
+        "{:#?}",
+        diags(&[&nested]).list
+    );
+    let early = PBRT_Q16.replace(
+        "build wlo = frame_origin(bounds.low);",
+        "{ let z: f32x3 = wlo; };\n    build wlo = frame_origin(bounds.low);",
+    );
+    let d = diags(&[&early]);
+    assert_eq!(
+        d.list
+            .iter()
+            .filter(|d| d.code.as_deref() == Some("E0409"))
+            .count(),
+        1,
+        "{:#?}",
+        d.list
+    );
+}
+
+#[test]
+fn e0325_bit_slices_fit() {
+    let bad = PBRT_Q16.replace("p_o = w[0:28];", "p_o = w[0:40];");
+    let got = codes(&[&bad]);
+    assert!(got.contains(&"E0325".to_string()), "{got:?}");
+    let bad = PBRT_Q16.replace("split w[28:32]", "split w[28:28]");
+    assert!(codes(&[&bad]).contains(&"E0325".to_string()));
+    assert!(diags(&[PBRT_Q16]).is_empty());
 }
