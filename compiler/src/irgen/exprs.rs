@@ -330,6 +330,23 @@ impl FuncCx<'_> {
                 let op = b.call(&info.unique_name, &vals, &results);
                 Ok(b.m.ops[op].results.first().copied())
             }
+            Some(Resolution::Builtin(Builtin::Insert)) => {
+                // insert(s, x) on a `mut set[T]` parameter: load, add, store back.
+                let [set, x] = args.as_slice() else {
+                    return Err(self.bug("insert takes 2 arguments"));
+                };
+                let r = self.mut_param_ref(set)?;
+                let v = self.expr(b, x)?;
+                let set_ty = match b.m.types.get(b.value_type(r)) {
+                    scion_ir::types::Type::Ref(t) => *t,
+                    _ => return Err(self.bug("insert into a non-reference")),
+                };
+                b.set_span(Some(e.span));
+                let old = b.build1(Op::Load, &[r], set_ty);
+                let new = b.intrinsic("set_insert", &[old, v], set_ty);
+                b.build(Op::Store, &[r, new], &[]);
+                Ok(None)
+            }
             Some(Resolution::Builtin(bi)) => {
                 let mut vals = Vec::with_capacity(args.len());
                 for a in args {

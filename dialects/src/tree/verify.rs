@@ -596,6 +596,36 @@ pub fn intrinsic_signature(m: &Module, name: &str, args: &[TypeId], result: Type
             sig(1, all_same(1) && is_float(result))
         }
         "fma" => sig(3, all_same(3) && is_float(result)),
+        "fadd_rd" | "fadd_ru" | "fsub_rd" | "fsub_ru" | "fmul_rd" | "fmul_ru" => {
+            sig(2, all_same(2) && is_float(result))
+        }
+        "with_axis" => sig(
+            3,
+            args.len() == 3
+                && args[0] == result
+                && t.lanes(result).is_some()
+                && t.as_int(args[1]).is_some()
+                && t.scalar_of(result) == args[2],
+        ),
+        "frame_origin" => sig(1, all_same(1) && float_vec(result)),
+        "frame_step" => sig(
+            3,
+            args.len() == 3
+                && args[0] == result
+                && args[1] == result
+                && float_vec(result)
+                && t.as_int(args[2]).is_some(),
+        ),
+        "quant_lo" | "quant_hi" => sig(
+            4,
+            args.len() == 4
+                && args[0] == args[1]
+                && args[1] == args[2]
+                && float_vec(args[0])
+                && t.lanes(result) == t.lanes(args[0])
+                && matches!(t.get(t.scalar_of(result)), Type::Int(crate::types::IntTy::U32))
+                && t.as_int(args[3]).is_some(),
+        ),
         "popcount" | "clz" | "ctz" => sig(1, all_same(1) && is_int(result)),
         "isnan" => sig(1, {
             let a = args.first().copied();
