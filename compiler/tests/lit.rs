@@ -40,7 +40,7 @@ fn main() {
             .chain(stderr.lines())
             .filter_map(|l| l.trim().strip_prefix(word))
             .filter_map(|rest| rest.strip_prefix(':'))
-            .filter_map(|n| n.trim().split_whitespace().next()?.parse::<usize>().ok())
+            .filter_map(|n| n.split_whitespace().next()?.parse::<usize>().ok())
             .sum()
     };
     let passed = count("Passed") + count("Expectedly Failed");

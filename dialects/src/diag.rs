@@ -77,7 +77,11 @@ impl SourceMap {
     pub fn add(&mut self, name: impl Into<String>, text: impl Into<String>) -> FileId {
         let text = text.into();
         let line_starts = files::line_starts(&text).collect();
-        self.files.push(SourceFile { name: name.into(), text, line_starts });
+        self.files.push(SourceFile {
+            name: name.into(),
+            text,
+            line_starts,
+        });
         FileId(self.files.len() as u32 - 1)
     }
 
@@ -121,15 +125,24 @@ impl<'a> Files<'a> for SourceMap {
     type Source = &'a str;
 
     fn name(&'a self, id: FileId) -> Result<&'a str, files::Error> {
-        self.files.get(id.0 as usize).map(|f| f.name.as_str()).ok_or(files::Error::FileMissing)
+        self.files
+            .get(id.0 as usize)
+            .map(|f| f.name.as_str())
+            .ok_or(files::Error::FileMissing)
     }
 
     fn source(&'a self, id: FileId) -> Result<&'a str, files::Error> {
-        self.files.get(id.0 as usize).map(|f| f.text.as_str()).ok_or(files::Error::FileMissing)
+        self.files
+            .get(id.0 as usize)
+            .map(|f| f.text.as_str())
+            .ok_or(files::Error::FileMissing)
     }
 
     fn line_index(&'a self, id: FileId, byte_index: usize) -> Result<usize, files::Error> {
-        let f = self.files.get(id.0 as usize).ok_or(files::Error::FileMissing)?;
+        let f = self
+            .files
+            .get(id.0 as usize)
+            .ok_or(files::Error::FileMissing)?;
         Ok(match f.line_starts.binary_search(&byte_index) {
             Ok(i) => i,
             Err(i) => i - 1,
@@ -137,12 +150,22 @@ impl<'a> Files<'a> for SourceMap {
     }
 
     fn line_range(&'a self, id: FileId, line_index: usize) -> Result<Range<usize>, files::Error> {
-        let f = self.files.get(id.0 as usize).ok_or(files::Error::FileMissing)?;
-        let start = *f.line_starts.get(line_index).ok_or(files::Error::LineTooLarge {
-            given: line_index,
-            max: f.line_starts.len() - 1,
-        })?;
-        let end = f.line_starts.get(line_index + 1).copied().unwrap_or(f.text.len());
+        let f = self
+            .files
+            .get(id.0 as usize)
+            .ok_or(files::Error::FileMissing)?;
+        let start = *f
+            .line_starts
+            .get(line_index)
+            .ok_or(files::Error::LineTooLarge {
+                given: line_index,
+                max: f.line_starts.len() - 1,
+            })?;
+        let end = f
+            .line_starts
+            .get(line_index + 1)
+            .copied()
+            .unwrap_or(f.text.len());
         Ok(start..end)
     }
 }
@@ -199,7 +222,11 @@ impl Diagnostic {
     pub fn new(severity: Severity, code: &str, message: impl Into<String>) -> Diagnostic {
         Diagnostic {
             severity,
-            code: if code.is_empty() { None } else { Some(code.to_string()) },
+            code: if code.is_empty() {
+                None
+            } else {
+                Some(code.to_string())
+            },
             message: message.into(),
             labels: Vec::new(),
             notes: Vec::new(),
@@ -208,13 +235,21 @@ impl Diagnostic {
 
     /// Adds the primary label.
     pub fn with_primary(mut self, span: Span, message: impl Into<String>) -> Diagnostic {
-        self.labels.push(Label { span, message: message.into(), primary: true });
+        self.labels.push(Label {
+            span,
+            message: message.into(),
+            primary: true,
+        });
         self
     }
 
     /// Adds a secondary label.
     pub fn with_secondary(mut self, span: Span, message: impl Into<String>) -> Diagnostic {
-        self.labels.push(Label { span, message: message.into(), primary: false });
+        self.labels.push(Label {
+            span,
+            message: message.into(),
+            primary: false,
+        });
         self
     }
 
@@ -248,7 +283,11 @@ impl Diagnostic {
             .labels
             .iter()
             .map(|l| {
-                let style = if l.primary { cs::LabelStyle::Primary } else { cs::LabelStyle::Secondary };
+                let style = if l.primary {
+                    cs::LabelStyle::Primary
+                } else {
+                    cs::LabelStyle::Secondary
+                };
                 cs::Label::new(style, l.span.file, l.span.range()).with_message(l.message.clone())
             })
             .collect();
@@ -277,7 +316,13 @@ fn severity_word(s: Severity) -> &'static str {
 impl fmt::Display for Diagnostic {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match &self.code {
-            Some(c) => write!(f, "{}[{}]: {}", severity_word(self.severity), c, self.message),
+            Some(c) => write!(
+                f,
+                "{}[{}]: {}",
+                severity_word(self.severity),
+                c,
+                self.message
+            ),
             None => write!(f, "{}: {}", severity_word(self.severity), self.message),
         }
     }
@@ -345,7 +390,10 @@ pub struct InternalError {
 impl InternalError {
     /// A new internal error.
     pub fn new(message: impl Into<String>) -> InternalError {
-        InternalError { message: message.into(), context: String::new() }
+        InternalError {
+            message: message.into(),
+            context: String::new(),
+        }
     }
 
     /// Attaches context (printed IR).
@@ -361,7 +409,10 @@ impl fmt::Display for InternalError {
         if !self.context.is_empty() {
             writeln!(f, "{}", self.context)?;
         }
-        write!(f, "note: this is a bug in scionc; please report it with the input that caused it")
+        write!(
+            f,
+            "note: this is a bug in scionc; please report it with the input that caused it"
+        )
     }
 }
 

@@ -623,7 +623,10 @@ pub fn intrinsic_signature(m: &Module, name: &str, args: &[TypeId], result: Type
                 && args[1] == args[2]
                 && float_vec(args[0])
                 && t.lanes(result) == t.lanes(args[0])
-                && matches!(t.get(t.scalar_of(result)), Type::Int(crate::types::IntTy::U32))
+                && matches!(
+                    t.get(t.scalar_of(result)),
+                    Type::Int(crate::types::IntTy::U32)
+                )
                 && t.as_int(args[3]).is_some(),
         ),
         "popcount" | "clz" | "ctz" => sig(1, all_same(1) && is_int(result)),
