@@ -106,6 +106,7 @@ pub mod builder;
 pub mod diag;
 pub mod entity;
 pub mod interp;
+pub mod lo;
 pub mod module;
 pub mod op;
 pub mod parse;

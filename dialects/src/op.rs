@@ -20,6 +20,8 @@ use smallvec::SmallVec;
 pub enum Dialect {
     /// The layout-agnostic traversal level.
     Tree,
+    /// The scalar SSA control-flow graph level.
+    Lo,
 }
 
 impl Dialect {
@@ -27,6 +29,7 @@ impl Dialect {
     pub fn name(self) -> &'static str {
         match self {
             Dialect::Tree => "tree",
+            Dialect::Lo => "lo",
         }
     }
 }
@@ -36,6 +39,8 @@ impl Dialect {
 pub enum OpKind {
     /// An op of the `tree` dialect.
     Tree(tree::Op),
+    /// An op of the `lo` dialect.
+    Lo(crate::lo::Op),
 }
 
 impl From<tree::Op> for OpKind {
@@ -49,6 +54,7 @@ impl OpKind {
     pub fn dialect(self) -> Dialect {
         match self {
             OpKind::Tree(_) => Dialect::Tree,
+            OpKind::Lo(_) => Dialect::Lo,
         }
     }
 
@@ -56,6 +62,7 @@ impl OpKind {
     pub fn mnemonic(self) -> &'static str {
         match self {
             OpKind::Tree(op) => op.mnemonic(),
+            OpKind::Lo(op) => op.mnemonic(),
         }
     }
 
@@ -69,6 +76,7 @@ impl OpKind {
         let (dialect, mnemonic) = name.split_once('.')?;
         match dialect {
             "tree" => tree::Op::from_mnemonic(mnemonic).map(OpKind::Tree),
+            "lo" => crate::lo::Op::from_mnemonic(mnemonic).map(OpKind::Lo),
             _ => None,
         }
     }
@@ -77,6 +85,7 @@ impl OpKind {
     pub fn is_terminator(self) -> bool {
         match self {
             OpKind::Tree(op) => op.is_terminator(),
+            OpKind::Lo(op) => op.is_terminator(),
         }
     }
 
@@ -84,6 +93,7 @@ impl OpKind {
     pub fn is_pure(self) -> bool {
         match self {
             OpKind::Tree(op) => op.is_pure(),
+            OpKind::Lo(op) => op.is_pure(),
         }
     }
 
@@ -92,6 +102,7 @@ impl OpKind {
     pub fn has_structured_regions(self) -> bool {
         match self {
             OpKind::Tree(_) => true,
+            OpKind::Lo(_) => false,
         }
     }
 
@@ -149,6 +160,15 @@ impl Operation {
     pub fn tree_op(&self) -> Option<tree::Op> {
         match self.kind {
             OpKind::Tree(op) => Some(op),
+            OpKind::Lo(_) => None,
+        }
+    }
+
+    /// The `lo` op kind, if this is a `lo` op.
+    pub fn lo_op(&self) -> Option<crate::lo::Op> {
+        match self.kind {
+            OpKind::Lo(op) => Some(op),
+            OpKind::Tree(_) => None,
         }
     }
 }

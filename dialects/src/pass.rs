@@ -147,6 +147,8 @@ pub enum Level {
     Any,
     /// Only `tree` ops.
     Tree,
+    /// Only `lo` ops.
+    Lo,
 }
 
 impl Level {
@@ -155,6 +157,7 @@ impl Level {
         match self {
             Level::Any => true,
             Level::Tree => d == Dialect::Tree,
+            Level::Lo => d == Dialect::Lo,
         }
     }
 }

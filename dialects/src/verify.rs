@@ -661,6 +661,7 @@ impl<'m> Verifier<'m> {
         };
         let outcome = match o.kind {
             OpKind::Tree(k) => crate::tree::verify::verify_op(m, op, k, &cx),
+            OpKind::Lo(k) => crate::lo::verify::verify_op(m, op, k, &cx),
         };
         if let Err(msg) = outcome {
             self.error(Some(op), msg);

@@ -78,11 +78,32 @@ fn min_max(a: &Val, b: &Val, max: bool) -> R {
             (Scalar::Int(p, t), Scalar::Int(q, _)) => {
                 Scalar::Int(if max { p.max(q) } else { p.min(q) }, t)
             }
-            (Scalar::F32(p), Scalar::F32(q)) => Scalar::F32(if max { p.max(q) } else { p.min(q) }),
-            (Scalar::F64(p), Scalar::F64(q)) => Scalar::F64(if max { p.max(q) } else { p.min(q) }),
+            (Scalar::F32(p), Scalar::F32(q)) => Scalar::F32(min_max_num(p, q, max)),
+            (Scalar::F64(p), Scalar::F64(q)) => Scalar::F64(min_max_num(p, q, max)),
             _ => return Err("expects numbers of one type".into()),
         })
     })
+}
+
+/// IEEE `minNum`/`maxNum`, spelled out so every backend can match it bit for bit: the other
+/// operand when one is NaN (`q` when both are), else the smaller (larger) one, and `p` on ties
+/// (so `min(+0, -0)` is `+0`). Rust's `f32::min` leaves the zero case unspecified.
+fn min_max_num<F: PartialOrd + Copy>(p: F, q: F, max: bool) -> F {
+    #[allow(clippy::eq_op)]
+    let p_nan = p != p;
+    if p_nan {
+        return q;
+    }
+    #[allow(clippy::eq_op)]
+    let q_nan = q != q;
+    if q_nan {
+        return p;
+    }
+    if (max && q > p) || (!max && q < p) {
+        q
+    } else {
+        p
+    }
 }
 
 /// Evaluates builtin `name` on `args`, giving a value of type `result`.

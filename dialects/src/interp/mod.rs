@@ -14,6 +14,7 @@
 //! the interpreter cannot run (which the verifier would have rejected).
 
 pub mod intrinsics;
+pub mod lo;
 mod tree;
 
 use crate::entity::{FuncId, OpId, ValueId};

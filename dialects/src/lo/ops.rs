@@ -1,0 +1,253 @@
+//! The op kinds of the `lo` dialect and their static properties (name, purity, terminator).
+//!
+//! `lo` is a scalar SSA control-flow graph (design note §5): every value is a scalar (`i1`,
+//! `i8`..`u64`, `f32`, `f64`) or a `ptr`. Signedness stays part of the integer types, so `div`,
+//! `rem`, `shr`, `cast` and `cmp` read it from their operand types, exactly as in `tree`. Each
+//! variant documents its operands, attributes, successors and results; [`super::verify`] checks
+//! what is written here.
+
+/// One `lo` operation kind.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Op {
+    /// `lo.const {value}` `() -> T`: an integer, float or `i1` constant (`ptr`: an integer
+    /// address, normally 0).
+    Const,
+    /// `lo.add` `(T, T) -> T`: wrapping integer or round-to-nearest float addition.
+    Add,
+    /// `lo.sub` `(T, T) -> T`.
+    Sub,
+    /// `lo.mul` `(T, T) -> T`.
+    Mul,
+    /// `lo.div` `(T, T) -> T`: integer division truncates toward zero (by zero: undefined).
+    Div,
+    /// `lo.rem` `(T, T) -> T`: the sign follows the dividend; floats: C `fmod`.
+    Rem,
+    /// `lo.neg` `(T) -> T`: integer negation or float sign flip (bits kept).
+    Neg,
+    /// `lo.and` `(T, T) -> T`, integers or `i1`.
+    And,
+    /// `lo.or` `(T, T) -> T`.
+    Or,
+    /// `lo.xor` `(T, T) -> T`.
+    Xor,
+    /// `lo.shl` `(T, U) -> T`: the amount is taken modulo the width.
+    Shl,
+    /// `lo.shr` `(T, U) -> T`: arithmetic on signed, logical on unsigned types.
+    Shr,
+    /// `lo.bitnot` `(T) -> T`, integers.
+    BitNot,
+    /// `lo.not` `(i1) -> i1`.
+    Not,
+    /// `lo.cmp {pred}` `(T, T) -> i1`: `eq ne lt le gt ge`, ordered on floats except `ne`.
+    Cmp,
+    /// `lo.select` `(i1, T, T) -> T`.
+    Select,
+    /// `lo.cast` `(A) -> B`: value conversion between scalars (integer widen/narrow, int to
+    /// float, float to int saturating with NaN to 0, float widen/narrow, to `i1` is `!= 0`).
+    Cast,
+    /// `lo.bitcast` `(A) -> B`: reinterpretation between scalars of equal width.
+    Bitcast,
+    /// `lo.min` `(T, T) -> T`: integer minimum, or float `minNum`: the non-NaN operand when
+    /// one is NaN, else the smaller, the first operand on ties (`min(+0, -0) = +0`).
+    Min,
+    /// `lo.max` `(T, T) -> T`: as `min`, the larger.
+    Max,
+    /// `lo.abs` `(T) -> T`: integer (wrapping) or float (clears the sign bit).
+    Abs,
+    /// `lo.sqrt` `(T) -> T`, floats, correctly rounded.
+    Sqrt,
+    /// `lo.floor` `(T) -> T`, floats.
+    Floor,
+    /// `lo.ceil` `(T) -> T`, floats.
+    Ceil,
+    /// `lo.trunc` `(T) -> T`, floats.
+    Trunc,
+    /// `lo.fma` `(T, T, T) -> T`: `a * b + c` rounded once.
+    Fma,
+    /// `lo.next_up` `(T) -> T`, floats: the next float toward `+inf` (NaN and `+inf` stay;
+    /// `±0` gives the smallest positive subnormal). Emulates round-up after a round-to-nearest
+    /// operation, one ulp outward unconditionally (layout catalog §3.8).
+    NextUp,
+    /// `lo.next_down` `(T) -> T`: the next float toward `-inf`.
+    NextDown,
+    /// `lo.load {offset}` `(ptr) -> T`: the scalar at `ptr + offset` (little-endian).
+    Load,
+    /// `lo.store {offset}` `(ptr, T) -> ()`.
+    Store,
+    /// `lo.ptr_add` `(ptr, integer) -> ptr`: byte offset, sign-extended for signed types,
+    /// zero-extended for unsigned ones.
+    PtrAdd,
+    /// `lo.stack_slot {size, align}` `() -> ptr`: a fresh `size`-byte slot in the function's
+    /// frame, valid until the function returns.
+    StackSlot,
+    /// `lo.call {callee = @f}` `(args...) -> (results...)`.
+    Call,
+    /// `lo.br` `() -> ()` with one successor.
+    Br,
+    /// `lo.cond_br` `(i1) -> ()` with two successors: taken when true, when false.
+    CondBr,
+    /// `lo.return` `(values...) -> ()`: the function's results.
+    Return,
+}
+
+impl Op {
+    /// Every op, in declaration order.
+    pub const ALL: [Op; 36] = [
+        Op::Const,
+        Op::Add,
+        Op::Sub,
+        Op::Mul,
+        Op::Div,
+        Op::Rem,
+        Op::Neg,
+        Op::And,
+        Op::Or,
+        Op::Xor,
+        Op::Shl,
+        Op::Shr,
+        Op::BitNot,
+        Op::Not,
+        Op::Cmp,
+        Op::Select,
+        Op::Cast,
+        Op::Bitcast,
+        Op::Min,
+        Op::Max,
+        Op::Abs,
+        Op::Sqrt,
+        Op::Floor,
+        Op::Ceil,
+        Op::Trunc,
+        Op::Fma,
+        Op::NextUp,
+        Op::NextDown,
+        Op::Load,
+        Op::Store,
+        Op::PtrAdd,
+        Op::StackSlot,
+        Op::Call,
+        Op::Br,
+        Op::CondBr,
+        Op::Return,
+    ];
+
+    /// The name without the dialect prefix (`add`).
+    pub fn mnemonic(self) -> &'static str {
+        match self {
+            Op::Const => "const",
+            Op::Add => "add",
+            Op::Sub => "sub",
+            Op::Mul => "mul",
+            Op::Div => "div",
+            Op::Rem => "rem",
+            Op::Neg => "neg",
+            Op::And => "and",
+            Op::Or => "or",
+            Op::Xor => "xor",
+            Op::Shl => "shl",
+            Op::Shr => "shr",
+            Op::BitNot => "bitnot",
+            Op::Not => "not",
+            Op::Cmp => "cmp",
+            Op::Select => "select",
+            Op::Cast => "cast",
+            Op::Bitcast => "bitcast",
+            Op::Min => "min",
+            Op::Max => "max",
+            Op::Abs => "abs",
+            Op::Sqrt => "sqrt",
+            Op::Floor => "floor",
+            Op::Ceil => "ceil",
+            Op::Trunc => "trunc",
+            Op::Fma => "fma",
+            Op::NextUp => "next_up",
+            Op::NextDown => "next_down",
+            Op::Load => "load",
+            Op::Store => "store",
+            Op::PtrAdd => "ptr_add",
+            Op::StackSlot => "stack_slot",
+            Op::Call => "call",
+            Op::Br => "br",
+            Op::CondBr => "cond_br",
+            Op::Return => "return",
+        }
+    }
+
+    /// The op with mnemonic `s`.
+    pub fn from_mnemonic(s: &str) -> Option<Op> {
+        Op::ALL.iter().copied().find(|op| op.mnemonic() == s)
+    }
+
+    /// True for ops that end a block.
+    pub fn is_terminator(self) -> bool {
+        matches!(self, Op::Br | Op::CondBr | Op::Return)
+    }
+
+    /// True for ops whose only effect is their results. `load` is not: it may trap and its
+    /// value depends on stores; `stack_slot` is, since an unused slot can go.
+    pub fn is_pure(self) -> bool {
+        !matches!(
+            self,
+            Op::Load | Op::Store | Op::Call | Op::Br | Op::CondBr | Op::Return
+        )
+    }
+
+    /// True for the binary ops `(T, T) -> T` whose scalar semantics are `tree`'s.
+    pub fn is_binary(self) -> bool {
+        matches!(
+            self,
+            Op::Add
+                | Op::Sub
+                | Op::Mul
+                | Op::Div
+                | Op::Rem
+                | Op::And
+                | Op::Or
+                | Op::Xor
+                | Op::Shl
+                | Op::Shr
+        )
+    }
+
+    /// The `tree` op with the same scalar semantics, for the ops `lo` shares with `tree`.
+    pub fn tree_equivalent(self) -> Option<crate::tree::Op> {
+        use crate::tree::Op as T;
+        Some(match self {
+            Op::Add => T::Add,
+            Op::Sub => T::Sub,
+            Op::Mul => T::Mul,
+            Op::Div => T::Div,
+            Op::Rem => T::Rem,
+            Op::Neg => T::Neg,
+            Op::And => T::And,
+            Op::Or => T::Or,
+            Op::Xor => T::Xor,
+            Op::Shl => T::Shl,
+            Op::Shr => T::Shr,
+            Op::BitNot => T::BitNot,
+            Op::Not => T::Not,
+            _ => return None,
+        })
+    }
+
+    /// True for the float-only unary intrinsics.
+    pub fn is_float_unary(self) -> bool {
+        matches!(
+            self,
+            Op::Sqrt | Op::Floor | Op::Ceil | Op::Trunc | Op::NextUp | Op::NextDown
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip() {
+        for op in Op::ALL {
+            assert_eq!(Op::from_mnemonic(op.mnemonic()), Some(op));
+        }
+        assert_eq!(Op::from_mnemonic("nope"), None);
+    }
+}
