@@ -37,6 +37,9 @@ struct Args {
     /// List the passes and stop.
     #[arg(long)]
     help_passes: bool,
+    /// A pass option `pass:key=value` (repeatable), e.g. `recursion-to-stack:stack-size=8`.
+    #[arg(long = "pass-option", value_name = "PASS:KEY=VALUE")]
+    pass_options: Vec<String>,
 }
 
 fn main() {
@@ -89,6 +92,12 @@ fn run(args: &Args) -> i32 {
         pm.options.print_after_all = args.print_after_all;
         pm.options.stop_after = args.stop_after.clone();
         let mut cx = PassCx::new();
+        for o in &args.pass_options {
+            if let Err(d) = cx.parse_option(o) {
+                eprint!("{}", d.render(&sources));
+                return 1;
+            }
+        }
         let mut dumps = String::new();
         let result = pm.run(&mut module, &mut cx, &mut dumps);
         eprint!("{dumps}");

@@ -5,9 +5,24 @@
 //! that need the compiler's knowledge (layouts, builds) will be registered here next to them.
 //! Pass order lives in `driver/pipelines.rs` alone.
 
+pub mod mem_to_lo;
+
 use scion_ir::pass::PassRegistry;
 
 /// Every pass `scionc --passes=...` and `--help-passes` know.
 pub fn registry() -> PassRegistry {
-    PassRegistry::with_builtin()
+    let mut reg = PassRegistry::with_builtin();
+    lower_passes(&mut reg);
+    reg
+}
+
+/// The passes from `tree`/`mem` down to `lo`.
+fn lower_passes(reg: &mut PassRegistry) {
+    reg.register(scion_ir::PassInfo {
+        name: "mem-to-lo",
+        summary: "structured tree/mem functions to the lo CFG (scalarized)",
+        input: scion_ir::pass::Level::Any,
+        output: scion_ir::pass::Level::Lo,
+        create: || Box::new(mem_to_lo::MemToLo),
+    });
 }

@@ -1,0 +1,174 @@
+//! `tree.intrinsic` to `lo` scalar ops, lane by lane, with the interpreter's exact evaluation
+//! order (`dot` sums the lane products left to right without fusing; `cross` is
+//! `a[i]*b[j] - a[j]*b[i]`; `hmin`/`hmax`/`hsum` fold left to right).
+//!
+//! `min`/`max` are `lo.min`/`lo.max` (IEEE minNum/maxNum). Directed rounding (`fadd_rd` ...)
+//! is the round-to-nearest op followed by one ulp outward, unconditionally (`lo.next_down` /
+//! `lo.next_up`, layout catalog §3.8). `isnan` is `x != x`; `rsqrt` is `1 / sqrt`; `length`
+//! is `sqrt(dot(v, v))`; `normalize` divides each lane by the length. Intrinsics without a
+//! scalar form here (transcendentals, bit counts, `round`, options, sets, quantization frames)
+//! are reported, never guessed.
+
+use super::{FnLower, R};
+use scion_ir::attr::Attr;
+use scion_ir::entity::{BlockId, TypeId, ValueId};
+use scion_ir::lo::Op as L;
+use scion_ir::tree::CmpPred;
+use scion_ir::OpSpec;
+
+/// Lowers intrinsic `name` on operand leaves `ins`, giving leaves of types `tys`.
+pub(super) fn lower(
+    cx: &mut FnLower<'_>,
+    cur: BlockId,
+    name: &str,
+    ins: &[Vec<ValueId>],
+    tys: &[TypeId],
+) -> R<Vec<ValueId>> {
+    let arg = |i: usize| -> R<Vec<ValueId>> {
+        ins.get(i)
+            .cloned()
+            .ok_or((format!("`{name}` is missing an operand"), None))
+    };
+    let lanewise1 = |cx: &mut FnLower<'_>, op: L| -> R<Vec<ValueId>> {
+        Ok(arg(0)?
+            .into_iter()
+            .map(|x| {
+                let ty = cx.ty_of(x);
+                cx.e1(cur, op, &[x], ty)
+            })
+            .collect())
+    };
+    let lanewise2 = |cx: &mut FnLower<'_>, ops: &[L]| -> R<Vec<ValueId>> {
+        let (a, b) = (arg(0)?, arg(1)?);
+        Ok(a.iter()
+            .zip(&b)
+            .map(|(&x, &y)| {
+                let ty = cx.ty_of(x);
+                let mut v = cx.e1(cur, ops[0], &[x, y], ty);
+                for &op in &ops[1..] {
+                    v = cx.e1(cur, op, &[v], ty);
+                }
+                v
+            })
+            .collect())
+    };
+    Ok(match name {
+        "abs" => lanewise1(cx, L::Abs)?,
+        "sqrt" => lanewise1(cx, L::Sqrt)?,
+        "floor" => lanewise1(cx, L::Floor)?,
+        "ceil" => lanewise1(cx, L::Ceil)?,
+        "trunc" => lanewise1(cx, L::Trunc)?,
+        "min" => lanewise2(cx, &[L::Min])?,
+        "max" => lanewise2(cx, &[L::Max])?,
+        "fadd_rd" => lanewise2(cx, &[L::Add, L::NextDown])?,
+        "fadd_ru" => lanewise2(cx, &[L::Add, L::NextUp])?,
+        "fsub_rd" => lanewise2(cx, &[L::Sub, L::NextDown])?,
+        "fsub_ru" => lanewise2(cx, &[L::Sub, L::NextUp])?,
+        "fmul_rd" => lanewise2(cx, &[L::Mul, L::NextDown])?,
+        "fmul_ru" => lanewise2(cx, &[L::Mul, L::NextUp])?,
+        "fma" => {
+            let (a, b, c) = (arg(0)?, arg(1)?, arg(2)?);
+            (0..a.len())
+                .map(|i| {
+                    let ty = cx.ty_of(a[i]);
+                    cx.e1(cur, L::Fma, &[a[i], b[i], c[i]], ty)
+                })
+                .collect()
+        }
+        "rsqrt" => arg(0)?
+            .into_iter()
+            .map(|x| {
+                let ty = cx.ty_of(x);
+                let s = cx.e1(cur, L::Sqrt, &[x], ty);
+                let one = float_const(cx, cur, ty, 1.0);
+                cx.e1(cur, L::Div, &[one, s], ty)
+            })
+            .collect(),
+        "isnan" => arg(0)?
+            .into_iter()
+            .map(|x| cx.cmp(cur, CmpPred::Ne, x, x))
+            .collect(),
+        "dot" => vec![dot(cx, cur, &arg(0)?, &arg(1)?)?],
+        "length" => {
+            let a = arg(0)?;
+            let d = dot(cx, cur, &a, &a)?;
+            let ty = cx.ty_of(d);
+            vec![cx.e1(cur, L::Sqrt, &[d], ty)]
+        }
+        "normalize" => {
+            let a = arg(0)?;
+            let d = dot(cx, cur, &a, &a)?;
+            let ty = cx.ty_of(d);
+            let len = cx.e1(cur, L::Sqrt, &[d], ty);
+            a.iter()
+                .map(|&x| cx.e1(cur, L::Div, &[x, len], ty))
+                .collect()
+        }
+        "cross" => {
+            let (a, b) = (arg(0)?, arg(1)?);
+            if a.len() != 3 || b.len() != 3 {
+                return Err(("`cross` needs 3 lanes".into(), None));
+            }
+            let ty = cx.ty_of(a[0]);
+            let mut c = |i: usize, j: usize| {
+                let p = cx.e1(cur, L::Mul, &[a[i], b[j]], ty);
+                let q = cx.e1(cur, L::Mul, &[a[j], b[i]], ty);
+                cx.e1(cur, L::Sub, &[p, q], ty)
+            };
+            vec![c(1, 2), c(2, 0), c(0, 1)]
+        }
+        "hmin" | "hmax" | "hsum" => {
+            let op = match name {
+                "hmin" => L::Min,
+                "hmax" => L::Max,
+                _ => L::Add,
+            };
+            let a = arg(0)?;
+            let Some((&first, rest)) = a.split_first() else {
+                return Err(("empty vector".into(), None));
+            };
+            let ty = cx.ty_of(first);
+            let mut acc = first;
+            for &x in rest {
+                acc = cx.e1(cur, op, &[acc, x], ty);
+            }
+            vec![acc]
+        }
+        "len" => {
+            let Some(&ty) = tys.first() else {
+                return Err(("`len` without a result".into(), None));
+            };
+            return Err((
+                format!(
+                    "`len` of an array (type {}) needs a view",
+                    cx.dst.types.display(ty)
+                ),
+                None,
+            ));
+        }
+        _ => return Err((format!("the intrinsic `{name}` has no lo form"), None)),
+    })
+}
+
+fn float_const(cx: &mut FnLower<'_>, cur: BlockId, ty: TypeId, v: f64) -> ValueId {
+    let o = cx.insert(
+        cur,
+        OpSpec::new(L::Const)
+            .results(&[ty])
+            .attr("value", Attr::float(v)),
+    );
+    cx.dst.ops[o].results[0]
+}
+
+fn dot(cx: &mut FnLower<'_>, cur: BlockId, a: &[ValueId], b: &[ValueId]) -> R<ValueId> {
+    if a.is_empty() || a.len() != b.len() {
+        return Err(("`dot` needs two vectors of one length".into(), None));
+    }
+    let ty = cx.ty_of(a[0]);
+    let mut acc = cx.e1(cur, L::Mul, &[a[0], b[0]], ty);
+    for i in 1..a.len() {
+        let p = cx.e1(cur, L::Mul, &[a[i], b[i]], ty);
+        acc = cx.e1(cur, L::Add, &[acc, p], ty);
+    }
+    Ok(acc)
+}
