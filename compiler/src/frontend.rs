@@ -39,6 +39,8 @@ pub struct PassOptions {
     pub stop_after: Option<String>,
     /// Record pass times.
     pub time_passes: bool,
+    /// Entries of a traversal's explicit stack (`--stack-size`, for `--emit=lo|clif`).
+    pub stack_size: Option<u32>,
 }
 
 impl From<&Options> for PassOptions {
@@ -48,6 +50,7 @@ impl From<&Options> for PassOptions {
             print_before_all: o.print_before_all,
             stop_after: o.stop_after.clone(),
             time_passes: o.time_passes,
+            stack_size: o.stack_size,
         }
     }
 }
@@ -111,6 +114,14 @@ pub fn compile(
         return out;
     }
     keep_reachable(&mut module, fe.inputs);
+    if matches!(emit, Emit::Lo | Emit::Clif) {
+        match crate::driver::lower::emit_low(&mut module, emit, popts.stack_size) {
+            Ok(text) => out.output = Some(text),
+            Err(PassError::Diagnostics(d)) => out.diagnostics.extend(d),
+            Err(PassError::Internal(i)) => out.internal_error = Some(i),
+        }
+        return out;
+    }
     out.output = Some(scion_ir::print::print_module(&module));
     out
 }

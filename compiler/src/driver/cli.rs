@@ -93,7 +93,7 @@ Exit status: 0 on success, 1 when the input has errors, 2 on a bad command line,
 internal compiler error (a bug: please report it with the input).
 
 Not built yet (these say so with error E0901 instead of being ignored):
-  --emit=mem|lo|clif|llvm|asm|obj|ptx|header, --layout, --target, --cpu, --run, --stack-size.";
+  --emit=mem|llvm|asm|obj|ptx|header, --layout, --target, --cpu, --run.";
 
 /// `scionc`: the Scion compiler.
 ///
@@ -197,11 +197,8 @@ impl Options {
     /// Rejects flags whose stage is not built yet, naming them.
     pub fn check_implemented(&self) -> Result<(), NotImplemented> {
         let emit_plan = match self.emit {
-            Emit::Ast | Emit::Tree | Emit::Check => None,
-            Emit::Mem | Emit::Lo => {
-                Some("destructor and constructor specialization (mem, lo dialects)")
-            }
-            Emit::Clif => Some("the Cranelift backend"),
+            Emit::Ast | Emit::Tree | Emit::Check | Emit::Lo | Emit::Clif => None,
+            Emit::Mem => Some("destructor and constructor specialization (mem dialect)"),
             Emit::Llvm | Emit::Asm | Emit::Obj | Emit::Ptx => Some("the LLVM backend"),
             Emit::Header => Some("the C ABI header generator"),
         };
@@ -232,12 +229,6 @@ impl Options {
             return Err(NotImplemented {
                 flag: "--run".into(),
                 planned: "the JIT and the interpreter",
-            });
-        }
-        if self.stack_size.is_some() {
-            return Err(NotImplemented {
-                flag: "--stack-size".into(),
-                planned: "recursion-to-stack lowering",
             });
         }
         Ok(())

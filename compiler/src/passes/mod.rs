@@ -6,6 +6,8 @@
 //! Pass order lives in `driver/pipelines.rs` alone.
 
 pub mod mem_to_lo;
+#[path = "mem/recursion_to_stack.rs"]
+pub mod recursion_to_stack;
 
 use scion_ir::pass::PassRegistry;
 
@@ -24,5 +26,12 @@ fn lower_passes(reg: &mut PassRegistry) {
         input: scion_ir::pass::Level::Any,
         output: scion_ir::pass::Level::Lo,
         create: || Box::new(mem_to_lo::MemToLo),
+    });
+    reg.register(scion_ir::PassInfo {
+        name: "recursion-to-stack",
+        summary: "recursive traversals to a loop over a fixed stack (status 1 on overflow)",
+        input: scion_ir::pass::Level::Lo,
+        output: scion_ir::pass::Level::Lo,
+        create: || Box::new(recursion_to_stack::RecursionToStack),
     });
 }

@@ -1,0 +1,209 @@
+//! The JIT: compiles a `lo` module to machine code in this process and calls its functions.
+//!
+//! Every function `@f` gets a companion trampoline `f$entry(args: ptr, results: ptr)` that
+//! loads each parameter from `args[8*i]` and stores each result to `results[8*i]` (the low
+//! bytes of a `u64` slot, little-endian), so [`JitModule::call`] can run any signature from
+//! [`Val`]s without a Rust function type per signature. [`JitModule::function_ptr`] gives the
+//! raw entry of `@f` (platform C calling convention) for callers that know its type.
+//! All `unsafe` of the backend is in this file, at the call boundary.
+
+#![allow(unsafe_code)]
+
+use crate::translate::{self, clif_type};
+use cranelift_codegen::ir::{AbiParam, InstBuilder, MemFlags, UserFuncName};
+use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
+use cranelift_jit::{JITBuilder, JITModule};
+use cranelift_module::{FuncId as ClFuncId, Linkage, Module as _};
+use scion_ir::interp::Val;
+use scion_ir::types::{FloatTy, Type};
+use scion_ir::{FuncId, Module};
+use std::collections::HashMap;
+use std::fmt;
+
+/// A backend failure (a translation or code generation error: a compiler bug or unsupported IR).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ClifError(pub String);
+
+impl fmt::Display for ClifError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "cranelift backend: {}", self.0)
+    }
+}
+
+impl std::error::Error for ClifError {}
+
+struct Entry {
+    entry: ClFuncId,
+    func: ClFuncId,
+    params: Vec<Type>,
+    results: Vec<Type>,
+}
+
+/// A compiled `lo` module living in executable memory.
+pub struct JitModule {
+    module: JITModule,
+    entries: HashMap<String, Entry>,
+}
+
+impl JitModule {
+    /// Compiles every function of the verified `lo` module `m`.
+    pub fn compile(m: &Module) -> Result<JitModule, ClifError> {
+        let builder = JITBuilder::with_isa(
+            crate::host_isa()?,
+            cranelift_module::default_libcall_names(),
+        );
+        let mut cl = JITModule::new(builder);
+        let syms = translate::declare_all(&mut cl, m).map_err(ClifError)?;
+        let mut fctx = FunctionBuilderContext::new();
+        let mut ctx = cl.make_context();
+        let mut entries = HashMap::new();
+        for &f in &m.func_order {
+            if m.is_declaration(f) {
+                continue;
+            }
+            let name = &m.funcs[f].name;
+            let id = syms.funcs[name];
+            ctx.func.signature = translate::signature(&cl, m, f).map_err(ClifError)?;
+            ctx.func.name = UserFuncName::user(0, id.as_u32());
+            translate::translate_func(&mut cl, &syms, m, f, &mut ctx.func, &mut fctx)
+                .map_err(|e| ClifError(format!("@{name}: {e}")))?;
+            cl.define_function(id, &mut ctx)
+                .map_err(|e| ClifError(format!("@{name}: {e:?}")))?;
+            cl.clear_context(&mut ctx);
+            let entry = trampoline(&mut cl, m, f, id, &mut fctx)?;
+            let ty = |t: &scion_ir::TypeId| m.types.get(*t).clone();
+            entries.insert(
+                name.clone(),
+                Entry {
+                    entry,
+                    func: id,
+                    params: m.funcs[f].params.iter().map(ty).collect(),
+                    results: m.funcs[f].results.iter().map(ty).collect(),
+                },
+            );
+        }
+        cl.finalize_definitions()
+            .map_err(|e| ClifError(format!("finalize: {e:?}")))?;
+        Ok(JitModule {
+            module: cl,
+            entries,
+        })
+    }
+
+    /// The machine-code address of `@name` (C calling convention of the host), if defined.
+    pub fn function_ptr(&self, name: &str) -> Option<*const u8> {
+        let e = self.entries.get(name)?;
+        Some(self.module.get_finalized_function(e.func))
+    }
+
+    /// Calls `@name` on scalar arguments (`ptr` as a `u64` integer) and returns its results.
+    /// The types of `args` must match the parameters (checked).
+    pub fn call(&self, name: &str, args: &[Val]) -> Result<Vec<Val>, ClifError> {
+        let e = self
+            .entries
+            .get(name)
+            .ok_or_else(|| ClifError(format!("no function `@{name}`")))?;
+        if args.len() != e.params.len() {
+            return Err(ClifError(format!(
+                "`@{name}` takes {} arguments, given {}",
+                e.params.len(),
+                args.len()
+            )));
+        }
+        let mut slots = Vec::with_capacity(args.len().max(1));
+        for (a, t) in args.iter().zip(&e.params) {
+            slots.push(to_slot(a, t).ok_or_else(|| {
+                ClifError(format!(
+                    "`@{name}`: argument {a:?} does not have type {t:?}"
+                ))
+            })?);
+        }
+        slots.push(0);
+        let mut results = vec![0u64; e.results.len().max(1)];
+        let code = self.module.get_finalized_function(e.entry);
+        // SAFETY: `code` is the finalized trampoline built by `trampoline` with the signature
+        // `(ptr, ptr) -> ()` in the host's default (C) calling convention. It reads exactly
+        // `params.len()` u64 slots from `args` (we pass at least that many, checked above) and
+        // writes `results.len()` slots (we allocate that many), and the module, hence the code,
+        // lives as long as `self`.
+        let f: extern "C" fn(*const u64, *mut u64) = unsafe { std::mem::transmute(code) };
+        f(slots.as_ptr(), results.as_mut_ptr());
+        Ok(e.results
+            .iter()
+            .zip(results)
+            .map(|(t, raw)| from_slot(raw, t))
+            .collect())
+    }
+}
+
+fn to_slot(v: &Val, t: &Type) -> Option<u64> {
+    Some(match (v, t) {
+        (Val::Bool(b), Type::Bool) => u64::from(*b),
+        (Val::Int(x, it), Type::Int(want)) if it == want => *x as u64,
+        (Val::Int(x, _), Type::Ptr) => *x as u64,
+        (Val::F32(x), Type::Float(FloatTy::F32)) => u64::from(x.to_bits()),
+        (Val::F64(x), Type::Float(FloatTy::F64)) => x.to_bits(),
+        _ => return None,
+    })
+}
+
+fn from_slot(raw: u64, t: &Type) -> Val {
+    match t {
+        Type::Bool => Val::Bool(raw & 1 != 0),
+        Type::Int(it) => {
+            let bits = it.bits();
+            let masked = if bits == 64 {
+                raw
+            } else {
+                raw & ((1u64 << bits) - 1)
+            };
+            Val::Int(it.wrap(masked as i128), *it)
+        }
+        Type::Float(FloatTy::F32) => Val::F32(f32::from_bits(raw as u32)),
+        Type::Float(_) => Val::F64(f64::from_bits(raw)),
+        _ => Val::Int(raw as i128, scion_ir::types::IntTy::U64),
+    }
+}
+
+/// Defines `name$entry(args: ptr, results: ptr)` calling `@name` with unpacked arguments.
+fn trampoline(
+    cl: &mut JITModule,
+    m: &Module,
+    f: FuncId,
+    callee: ClFuncId,
+    fctx: &mut FunctionBuilderContext,
+) -> Result<ClFuncId, ClifError> {
+    let ptr = cl.target_config().pointer_type();
+    let mut ctx = cl.make_context();
+    ctx.func.signature.params.push(AbiParam::new(ptr));
+    ctx.func.signature.params.push(AbiParam::new(ptr));
+    let name = format!("{}$entry", m.funcs[f].name);
+    let id = cl
+        .declare_function(&name, Linkage::Local, &ctx.func.signature)
+        .map_err(|e| ClifError(e.to_string()))?;
+    ctx.func.name = UserFuncName::user(1, id.as_u32());
+    {
+        let mut b = FunctionBuilder::new(&mut ctx.func, fctx);
+        let block = b.create_block();
+        b.append_block_params_for_function_params(block);
+        b.switch_to_block(block);
+        let (args, res) = (b.block_params(block)[0], b.block_params(block)[1]);
+        let mut vals = Vec::new();
+        for (i, &p) in m.funcs[f].params.iter().enumerate() {
+            let t = clif_type(m, p, ptr).map_err(ClifError)?;
+            vals.push(b.ins().load(t, MemFlags::trusted(), args, (8 * i) as i32));
+        }
+        let fref = cl.declare_func_in_func(callee, b.func);
+        let call = b.ins().call(fref, &vals);
+        let outs = b.inst_results(call).to_vec();
+        for (i, v) in outs.into_iter().enumerate() {
+            b.ins().store(MemFlags::trusted(), v, res, (8 * i) as i32);
+        }
+        b.ins().return_(&[]);
+        b.seal_all_blocks();
+        b.finalize();
+    }
+    cl.define_function(id, &mut ctx)
+        .map_err(|e| ClifError(format!("{name}: {e:?}")))?;
+    Ok(id)
+}

@@ -1,0 +1,600 @@
+//! `lo` to Cranelift IR, one op to one (or a few) instructions, through `FunctionBuilder`.
+//!
+//! Types: `i1` is `i8` holding 0 or 1; integers keep their width (signedness picks `sdiv`/`udiv`,
+//! `sshr`/`ushr`, signed or unsigned compares and extensions); `ptr` is the target's pointer
+//! type. Float semantics match the interpreters bit for bit: arithmetic rounds to nearest in
+//! the value's own precision; a NaN produced by `add sub mul div rem` is replaced by the
+//! canonical quiet NaN (as [`scion_ir::tree::scalar`] does); Cranelift never contracts `a*b+c`,
+//! and `fma` is emitted only for `lo.fma`; `min`/`max` are compare-and-select (Cranelift's
+//! `fmin`/`fmax` propagate NaN, `lo` wants the non-NaN operand); `rem` calls the C library's
+//! `fmodf`/`fmod`; `next_up`/`next_down` step the bit pattern. Blocks are translated in reverse
+//! post-order so every definition is translated before its uses.
+
+use cranelift_codegen::ir::condcodes::{FloatCC, IntCC};
+use cranelift_codegen::ir::immediates::{Ieee32, Ieee64};
+use cranelift_codegen::ir::{
+    self, types, AbiParam, BlockArg, InstBuilder, MemFlags, Signature, StackSlotData, StackSlotKind,
+};
+use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
+use cranelift_module::{FuncId as ClFuncId, Linkage, Module as ClModule};
+use scion_ir::entity::{BlockId, FuncId, TypeId, ValueId};
+use scion_ir::lo::Op as L;
+use scion_ir::op::OpKind;
+use scion_ir::tree::CmpPred;
+use scion_ir::types::{FloatTy, IntTy, Type};
+use scion_ir::Module;
+use std::collections::HashMap;
+
+/// The Cranelift type of a `lo` type.
+pub fn clif_type(m: &Module, ty: TypeId, ptr: ir::Type) -> Result<ir::Type, String> {
+    Ok(match m.types.get(ty) {
+        Type::Bool => types::I8,
+        Type::Int(t) => match t.bits() {
+            8 => types::I8,
+            16 => types::I16,
+            32 => types::I32,
+            _ => types::I64,
+        },
+        Type::Float(FloatTy::F32) => types::F32,
+        Type::Float(FloatTy::F64) => types::F64,
+        Type::Ptr => ptr,
+        _ => return Err(format!("{} is not a lo type", m.types.display(ty))),
+    })
+}
+
+/// The Cranelift signature of function `f`.
+pub fn signature<M: ClModule>(cl: &M, m: &Module, f: FuncId) -> Result<Signature, String> {
+    let ptr = cl.target_config().pointer_type();
+    let mut sig = cl.make_signature();
+    for &p in &m.funcs[f].params {
+        sig.params.push(AbiParam::new(clif_type(m, p, ptr)?));
+    }
+    for &r in &m.funcs[f].results {
+        sig.returns.push(AbiParam::new(clif_type(m, r, ptr)?));
+    }
+    Ok(sig)
+}
+
+/// Declares every function of `m` in `cl` (definitions exported, declarations imported), and
+/// the C library's `fmodf`/`fmod` for float `rem`.
+pub fn declare_all<M: ClModule>(cl: &mut M, m: &Module) -> Result<Symbols, String> {
+    let mut funcs = HashMap::new();
+    for &f in &m.func_order {
+        let sig = signature(cl, m, f)?;
+        let linkage = if m.is_declaration(f) {
+            Linkage::Import
+        } else {
+            Linkage::Export
+        };
+        let id = cl
+            .declare_function(&m.funcs[f].name, linkage, &sig)
+            .map_err(|e| e.to_string())?;
+        funcs.insert(m.funcs[f].name.clone(), id);
+    }
+    let mut fmod = |name: &str, t: ir::Type| -> Result<ClFuncId, String> {
+        let mut sig = cl.make_signature();
+        sig.params.push(AbiParam::new(t));
+        sig.params.push(AbiParam::new(t));
+        sig.returns.push(AbiParam::new(t));
+        cl.declare_function(name, Linkage::Import, &sig)
+            .map_err(|e| e.to_string())
+    };
+    let fmodf = fmod("fmodf", types::F32)?;
+    let fmod64 = fmod("fmod", types::F64)?;
+    Ok(Symbols {
+        funcs,
+        fmodf,
+        fmod: fmod64,
+    })
+}
+
+/// The Cranelift ids of a module's functions and helpers.
+pub struct Symbols {
+    /// Each `lo` function by name.
+    pub funcs: HashMap<String, ClFuncId>,
+    fmodf: ClFuncId,
+    fmod: ClFuncId,
+}
+
+/// Blocks reachable from the entry, in reverse post-order.
+fn rpo(m: &Module, blocks: &[BlockId]) -> Vec<BlockId> {
+    let mut seen = std::collections::HashSet::new();
+    let mut post = Vec::new();
+    let Some(&entry) = blocks.first() else {
+        return post;
+    };
+    let mut stack = vec![(entry, 0usize)];
+    seen.insert(entry);
+    while let Some(&mut (b, ref mut i)) = stack.last_mut() {
+        let succs: Vec<BlockId> = m.blocks[b]
+            .ops
+            .last()
+            .map(|&o| m.ops[o].successors.iter().map(|s| s.block).collect())
+            .unwrap_or_default();
+        if let Some(&s) = succs.get(*i) {
+            *i += 1;
+            if seen.insert(s) {
+                stack.push((s, 0));
+            }
+        } else {
+            post.push(b);
+            stack.pop();
+        }
+    }
+    post.reverse();
+    post
+}
+
+/// Builds the body of `lo` function `f` into `func` (whose signature is set).
+pub fn translate_func<M: ClModule>(
+    cl: &mut M,
+    syms: &Symbols,
+    m: &Module,
+    f: FuncId,
+    func: &mut ir::Function,
+    fctx: &mut FunctionBuilderContext,
+) -> Result<(), String> {
+    let ptr = cl.target_config().pointer_type();
+    let mut b = FunctionBuilder::new(func, fctx);
+    let body = &m.regions[m.funcs[f].body].blocks;
+    let order = rpo(m, body);
+    let mut blocks = HashMap::new();
+    let mut vals: HashMap<ValueId, ir::Value> = HashMap::new();
+    for (i, &lb) in order.iter().enumerate() {
+        let cb = b.create_block();
+        if i == 0 {
+            b.append_block_params_for_function_params(cb);
+        } else {
+            for &a in &m.blocks[lb].args {
+                b.append_block_param(cb, clif_type(m, m.values[a].ty, ptr)?);
+            }
+        }
+        blocks.insert(lb, cb);
+    }
+    for &lb in &order {
+        let cb = blocks[&lb];
+        b.switch_to_block(cb);
+        let params = b.block_params(cb).to_vec();
+        for (&a, v) in m.blocks[lb].args.iter().zip(params) {
+            vals.insert(a, v);
+        }
+        for &op in &m.blocks[lb].ops {
+            let mut fx = Fx {
+                b: &mut b,
+                m,
+                ptr,
+                vals: &mut vals,
+            };
+            fx.op(cl, syms, op, &blocks)?;
+        }
+    }
+    b.seal_all_blocks();
+    b.finalize();
+    Ok(())
+}
+
+struct Fx<'a, 'b> {
+    b: &'a mut FunctionBuilder<'b>,
+    m: &'a Module,
+    ptr: ir::Type,
+    vals: &'a mut HashMap<ValueId, ir::Value>,
+}
+
+impl Fx<'_, '_> {
+    fn v(&self, x: ValueId) -> Result<ir::Value, String> {
+        self.vals
+            .get(&x)
+            .copied()
+            .ok_or_else(|| "a value is used before its definition is translated".to_string())
+    }
+
+    fn int_ty(&self, x: ValueId) -> Option<IntTy> {
+        self.m.types.as_int(self.m.values[x].ty)
+    }
+
+    fn cty(&self, ty: TypeId) -> Result<ir::Type, String> {
+        clif_type(self.m, ty, self.ptr)
+    }
+
+    /// The canonical quiet NaN in place of any NaN `v`.
+    fn canon(&mut self, v: ir::Value, t: ir::Type) -> ir::Value {
+        let nan = self.b.ins().fcmp(FloatCC::Unordered, v, v);
+        let c = if t == types::F32 {
+            self.b.ins().f32const(Ieee32::with_bits(0x7fc0_0000))
+        } else {
+            self.b
+                .ins()
+                .f64const(Ieee64::with_bits(scion_ir::attr::CANONICAL_NAN_BITS))
+        };
+        self.b.ins().select(nan, c, v)
+    }
+
+    fn op<M: ClModule>(
+        &mut self,
+        cl: &mut M,
+        syms: &Symbols,
+        op: scion_ir::OpId,
+        blocks: &HashMap<BlockId, ir::Block>,
+    ) -> Result<(), String> {
+        let m = self.m;
+        let o = &m.ops[op];
+        let OpKind::Lo(kind) = o.kind else {
+            return Err(format!("`{}` is not a lo op", o.kind.name()));
+        };
+        let args: Vec<ir::Value> = o
+            .operands
+            .iter()
+            .map(|&x| self.v(x))
+            .collect::<Result<_, _>>()?;
+        let rty = o.results.first().map(|&r| m.values[r].ty);
+        let rct = match rty {
+            Some(t) => Some(self.cty(t)?),
+            None => None,
+        };
+        let ct = || rct.ok_or_else(|| "op without a result".to_string());
+        let is_float = |t: ir::Type| t == types::F32 || t == types::F64;
+        let signed = o
+            .operands
+            .first()
+            .and_then(|&x| self.int_ty(x))
+            .is_some_and(|t| t.is_signed());
+        let out: Option<ir::Value> = match kind {
+            L::Const => {
+                let t = ct()?;
+                let a = o.attr("value").ok_or("constant without value")?;
+                Some(match a {
+                    scion_ir::attr::Attr::Bool(x) => self.b.ins().iconst(t, i64::from(*x)),
+                    scion_ir::attr::Attr::Int(v) => {
+                        let bits = t.bits();
+                        let raw = if bits >= 64 {
+                            *v as u64
+                        } else {
+                            (*v as u64) & ((1u64 << bits) - 1)
+                        };
+                        self.b.ins().iconst(t, raw as i64)
+                    }
+                    scion_ir::attr::Attr::Float(bits) => {
+                        let x = f64::from_bits(*bits);
+                        if t == types::F32 {
+                            self.b
+                                .ins()
+                                .f32const(Ieee32::with_bits((x as f32).to_bits()))
+                        } else {
+                            self.b.ins().f64const(Ieee64::with_bits(*bits))
+                        }
+                    }
+                    _ => return Err("bad constant".into()),
+                })
+            }
+            L::Add | L::Sub | L::Mul | L::Div | L::Rem if is_float(ct()?) => {
+                let t = ct()?;
+                let (x, y) = (args[0], args[1]);
+                let r = match kind {
+                    L::Add => self.b.ins().fadd(x, y),
+                    L::Sub => self.b.ins().fsub(x, y),
+                    L::Mul => self.b.ins().fmul(x, y),
+                    L::Div => self.b.ins().fdiv(x, y),
+                    _ => {
+                        let id = if t == types::F32 {
+                            syms.fmodf
+                        } else {
+                            syms.fmod
+                        };
+                        let fref = cl.declare_func_in_func(id, self.b.func);
+                        let call = self.b.ins().call(fref, &[x, y]);
+                        self.b.inst_results(call)[0]
+                    }
+                };
+                Some(self.canon(r, t))
+            }
+            L::Add => Some(self.b.ins().iadd(args[0], args[1])),
+            L::Sub => Some(self.b.ins().isub(args[0], args[1])),
+            L::Mul => Some(self.b.ins().imul(args[0], args[1])),
+            L::Div if signed => Some(self.b.ins().sdiv(args[0], args[1])),
+            L::Div => Some(self.b.ins().udiv(args[0], args[1])),
+            L::Rem if signed => Some(self.b.ins().srem(args[0], args[1])),
+            L::Rem => Some(self.b.ins().urem(args[0], args[1])),
+            L::And => Some(self.b.ins().band(args[0], args[1])),
+            L::Or => Some(self.b.ins().bor(args[0], args[1])),
+            L::Xor => Some(self.b.ins().bxor(args[0], args[1])),
+            L::Shl => Some(self.b.ins().ishl(args[0], args[1])),
+            L::Shr if signed => Some(self.b.ins().sshr(args[0], args[1])),
+            L::Shr => Some(self.b.ins().ushr(args[0], args[1])),
+            L::BitNot => Some(self.b.ins().bnot(args[0])),
+            L::Not => Some(self.b.ins().bxor_imm(args[0], 1)),
+            L::Neg if is_float(ct()?) => Some(self.b.ins().fneg(args[0])),
+            L::Neg => Some(self.b.ins().ineg(args[0])),
+            L::Abs if is_float(ct()?) => Some(self.b.ins().fabs(args[0])),
+            L::Abs if signed => Some(self.b.ins().iabs(args[0])),
+            L::Abs => Some(args[0]),
+            L::Sqrt => Some(self.b.ins().sqrt(args[0])),
+            L::Floor => Some(self.b.ins().floor(args[0])),
+            L::Ceil => Some(self.b.ins().ceil(args[0])),
+            L::Trunc => Some(self.b.ins().trunc(args[0])),
+            L::Fma => Some(self.b.ins().fma(args[0], args[1], args[2])),
+            L::Min | L::Max => Some(self.min_max(kind == L::Max, args[0], args[1], ct()?, signed)),
+            L::NextUp | L::NextDown => Some(self.next(kind == L::NextUp, args[0], ct()?)),
+            L::Cmp => {
+                let pred = o
+                    .str_attr("pred")
+                    .and_then(CmpPred::from_name)
+                    .ok_or("bad predicate")?;
+                let t = self.b.func.dfg.value_type(args[0]);
+                Some(if is_float(t) {
+                    let cc = match pred {
+                        CmpPred::Eq => FloatCC::Equal,
+                        CmpPred::Ne => FloatCC::NotEqual,
+                        CmpPred::Lt => FloatCC::LessThan,
+                        CmpPred::Le => FloatCC::LessThanOrEqual,
+                        CmpPred::Gt => FloatCC::GreaterThan,
+                        CmpPred::Ge => FloatCC::GreaterThanOrEqual,
+                    };
+                    self.b.ins().fcmp(cc, args[0], args[1])
+                } else {
+                    let cc = match (pred, signed) {
+                        (CmpPred::Eq, _) => IntCC::Equal,
+                        (CmpPred::Ne, _) => IntCC::NotEqual,
+                        (CmpPred::Lt, true) => IntCC::SignedLessThan,
+                        (CmpPred::Le, true) => IntCC::SignedLessThanOrEqual,
+                        (CmpPred::Gt, true) => IntCC::SignedGreaterThan,
+                        (CmpPred::Ge, true) => IntCC::SignedGreaterThanOrEqual,
+                        (CmpPred::Lt, false) => IntCC::UnsignedLessThan,
+                        (CmpPred::Le, false) => IntCC::UnsignedLessThanOrEqual,
+                        (CmpPred::Gt, false) => IntCC::UnsignedGreaterThan,
+                        (CmpPred::Ge, false) => IntCC::UnsignedGreaterThanOrEqual,
+                    };
+                    self.b.ins().icmp(cc, args[0], args[1])
+                })
+            }
+            L::Select => Some(self.b.ins().select(args[0], args[1], args[2])),
+            L::Cast => {
+                let from = m.values[o.operands[0]].ty;
+                Some(self.cast(args[0], from, rty.ok_or("cast without result")?)?)
+            }
+            L::Bitcast => {
+                let t = ct()?;
+                let from = self.b.func.dfg.value_type(args[0]);
+                Some(if from == t {
+                    args[0]
+                } else {
+                    self.b.ins().bitcast(t, MemFlags::new(), args[0])
+                })
+            }
+            L::Load => {
+                let off = o.int_attr("offset").unwrap_or(0) as i32;
+                Some(self.b.ins().load(ct()?, MemFlags::new(), args[0], off))
+            }
+            L::Store => {
+                let off = o.int_attr("offset").unwrap_or(0) as i32;
+                self.b.ins().store(MemFlags::new(), args[1], args[0], off);
+                None
+            }
+            L::PtrAdd => {
+                let t = self.b.func.dfg.value_type(args[1]);
+                let signed = o
+                    .operands
+                    .get(1)
+                    .and_then(|&x| self.int_ty(x))
+                    .is_some_and(|t| t.is_signed());
+                let d = if t == self.ptr {
+                    args[1]
+                } else if signed {
+                    self.b.ins().sextend(self.ptr, args[1])
+                } else {
+                    self.b.ins().uextend(self.ptr, args[1])
+                };
+                Some(self.b.ins().iadd(args[0], d))
+            }
+            L::StackSlot => {
+                let size = o.int_attr("size").unwrap_or(1) as u32;
+                let align = o.int_attr("align").unwrap_or(8).max(1) as u32;
+                let slot = self.b.create_sized_stack_slot(StackSlotData::new(
+                    StackSlotKind::ExplicitSlot,
+                    size,
+                    align.trailing_zeros() as u8,
+                ));
+                Some(self.b.ins().stack_addr(self.ptr, slot, 0))
+            }
+            L::Call => {
+                let callee = o
+                    .attr("callee")
+                    .and_then(|a| a.as_sym())
+                    .ok_or("call without callee")?;
+                let id = *syms
+                    .funcs
+                    .get(callee)
+                    .ok_or_else(|| format!("unknown callee @{callee}"))?;
+                let fref = cl.declare_func_in_func(id, self.b.func);
+                let call = self.b.ins().call(fref, &args);
+                let res = self.b.inst_results(call).to_vec();
+                for (&r, v) in o.results.iter().zip(res) {
+                    self.vals.insert(r, v);
+                }
+                None
+            }
+            L::Br | L::CondBr => {
+                let target = |i: usize| -> Result<(ir::Block, Vec<BlockArg>), String> {
+                    let s = &o.successors[i];
+                    let bl = *blocks.get(&s.block).ok_or("branch to a missing block")?;
+                    let a = s
+                        .args
+                        .iter()
+                        .map(|&x| self.v(x).map(BlockArg::Value))
+                        .collect::<Result<_, _>>()?;
+                    Ok((bl, a))
+                };
+                if kind == L::Br {
+                    let (bl, a) = target(0)?;
+                    self.b.ins().jump(bl, &a);
+                } else {
+                    let (t, ta) = target(0)?;
+                    let (e, ea) = target(1)?;
+                    self.b.ins().brif(args[0], t, &ta, e, &ea);
+                }
+                None
+            }
+            L::Return => {
+                self.b.ins().return_(&args);
+                None
+            }
+        };
+        if let (Some(v), Some(&r)) = (out, o.results.first()) {
+            self.vals.insert(r, v);
+        }
+        Ok(())
+    }
+
+    /// minNum/maxNum: the other operand when one is NaN (`q` when both are), `p` on ties.
+    fn min_max(
+        &mut self,
+        max: bool,
+        p: ir::Value,
+        q: ir::Value,
+        t: ir::Type,
+        signed: bool,
+    ) -> ir::Value {
+        if !(t == types::F32 || t == types::F64) {
+            return match (max, signed) {
+                (false, true) => self.b.ins().smin(p, q),
+                (false, false) => self.b.ins().umin(p, q),
+                (true, true) => self.b.ins().smax(p, q),
+                (true, false) => self.b.ins().umax(p, q),
+            };
+        }
+        let cc = if max {
+            FloatCC::GreaterThan
+        } else {
+            FloatCC::LessThan
+        };
+        let better = self.b.ins().fcmp(cc, q, p);
+        let r = self.b.ins().select(better, q, p);
+        let q_nan = self.b.ins().fcmp(FloatCC::Unordered, q, q);
+        let r = self.b.ins().select(q_nan, p, r);
+        let p_nan = self.b.ins().fcmp(FloatCC::Unordered, p, p);
+        self.b.ins().select(p_nan, q, r)
+    }
+
+    /// One ulp toward `+inf` (`up`) or `-inf`; NaN and the infinity in that direction stay.
+    fn next(&mut self, up: bool, x: ir::Value, t: ir::Type) -> ir::Value {
+        let (it, zero_step, inf) = if t == types::F32 {
+            let inf = if up { f32::INFINITY } else { f32::NEG_INFINITY };
+            let z: i64 = if up { 1 } else { 0x8000_0001 };
+            (types::I32, z, self.b.ins().f32const(inf))
+        } else {
+            let inf = if up { f64::INFINITY } else { f64::NEG_INFINITY };
+            let z: i64 = if up {
+                1
+            } else {
+                0x8000_0000_0000_0001u64 as i64
+            };
+            (types::I64, z, self.b.ins().f64const(inf))
+        };
+        let zero = if t == types::F32 {
+            self.b.ins().f32const(0.0)
+        } else {
+            self.b.ins().f64const(0.0)
+        };
+        let bits = self.b.ins().bitcast(it, MemFlags::new(), x);
+        let inc = self.b.ins().iadd_imm(bits, 1);
+        let dec = self.b.ins().iadd_imm(bits, -1);
+        let pos = self.b.ins().fcmp(FloatCC::GreaterThan, x, zero);
+        let stepped = if up {
+            self.b.ins().select(pos, inc, dec)
+        } else {
+            self.b.ins().select(pos, dec, inc)
+        };
+        let zs = self.b.ins().iconst(it, zero_step);
+        let is_zero = self.b.ins().fcmp(FloatCC::Equal, x, zero);
+        let stepped = self.b.ins().select(is_zero, zs, stepped);
+        let r = self.b.ins().bitcast(t, MemFlags::new(), stepped);
+        let nan = self.b.ins().fcmp(FloatCC::Unordered, x, x);
+        let at_inf = self.b.ins().fcmp(FloatCC::Equal, x, inf);
+        let keep = self.b.ins().bor(nan, at_inf);
+        self.b.ins().select(keep, x, r)
+    }
+
+    /// `lo.cast`: Rust `as` semantics between scalars.
+    fn cast(&mut self, x: ir::Value, from: TypeId, to: TypeId) -> Result<ir::Value, String> {
+        let m = self.m;
+        let (ft, tt) = (m.types.get(from).clone(), m.types.get(to).clone());
+        let ct = self.cty(to)?;
+        let cf = self.b.func.dfg.value_type(x);
+        let int_of = |t: &Type| match t {
+            Type::Int(i) => Some((i.bits(), i.is_signed())),
+            Type::Bool => Some((1, false)),
+            _ => None,
+        };
+        Ok(match (&ft, &tt) {
+            (_, Type::Bool) => match ft {
+                Type::Float(_) => {
+                    let z = if cf == types::F32 {
+                        self.b.ins().f32const(0.0)
+                    } else {
+                        self.b.ins().f64const(0.0)
+                    };
+                    self.b.ins().fcmp(FloatCC::NotEqual, x, z)
+                }
+                _ => self.b.ins().icmp_imm(IntCC::NotEqual, x, 0),
+            },
+            (Type::Int(_) | Type::Bool, Type::Int(_)) => {
+                let (fb, fs) = int_of(&ft).ok_or("bad cast")?;
+                if cf.bits() == ct.bits() {
+                    x
+                } else if cf.bits() > ct.bits() {
+                    self.b.ins().ireduce(ct, x)
+                } else if fs && fb > 1 {
+                    self.b.ins().sextend(ct, x)
+                } else {
+                    self.b.ins().uextend(ct, x)
+                }
+            }
+            (Type::Int(_) | Type::Bool, Type::Float(_)) => {
+                let (_, fs) = int_of(&ft).ok_or("bad cast")?;
+                let wide = if cf.bits() < 32 {
+                    if fs {
+                        self.b.ins().sextend(types::I32, x)
+                    } else {
+                        self.b.ins().uextend(types::I32, x)
+                    }
+                } else {
+                    x
+                };
+                if fs {
+                    self.b.ins().fcvt_from_sint(ct, wide)
+                } else {
+                    self.b.ins().fcvt_from_uint(ct, wide)
+                }
+            }
+            (Type::Float(_), Type::Int(it)) => {
+                let (bits, signed) = (it.bits(), it.is_signed());
+                if bits >= 32 {
+                    if signed {
+                        self.b.ins().fcvt_to_sint_sat(ct, x)
+                    } else {
+                        self.b.ins().fcvt_to_uint_sat(ct, x)
+                    }
+                } else {
+                    let (lo, hi) = it.range();
+                    let w = if signed {
+                        self.b.ins().fcvt_to_sint_sat(types::I32, x)
+                    } else {
+                        self.b.ins().fcvt_to_uint_sat(types::I32, x)
+                    };
+                    let hi_c = self.b.ins().iconst(types::I32, hi as i64);
+                    let c = if signed {
+                        let lo_c = self.b.ins().iconst(types::I32, lo as i64);
+                        let a = self.b.ins().smax(w, lo_c);
+                        self.b.ins().smin(a, hi_c)
+                    } else {
+                        self.b.ins().umin(w, hi_c)
+                    };
+                    self.b.ins().ireduce(ct, c)
+                }
+            }
+            (Type::Float(a), Type::Float(b)) if a == b => x,
+            (Type::Float(_), Type::Float(FloatTy::F64)) => self.b.ins().fpromote(ct, x),
+            (Type::Float(_), Type::Float(_)) => self.b.ins().fdemote(ct, x),
+            _ => return Err("unsupported cast".into()),
+        })
+    }
+}

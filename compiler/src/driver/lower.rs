@@ -1,0 +1,41 @@
+//! The back half of `scionc`: from the `tree` module the front end produced to `--emit=lo` or
+//! `--emit=clif` text (design note §5, paper §7.3).
+//!
+//! Runs `mem-to-lo` (partial: functions that still need a layout, such as traversals of a sum
+//! ADT before destructor specialization exists for the input, are left out) and then
+//! `recursion-to-stack` with `--stack-size`, and prints the `lo` module or its Cranelift IR.
+
+use super::cli::Emit;
+use crate::passes;
+use scion_ir::diag::InternalError;
+use scion_ir::pass::{PassCx, PassError, PassManager};
+use scion_ir::Module;
+
+/// The passes from `tree`/`mem` to `lo`, in order.
+pub const LOWER_PIPELINE: &[&str] = &["mem-to-lo", "recursion-to-stack"];
+
+/// Lowers `m` to `lo` in place (partial mode) with the given traversal stack size.
+pub fn lower_to_lo(m: &mut Module, stack_size: Option<u32>) -> Result<(), PassError> {
+    let registry = passes::registry();
+    let names: Vec<String> = LOWER_PIPELINE.iter().map(|s| s.to_string()).collect();
+    let mut pm =
+        PassManager::from_names(&registry, &names).map_err(|d| PassError::Diagnostics(d.into()))?;
+    let mut cx = PassCx::new();
+    cx.set_option("mem-to-lo", "partial", "true");
+    if let Some(n) = stack_size {
+        cx.set_option("recursion-to-stack", "stack-size", &n.to_string());
+    }
+    let mut dumps = String::new();
+    pm.run(m, &mut cx, &mut dumps)?;
+    Ok(())
+}
+
+/// The text `--emit=lo` or `--emit=clif` prints for the `tree` module `m`.
+pub fn emit_low(m: &mut Module, emit: Emit, stack_size: Option<u32>) -> Result<String, PassError> {
+    lower_to_lo(m, stack_size)?;
+    match emit {
+        Emit::Clif => scion_clif::print_clif(m)
+            .map_err(|e| PassError::Internal(InternalError::new(e.to_string()))),
+        _ => Ok(scion_ir::print::print_module(m)),
+    }
+}

@@ -1,0 +1,405 @@
+//! `recursion-to-stack`: a recursive traversal whose recursive calls are tail calls in sequence
+//! becomes a loop over a fixed-size explicit stack (design note §4, paper §7.3).
+//!
+//! It runs on the `lo` CFG, right after `mem-to-lo`: structured `mem` has no general loop, and
+//! in the CFG the rewrite is local. A function `@f` qualifies when it returns nothing and every
+//! block that calls `@f` ends with the calls (nothing between them but more calls to `@f`) and
+//! then only reaches `lo.return` through blocks without side effects; each call passes the
+//! function's own parameter wherever it does not change it (`mut` parameters are pointers
+//! passed through). The *changed* positions form a stack entry.
+//!
+//! The rewrite: a new entry block allocates the stack (`lo.stack_slot`, `stack-size` entries,
+//! default 64, each changed argument in an 8-byte cell) and the stack pointer (a 4-byte slot),
+//! then runs the old body on the original arguments. Where the body made recursive calls it now
+//! pushes their arguments in reverse order and jumps to the loop head; where it returned it jumps
+//! to the loop head. The loop head pops the next entry into the body, or returns when the stack
+//! is empty. So the visit order, and every result, is the recursion's.
+//!
+//! **Status results.** A rewritten function returns an `i32` status: 0 done, 1 the stack
+//! overflowed (a push to a full stack returns at once; `mut` results hold what was computed so
+//! far). A caller of a function with a status gets a status too, appended as its last result:
+//! after the call it returns the status (other results zero) when it is not 0. Such functions
+//! carry the attribute `status`. Recursion of any other shape is a user error (E0971) naming
+//! the call.
+
+use rustc_hash::{FxHashMap, FxHashSet};
+use scion_ir::attr::Attr;
+use scion_ir::diag::{Diagnostic, Diagnostics};
+use scion_ir::entity::{BlockId, FuncId, OpId, TypeId, ValueId};
+use scion_ir::lo::Op as L;
+use scion_ir::module::{ValueData, ValueDef};
+use scion_ir::op::OpKind;
+use scion_ir::tree::CmpPred;
+use scion_ir::types::{IntTy, Type};
+use scion_ir::{Builder, Module, Pass, PassCx, PassError};
+
+/// The default number of stack entries.
+pub const DEFAULT_STACK_SIZE: u32 = 64;
+
+/// The pass object.
+pub struct RecursionToStack;
+
+impl Pass for RecursionToStack {
+    fn name(&self) -> &'static str {
+        "recursion-to-stack"
+    }
+
+    fn summary(&self) -> &'static str {
+        "recursive traversals (tail calls in sequence) to a loop over a fixed stack"
+    }
+
+    fn run(&mut self, m: &mut Module, cx: &mut PassCx) -> Result<bool, PassError> {
+        let size = match cx.option("recursion-to-stack", "stack-size") {
+            None => DEFAULT_STACK_SIZE,
+            Some(s) => match s.parse::<u32>() {
+                Ok(n) if n > 0 => n,
+                _ => {
+                    let d = Diagnostic::error(
+                        "E0962",
+                        format!("recursion-to-stack:stack-size={s}: expected a positive integer"),
+                    );
+                    return Err(PassError::Diagnostics(d.into()));
+                }
+            },
+        };
+        run(m, size).map_err(|d| {
+            let mut ds = Diagnostics::new();
+            ds.push(d);
+            PassError::Diagnostics(ds)
+        })
+    }
+}
+
+fn callee_of(m: &Module, op: OpId) -> Option<&str> {
+    let o = &m.ops[op];
+    if o.kind != OpKind::Lo(L::Call) {
+        return None;
+    }
+    o.attr("callee").and_then(Attr::as_sym)
+}
+
+/// Rewrites every qualifying function of the `lo` module `m`; returns whether anything changed.
+pub fn run(m: &mut Module, stack_size: u32) -> Result<bool, Diagnostic> {
+    let mut with_status: Vec<FuncId> = Vec::new();
+    for f in m.func_order.clone() {
+        if m.is_declaration(f) {
+            continue;
+        }
+        let name = m.funcs[f].name.clone();
+        let calls: Vec<OpId> = body_ops(m, f)
+            .into_iter()
+            .filter(|&o| callee_of(m, o) == Some(name.as_str()))
+            .collect();
+        if calls.is_empty() {
+            continue;
+        }
+        rewrite(m, f, &calls, stack_size)?;
+        with_status.push(f);
+    }
+    let changed = !with_status.is_empty();
+    propagate_status(m, with_status);
+    Ok(changed)
+}
+
+fn body_ops(m: &Module, f: FuncId) -> Vec<OpId> {
+    m.regions[m.funcs[f].body]
+        .blocks
+        .iter()
+        .flat_map(|&b| m.blocks[b].ops.iter().copied())
+        .collect()
+}
+
+fn not_tail(m: &Module, op: OpId, why: &str) -> Diagnostic {
+    let name = callee_of(m, op).unwrap_or("?").to_string();
+    let mut d = Diagnostic::error(
+        "E0971",
+        format!("the recursive call of `@{name}` cannot become an explicit stack: {why}"),
+    );
+    if let Some(s) = m.span(op) {
+        d = d.with_primary(s, "this call");
+    }
+    d.with_note(
+        "a recursive traversal may end an arm with recursive calls in sequence, passing its \
+         other parameters through unchanged",
+    )
+}
+
+/// True when `b` reaches a result-less `lo.return` through blocks of pure ops only.
+fn exits_quietly(m: &Module, mut b: BlockId) -> bool {
+    for _ in 0..64 {
+        let ops = &m.blocks[b].ops;
+        let Some((&term, body)) = ops.split_last() else {
+            return false;
+        };
+        if !body.iter().all(|&o| m.ops[o].kind.is_pure()) {
+            return false;
+        }
+        let t = &m.ops[term];
+        match t.kind {
+            OpKind::Lo(L::Return) => return t.operands.is_empty(),
+            OpKind::Lo(L::Br) => b = t.successors[0].block,
+            _ => return false,
+        }
+    }
+    false
+}
+
+fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), Diagnostic> {
+    if !m.funcs[f].results.is_empty() {
+        return Err(not_tail(m, calls[0], "the function returns values"));
+    }
+    let region = m.funcs[f].body;
+    let entry = m.regions[region].blocks[0];
+    let params: Vec<ValueId> = m.blocks[entry].args.to_vec();
+    // Group the calls by block and check each block's shape.
+    let mut by_block: FxHashMap<BlockId, Vec<OpId>> = FxHashMap::default();
+    for &c in calls {
+        let b = m.ops[c]
+            .parent
+            .ok_or_else(|| not_tail(m, c, "detached call"))?;
+        by_block.entry(b).or_default().push(c);
+    }
+    let mut changed: FxHashSet<usize> = FxHashSet::default();
+    for (&b, cs) in &by_block {
+        let ops = &m.blocks[b].ops;
+        let n = cs.len();
+        if ops.len() < n + 1 {
+            return Err(not_tail(m, cs[0], "unexpected block shape"));
+        }
+        let tail = &ops[ops.len() - 1 - n..ops.len() - 1];
+        if tail.iter().any(|o| !cs.contains(o)) {
+            return Err(not_tail(m, cs[0], "other work follows the recursive call"));
+        }
+        let term = &m.ops[ops[ops.len() - 1]];
+        let quiet = match term.kind {
+            OpKind::Lo(L::Return) => term.operands.is_empty(),
+            OpKind::Lo(L::Br) => exits_quietly(m, term.successors[0].block),
+            _ => false,
+        };
+        if !quiet {
+            return Err(not_tail(m, cs[0], "the function does more after the call"));
+        }
+        for &c in cs {
+            for (i, &a) in m.ops[c].operands.iter().enumerate() {
+                if a != params[i] {
+                    changed.insert(i);
+                }
+            }
+        }
+    }
+    let mut changed: Vec<usize> = changed.into_iter().collect();
+    changed.sort_unstable();
+    let entry_bytes = 8 * changed.len().max(1) as u64;
+    let i32t = m.types.i32();
+    let u32t = m.types.u32();
+    let u64t = m.types.int(IntTy::U64);
+    let ptrt = m.ty(Type::Ptr);
+
+    // New entry: the stack, the stack pointer, then the old body on the original arguments.
+    let param_tys = m.funcs[f].params.clone();
+    let new_entry = m.add_block(region, &param_tys);
+    let blocks = &mut m.regions[region].blocks;
+    blocks.retain(|&x| x != new_entry);
+    blocks.insert(0, new_entry);
+    let new_params: Vec<ValueId> = m.blocks[new_entry].args.to_vec();
+    // The old entry keeps its arguments: it is now the loop body's head.
+    let head = m.add_block(region, &[]);
+    let done = m.add_block(region, &[]);
+    let pop = m.add_block(region, &[]);
+    let overflow = m.add_block(region, &[]);
+    let (stack, sp_slot);
+    {
+        let mut b = Builder::at_end(m, new_entry);
+        stack = b.lo_stack_slot(entry_bytes * u64::from(size), 8);
+        sp_slot = b.lo_stack_slot(4, 4);
+        let zero = b.lo_int(u32t, 0);
+        b.lo_store(sp_slot, 0, zero);
+        b.lo_br(entry, &new_params);
+    }
+    // The old entry's uses of unchanged parameters must see the new entry's values on every
+    // visit: they do, since `entry` is entered with them each time (below).
+    {
+        let mut b = Builder::at_end(m, head);
+        let sp = b.lo_load(sp_slot, 0, u32t);
+        let zero = b.lo_int(u32t, 0);
+        let empty = b.lo_cmp(CmpPred::Eq, sp, zero);
+        b.lo_cond_br(empty, (done, &[]), (pop, &[]));
+        b.set_insertion_point_to_end(done);
+        let ok = b.lo_int(i32t, 0);
+        b.lo_ret(&[ok]);
+        b.set_insertion_point_to_end(overflow);
+        let one = b.lo_int(i32t, 1);
+        b.lo_ret(&[one]);
+        b.set_insertion_point_to_end(pop);
+        let one = b.lo_int(u32t, 1);
+        let sp1 = b.lo1(L::Sub, &[sp, one], u32t);
+        b.lo_store(sp_slot, 0, sp1);
+        let sp64 = b.lo1(L::Cast, &[sp1], u64t);
+        let width = b.lo_int(u64t, entry_bytes as i128);
+        let off = b.lo1(L::Mul, &[sp64, width], u64t);
+        let at = b.lo1(L::PtrAdd, &[stack, off], ptrt);
+        let mut args = new_params.clone();
+        for (k, &i) in changed.iter().enumerate() {
+            args[i] = b.lo_load(at, 8 * k as i64, param_tys[i]);
+        }
+        b.lo_br(entry, &args);
+    }
+    // Returns of the body go to the loop head.
+    let body_blocks: Vec<BlockId> = m.regions[region]
+        .blocks
+        .iter()
+        .copied()
+        .filter(|&x| ![new_entry, head, done, pop, overflow].contains(&x))
+        .collect();
+    for &bb in &body_blocks {
+        let Some(&term) = m.blocks[bb].ops.last() else {
+            continue;
+        };
+        if m.ops[term].kind == OpKind::Lo(L::Return) && !by_block.contains_key(&bb) {
+            scion_ir::rewrite::erase_op(m, term);
+            Builder::at_end(m, bb).lo_br(head, &[]);
+        }
+    }
+    // Recursive calls become pushes, last call first.
+    for (bb, cs) in by_block {
+        let term = *m.blocks[bb].ops.last().expect("checked above");
+        let arg_lists: Vec<Vec<ValueId>> = cs.iter().map(|&c| m.ops[c].operands.to_vec()).collect();
+        for &c in &cs {
+            scion_ir::rewrite::erase_op(m, c);
+        }
+        scion_ir::rewrite::erase_op(m, term);
+        let mut cur = bb;
+        for args in arg_lists.iter().rev() {
+            let next = m.add_block(region, &[]);
+            let mut b = Builder::at_end(m, cur);
+            let sp = b.lo_load(sp_slot, 0, u32t);
+            let cap = b.lo_int(u32t, i128::from(size));
+            let full = b.lo_cmp(CmpPred::Ge, sp, cap);
+            b.lo_cond_br(full, (overflow, &[]), (next, &[]));
+            b.set_insertion_point_to_end(next);
+            let sp64 = b.lo1(L::Cast, &[sp], u64t);
+            let width = b.lo_int(u64t, entry_bytes as i128);
+            let off = b.lo1(L::Mul, &[sp64, width], u64t);
+            let at = b.lo1(L::PtrAdd, &[stack, off], ptrt);
+            for (k, &i) in changed.iter().enumerate() {
+                b.lo_store(at, 8 * k as i64, args[i]);
+            }
+            let one = b.lo_int(u32t, 1);
+            let sp1 = b.lo1(L::Add, &[sp, one], u32t);
+            b.lo_store(sp_slot, 0, sp1);
+            cur = next;
+        }
+        Builder::at_end(m, cur).lo_br(head, &[]);
+    }
+    m.funcs[f].results = vec![i32t];
+    m.funcs[f].attrs.set("status", Attr::Unit);
+    drop_unreachable(m, f);
+    Ok(())
+}
+
+/// Removes blocks no path from the entry reaches (the quiet exits after rewritten calls).
+fn drop_unreachable(m: &mut Module, f: FuncId) {
+    let region = m.funcs[f].body;
+    let blocks = m.regions[region].blocks.clone();
+    let mut seen: FxHashSet<BlockId> = FxHashSet::default();
+    let mut work = vec![blocks[0]];
+    while let Some(b) = work.pop() {
+        if !seen.insert(b) {
+            continue;
+        }
+        if let Some(&t) = m.blocks[b].ops.last() {
+            work.extend(m.ops[t].successors.iter().map(|s| s.block));
+        }
+    }
+    m.regions[region].blocks.retain(|b| seen.contains(b));
+    for b in blocks {
+        if !seen.contains(&b) {
+            m.blocks[b].parent = None;
+        }
+    }
+}
+
+/// Gives every caller of a function with a status a status of its own (appended as the last
+/// result), returning early when a callee reports one.
+fn propagate_status(m: &mut Module, mut work: Vec<FuncId>) {
+    let mut done: FxHashSet<FuncId> = work.iter().copied().collect();
+    let i32t = m.types.i32();
+    while let Some(callee) = work.pop() {
+        let name = m.funcs[callee].name.clone();
+        for g in m.func_order.clone() {
+            if m.is_declaration(g) {
+                continue;
+            }
+            let sites: Vec<OpId> = body_ops(m, g)
+                .into_iter()
+                .filter(|&o| callee_of(m, o) == Some(name.as_str()))
+                .collect();
+            if sites.is_empty() || g == callee {
+                continue;
+            }
+            let newly = done.insert(g);
+            if newly {
+                add_status_result(m, g, i32t);
+                work.push(g);
+            }
+            for site in sites {
+                let status = m.values.alloc(ValueData {
+                    ty: i32t,
+                    def: ValueDef::Result(site, m.ops[site].results.len() as u32),
+                });
+                m.ops[site].results.push(status);
+                split_after_status(m, g, site, status);
+            }
+        }
+    }
+}
+
+/// Appends an `i32` result to `g`, returning 0 at every existing return.
+fn add_status_result(m: &mut Module, g: FuncId, i32t: TypeId) {
+    m.funcs[g].results.push(i32t);
+    m.funcs[g].attrs.set("status", Attr::Unit);
+    for op in body_ops(m, g) {
+        if m.ops[op].kind == OpKind::Lo(L::Return) {
+            let mut b = Builder::new(m);
+            b.set_insertion_point(scion_ir::InsertPoint::Before(op));
+            let z = b.lo_int(i32t, 0);
+            m.ops[op].operands.push(z);
+        }
+    }
+}
+
+/// After the call `site` in `g`, returns `status` (other results zero) when it is not 0.
+fn split_after_status(m: &mut Module, g: FuncId, site: OpId, status: ValueId) {
+    let Some(b) = m.ops[site].parent else {
+        return;
+    };
+    let region = m.funcs[g].body;
+    let pos = m.blocks[b].ops.iter().position(|&o| o == site).unwrap_or(0);
+    let rest: Vec<OpId> = m.blocks[b].ops.split_off(pos + 1);
+    let cont = m.add_block(region, &[]);
+    for &o in &rest {
+        m.ops[o].parent = Some(cont);
+    }
+    m.blocks[cont].ops = rest;
+    let fail = m.add_block(region, &[]);
+    let results = m.funcs[g].results.clone();
+    let mut bl = Builder::at_end(m, b);
+    let zero = bl.lo_int(results[results.len() - 1], 0);
+    let bad = bl.lo_cmp(CmpPred::Ne, status, zero);
+    bl.lo_cond_br(bad, (fail, &[]), (cont, &[]));
+    bl.set_insertion_point_to_end(fail);
+    let mut vals = Vec::new();
+    for &t in &results[..results.len() - 1] {
+        vals.push(zero_of(&mut bl, t));
+    }
+    vals.push(status);
+    bl.lo_ret(&vals);
+}
+
+fn zero_of(b: &mut Builder<'_>, t: TypeId) -> ValueId {
+    match b.m.types.get(t).clone() {
+        Type::Bool => b.lo_bool(false),
+        Type::Float(_) => b.lo_float(t, 0.0),
+        _ => b.lo_int(t, 0),
+    }
+}
