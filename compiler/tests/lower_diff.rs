@@ -183,8 +183,24 @@ fn a_real_hit_is_found_by_every_engine() {
     let jit = JitModule::compile(&lo).expect("compiles");
     // Ray from (0.25, 0.25, -1) along +z through the triangle (0,0,0) (1,0,0) (0,1,0).
     let floats = [
-        0.25, 0.25, -1.0, 0.0, 0.0, 1.0, 0.0, f32::INFINITY, // ray
-        0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, // triangle (id from 0.0's bits)
+        0.25,
+        0.25,
+        -1.0,
+        0.0,
+        0.0,
+        1.0,
+        0.0,
+        f32::INFINITY, // ray
+        0.0,
+        0.0,
+        0.0,
+        1.0,
+        0.0,
+        0.0,
+        0.0,
+        1.0,
+        0.0,
+        0.0, // triangle (id from 0.0's bits)
     ];
     let f = tree.func_by_name("t_hit").unwrap();
     let mut src = floats.iter().copied();
