@@ -37,6 +37,9 @@ struct Args {
     /// List the passes and stop.
     #[arg(long)]
     help_passes: bool,
+    /// What to print: the IR (`ir`, default) or, for a `lo` module, its Cranelift IR (`clif`).
+    #[arg(long, value_name = "ir|clif", default_value = "ir")]
+    emit: String,
     /// A pass option `pass:key=value` (repeatable), e.g. `recursion-to-stack:stack-size=8`.
     #[arg(long = "pass-option", value_name = "PASS:KEY=VALUE")]
     pass_options: Vec<String>,
@@ -49,6 +52,13 @@ fn main() {
 
 fn run(args: &Args) -> i32 {
     let registry = passes::registry();
+    if args.emit != "ir" && args.emit != "clif" {
+        eprintln!(
+            "error[E0907]: --emit={}: expected `ir` or `clif`",
+            args.emit
+        );
+        return 1;
+    }
     if args.help_passes {
         println!("{}", registry.help().trim_end());
         return 0;
@@ -103,6 +113,15 @@ fn run(args: &Args) -> i32 {
         eprint!("{dumps}");
         eprint!("{}", cx.diagnostics.render(&sources));
         match result {
+            Ok(_) if args.emit == "clif" => match scion_clif::print_clif(&module) {
+                Ok(text) => {
+                    let _ = write!(out, "{text}");
+                }
+                Err(e) => {
+                    eprintln!("error[E0907]: {e}");
+                    status = 1;
+                }
+            },
             Ok(_) => {
                 let _ = write!(out, "{}", scion_ir::print::print_module(&module));
             }
