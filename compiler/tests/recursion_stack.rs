@@ -1,5 +1,6 @@
 //! `recursion-to-stack` keeps the recursion's visit order and reports overflow: a traversal of
-//! an implicit binary tree (lit-tests/recursion-to-stack/implicit-bvh.tree) run recursively and
+//! an implicit binary tree (lit-tests/recursion-to-stack/implicit-bvh.tree, tree IR with lo
+//! memory ops, and mem-bvh.mem, the same at the mem level with a buffer table) run recursively and
 //! as a stack loop, in the `lo` interpreter and JIT-compiled, must write the same visit log;
 //! with a stack too small for the tree, it must return status 1 in both engines, after the
 //! same prefix of visits.
@@ -13,10 +14,21 @@ use scion_ir::pass::{PassCx, PassManager};
 use scion_ir::types::IntTy;
 use scion_ir::Module;
 
-const SRC: &str = include_str!("../../lit-tests/recursion-to-stack/implicit-bvh.tree");
+const LO_SRC: &str = include_str!("../../lit-tests/recursion-to-stack/implicit-bvh.tree");
+const MEM_SRC: &str = include_str!("../../lit-tests/recursion-to-stack/mem-bvh.mem");
+
+thread_local! {
+    /// Which input the helpers use: false the lo-memory one, true the mem one.
+    static MEM: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+fn is_mem() -> bool {
+    MEM.with(|c| c.get())
+}
 
 fn lowered(pipeline: &str, stack_size: Option<u32>) -> Module {
-    let mut m = scion_ir::parse_module(SRC, FileId(0)).expect("parses");
+    let src = if is_mem() { MEM_SRC } else { LO_SRC };
+    let mut m = scion_ir::parse_module(src, FileId(0)).expect("parses");
     let reg = passes::registry();
     let mut pm = PassManager::parse(&reg, pipeline).expect("pipeline");
     pm.options.verify_each = true;
@@ -53,7 +65,10 @@ fn ptr(a: u64) -> Val {
 /// Runs `@run` in the lo interpreter: (results, visit log).
 fn interp(m: &Module, tree: &[u8], n: u32, q: f32) -> (Vec<Val>, Vec<u32>) {
     let mut it = LoInterp::new(m);
-    let np = it.alloc(tree, 8);
+    let mut np = it.alloc(tree, 8);
+    if is_mem() {
+        np = it.alloc(&np.to_le_bytes(), 8);
+    }
     let lp = it.alloc(&vec![0u8; 4 + 4 * n as usize], 4);
     let out = it
         .call(
@@ -74,12 +89,18 @@ fn interp(m: &Module, tree: &[u8], n: u32, q: f32) -> (Vec<Val>, Vec<u32>) {
 fn jit(m: &Module, tree: &[u8], n: u32, q: f32) -> (Vec<Val>, Vec<u32>) {
     let j = JitModule::compile(m).expect("compiles");
     let tree = tree.to_vec();
+    let table = [tree.as_ptr() as u64];
+    let base = if is_mem() {
+        table.as_ptr() as u64
+    } else {
+        tree.as_ptr() as u64
+    };
     let mut log = vec![0u8; 4 + 4 * n as usize];
     let out = j
         .call(
             "run",
             &[
-                ptr(tree.as_ptr() as u64),
+                ptr(base),
                 Val::Int(i128::from(n), IntTy::U32),
                 Val::F32(q),
                 ptr(log.as_mut_ptr() as u64),
@@ -104,6 +125,22 @@ fn status(out: &[Val]) -> i128 {
 
 #[test]
 fn the_stack_loop_visits_in_recursion_order() {
+    visits_in_order();
+}
+
+#[test]
+fn the_mem_level_traversal_visits_in_recursion_order() {
+    MEM.with(|c| c.set(true));
+    visits_in_order();
+}
+
+#[test]
+fn the_mem_level_traversal_overflows_like_the_lo_one() {
+    MEM.with(|c| c.set(true));
+    overflow();
+}
+
+fn visits_in_order() {
     let rec = lowered("mem-to-lo", None);
     let looped = lowered("mem-to-lo,recursion-to-stack", None);
     let mut longest = 0;
@@ -114,7 +151,7 @@ fn the_stack_loop_visits_in_recursion_order() {
             let (l_out, l_log) = interp(&looped, &tree, n, q);
             longest = longest.max(r_log.len());
             assert_eq!(r_log, l_log, "seed {seed}, q {q}");
-            assert_eq!(r_out.len(), 1);
+            assert_eq!(r_out.len(), usize::from(!is_mem()));
             assert_eq!(status(&l_out), 0);
             let (j_out, j_log) = jit(&looped, &tree, n, q);
             assert_eq!(j_log, l_log, "JIT, seed {seed}, q {q}");
@@ -131,6 +168,10 @@ fn the_stack_loop_visits_in_recursion_order() {
 
 #[test]
 fn a_full_stack_returns_status_1_after_the_same_visits() {
+    overflow();
+}
+
+fn overflow() {
     // Every interval contains q, so the whole tree is visited and the stack must hold one
     // pending right child per level plus the two children just pushed: depth 6 needs 6
     // entries, 3 overflow.

@@ -107,6 +107,7 @@ pub mod diag;
 pub mod entity;
 pub mod interp;
 pub mod lo;
+pub mod mem;
 pub mod module;
 pub mod op;
 pub mod parse;

@@ -12,7 +12,7 @@
 
 use crate::attr::{Attr, Attrs};
 use crate::entity::{BlockId, RegionId, ValueId};
-use crate::tree;
+use crate::{mem, tree};
 use smallvec::SmallVec;
 
 /// The dialects, for checks such as "no `tree` op survives this pass".
@@ -22,6 +22,8 @@ pub enum Dialect {
     Tree,
     /// The scalar SSA control-flow graph level.
     Lo,
+    /// Reads and writes of a physical layout's buffers (added to `tree`).
+    Mem,
 }
 
 impl Dialect {
@@ -30,6 +32,7 @@ impl Dialect {
         match self {
             Dialect::Tree => "tree",
             Dialect::Lo => "lo",
+            Dialect::Mem => "mem",
         }
     }
 }
@@ -41,6 +44,14 @@ pub enum OpKind {
     Tree(tree::Op),
     /// An op of the `lo` dialect.
     Lo(crate::lo::Op),
+    /// An op of the `mem` dialect.
+    Mem(mem::Op),
+}
+
+impl From<mem::Op> for OpKind {
+    fn from(op: mem::Op) -> OpKind {
+        OpKind::Mem(op)
+    }
 }
 
 impl From<tree::Op> for OpKind {
@@ -55,6 +66,7 @@ impl OpKind {
         match self {
             OpKind::Tree(_) => Dialect::Tree,
             OpKind::Lo(_) => Dialect::Lo,
+            OpKind::Mem(_) => Dialect::Mem,
         }
     }
 
@@ -63,6 +75,7 @@ impl OpKind {
         match self {
             OpKind::Tree(op) => op.mnemonic(),
             OpKind::Lo(op) => op.mnemonic(),
+            OpKind::Mem(op) => op.mnemonic(),
         }
     }
 
@@ -77,6 +90,7 @@ impl OpKind {
         match dialect {
             "tree" => tree::Op::from_mnemonic(mnemonic).map(OpKind::Tree),
             "lo" => crate::lo::Op::from_mnemonic(mnemonic).map(OpKind::Lo),
+            "mem" => mem::Op::from_mnemonic(mnemonic).map(OpKind::Mem),
             _ => None,
         }
     }
@@ -86,6 +100,7 @@ impl OpKind {
         match self {
             OpKind::Tree(op) => op.is_terminator(),
             OpKind::Lo(op) => op.is_terminator(),
+            OpKind::Mem(_) => false,
         }
     }
 
@@ -94,6 +109,7 @@ impl OpKind {
         match self {
             OpKind::Tree(op) => op.is_pure(),
             OpKind::Lo(op) => op.is_pure(),
+            OpKind::Mem(op) => op.is_pure(),
         }
     }
 
@@ -101,9 +117,14 @@ impl OpKind {
     /// only through the block's terminator. Every `tree` region is; `lo` regions will be CFGs.
     pub fn has_structured_regions(self) -> bool {
         match self {
-            OpKind::Tree(_) => true,
+            OpKind::Tree(_) | OpKind::Mem(_) => true,
             OpKind::Lo(_) => false,
         }
+    }
+
+    /// True when this is the kind `mem::Op::X` given.
+    pub fn is_mem(self, op: mem::Op) -> bool {
+        self == OpKind::Mem(op)
     }
 
     /// True when this is the kind `tree::Op::X` given.
@@ -160,7 +181,7 @@ impl Operation {
     pub fn tree_op(&self) -> Option<tree::Op> {
         match self.kind {
             OpKind::Tree(op) => Some(op),
-            OpKind::Lo(_) => None,
+            OpKind::Lo(_) | OpKind::Mem(_) => None,
         }
     }
 
@@ -168,7 +189,7 @@ impl Operation {
     pub fn lo_op(&self) -> Option<crate::lo::Op> {
         match self.kind {
             OpKind::Lo(op) => Some(op),
-            OpKind::Tree(_) => None,
+            OpKind::Tree(_) | OpKind::Mem(_) => None,
         }
     }
 }

@@ -149,6 +149,8 @@ pub enum Level {
     Tree,
     /// Only `lo` ops.
     Lo,
+    /// `tree` and `mem` ops (after specialization to a layout).
+    Mem,
 }
 
 impl Level {
@@ -158,6 +160,7 @@ impl Level {
             Level::Any => true,
             Level::Tree => d == Dialect::Tree,
             Level::Lo => d == Dialect::Lo,
+            Level::Mem => matches!(d, Dialect::Tree | Dialect::Mem),
         }
     }
 }

@@ -24,6 +24,7 @@
 
 mod flat;
 mod intrinsics;
+mod mem_ops;
 
 pub use flat::{layout, leaves};
 
@@ -269,14 +270,15 @@ impl FnLower<'_> {
     fn lower_op(&mut self, op: OpId, cur: BlockId) -> R<Step> {
         let src = self.src;
         let o = &src.ops[op];
-        let kind = match o.kind {
-            OpKind::Tree(k) => k,
-            OpKind::Lo(k) => return self.copy_lo(op, k, cur),
-        };
         let mut ins: Vec<Vec<ValueId>> = Vec::with_capacity(o.operands.len());
         for &v in &o.operands {
             ins.push(self.get(v)?);
         }
+        let kind = match o.kind {
+            OpKind::Tree(k) => k,
+            OpKind::Lo(k) => return self.copy_lo(op, k, cur),
+            OpKind::Mem(k) => return self.lower_mem(op, k, &ins, cur),
+        };
         let res_ty = o.results.first().map(|&r| src.values[r].ty);
         let out: Vec<ValueId> = match kind {
             T::Const => {
@@ -383,7 +385,10 @@ impl FnLower<'_> {
                 out.splice(start..start + len, ins[1].iter().copied());
                 out
             }
-            T::Index => self.index(cur, o.operands[0], &ins[0], o.operands[1], ins[1][0])?,
+            T::Index => match src.types.get(src.values[o.operands[0]].ty) {
+                Type::View(elem) => self.index_view(cur, &ins[0], ins[1][0], *elem)?,
+                _ => self.index(cur, o.operands[0], &ins[0], o.operands[1], ins[1][0])?,
+            },
             T::Bits => self.bits(cur, op, &ins)?,
             T::Is | T::Slice => {
                 return self.err(format!("`tree.{}` needs a layout", kind.mnemonic()))
@@ -403,6 +408,20 @@ impl FnLower<'_> {
                 );
                 let flat = self.dst.ops[c].results.to_vec();
                 return self.bind_results(op, flat, cur);
+            }
+            T::Intrinsic
+                if o.str_attr("name") == Some("len")
+                    && o.operands.first().is_some_and(|&v| {
+                        matches!(src.types.get(src.values[v].ty), Type::View(_))
+                    }) =>
+            {
+                let ty = self.lo_ty(res_ty.unwrap_or_default_ty(self)?)?[0];
+                let n = ins[0][1];
+                vec![if self.ty_of(n) == ty {
+                    n
+                } else {
+                    self.e1(cur, L::Cast, &[n], ty)
+                }]
             }
             T::Intrinsic => {
                 let name = o.str_attr("name").unwrap_or("").to_string();
@@ -680,6 +699,7 @@ impl FnLower<'_> {
         let o = &src.ops[op];
         let n = match src.types.get(src.values[o.operands[0]].ty) {
             Type::Array { len: Some(n), .. } => *n as usize,
+            Type::View(elem) => return self.foreach_view(op, elems, *elem, cur),
             _ => return self.err("`tree.foreach` over a slice or set needs a layout or a view"),
         };
         let tb = src.regions[o.regions[0]].blocks[0];

@@ -44,6 +44,10 @@ fn push_leaves(m: &Module, ty: TypeId, out: &mut Vec<Type>) -> Result<(), String
             }
         }
         Type::Ref(_) => out.push(Type::Ptr),
+        Type::View(_) => {
+            let u64t = Type::Int(scion_ir::types::IntTy::U64);
+            out.extend([Type::Ptr, u64t.clone(), u64t]);
+        }
         Type::Adt(name) => {
             let def = m
                 .adt(name)
@@ -99,6 +103,13 @@ fn place(m: &Module, ty: TypeId, base: u64, offs: &mut Vec<u64>) -> Result<(u64,
             Some(def) if def.is_record() => def.shared.iter().map(|f| f.ty).collect(),
             _ => return Err(format!("`{name}` has no plain-data layout")),
         },
+        Type::View(_) => {
+            // Three 8-byte leaves: first element, length, stride.
+            for k in 0..3 {
+                offs.push(base + 8 * k);
+            }
+            return Ok((24, 8));
+        }
         _ => {
             return Err(format!(
                 "values of type {} have no memory layout",
