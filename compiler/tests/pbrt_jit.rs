@@ -270,3 +270,14 @@ fn closest_hit_over_linear_bvh_matches_the_tree_interpreter() {
     }
     assert!(hits > 40, "the scenes should be hit often ({hits})");
 }
+
+#[test]
+fn lowered_modules_print_and_parse_back_identically() {
+    let lo = lo_module();
+    let text = scion_ir::print_module(&lo);
+    let back = scion_ir::parse_module(&text, FileId(0)).expect("lo text parses");
+    scion_ir::verify(&back).expect("and verifies");
+    assert_eq!(scion_ir::print_module(&back), text);
+    let clif = scion_clif::print_clif(&lo).expect("clif");
+    assert!(clif.contains("function %closest_hit("));
+}
