@@ -58,6 +58,13 @@ struct Scene {
     adt: Val,
     nodes: Vec<u8>,
     prims: Vec<u8>,
+    /// The runtime's logical tree nodes (design note §3: kind, bounds, child[2], prim_offset,
+    /// prim_count; 44 bytes), in the same pre-order; primitives are `prims`.
+    logical: Vec<u8>,
+}
+
+fn put(buf: &mut [u8], at: usize, bytes: &[u8]) {
+    buf[at..at + bytes.len()].copy_from_slice(bytes);
 }
 
 fn v3(v: V3) -> Val {
@@ -92,8 +99,10 @@ fn build(tris: &mut [Tri], depth: usize, s: &mut Scene) -> Val {
     let bounds_val = rec("AABB", None, vec![v3(lo), v3(hi)]);
     let me = s.nodes.len() / 32;
     s.nodes.extend_from_slice(&[0u8; 32]);
+    s.logical.extend_from_slice(&[0u8; 44]);
     for (k, x) in lo.iter().chain(hi.iter()).enumerate() {
         s.nodes[me * 32 + 4 * k..me * 32 + 4 * k + 4].copy_from_slice(&x.to_le_bytes());
+        put(&mut s.logical, me * 44 + 4 + 4 * k, &x.to_le_bytes());
     }
     if tris.len() <= 3 {
         let p_o = (s.prims.len() / 40) as u32;
@@ -116,6 +125,13 @@ fn build(tris: &mut [Tri], depth: usize, s: &mut Scene) -> Val {
         }
         s.nodes[me * 32 + 24..me * 32 + 28].copy_from_slice(&p_o.to_le_bytes());
         s.nodes[me * 32 + 28..me * 32 + 30].copy_from_slice(&(tris.len() as u16).to_le_bytes());
+        put(&mut s.logical, me * 44, &1u32.to_le_bytes());
+        put(&mut s.logical, me * 44 + 36, &p_o.to_le_bytes());
+        put(
+            &mut s.logical,
+            me * 44 + 40,
+            &(tris.len() as u32).to_le_bytes(),
+        );
         return rec(
             "BVH",
             Some(1),
@@ -137,6 +153,12 @@ fn build(tris: &mut [Tri], depth: usize, s: &mut Scene) -> Val {
     let right = build(r, depth + 1, s);
     let c_o = (right_index - me) as u32;
     s.nodes[me * 32 + 24..me * 32 + 28].copy_from_slice(&c_o.to_le_bytes());
+    put(&mut s.logical, me * 44 + 28, &(me as u32 + 1).to_le_bytes());
+    put(
+        &mut s.logical,
+        me * 44 + 32,
+        &(right_index as u32).to_le_bytes(),
+    );
     rec("BVH", Some(0), vec![bounds_val, left, right])
 }
 
@@ -171,6 +193,7 @@ fn scene(seed: u64, n: usize) -> Scene {
         adt: Val::Bool(false),
         nodes: Vec::new(),
         prims: Vec::new(),
+        logical: Vec::new(),
     };
     s.adt = build(&mut tris, 0, &mut s);
     s
@@ -280,4 +303,54 @@ fn lowered_modules_print_and_parse_back_identically() {
     assert_eq!(scion_ir::print_module(&back), text);
     let clif = scion_clif::print_clif(&lo).expect("clif");
     assert!(clif.contains("function %closest_hit("));
+}
+
+/// The JIT-compiled constructor (`@LinearBVH.sizes`, `@LinearBVH.build`) packs the runtime's
+/// logical tree into exactly the bytes of the hand-packed LinearBVH, and closest-hit over its
+/// output finds the tree interpreter's hits.
+#[test]
+fn the_jit_compiled_constructor_packs_linear_bvh() {
+    let lo = lo_module();
+    let jit = JitModule::compile(&lo).expect("compiles");
+    for seed in 1..4u64 {
+        let s = scene(seed, 60);
+        let n_nodes = (s.nodes.len() / 32) as u32;
+        let n_prims = (s.prims.len() / 40) as u32;
+        // LogicalTree: nodes ptr @0, node count @8, root @12, primitives ptr @16, count @24.
+        let mut tree = [0u64; 4];
+        tree[0] = s.logical.as_ptr() as u64;
+        tree[1] = u64::from(n_nodes);
+        tree[2] = s.prims.as_ptr() as u64;
+        tree[3] = u64::from(n_prims);
+        let tp = u64v(tree.as_ptr() as u64);
+        let mut sizes = [0u64; 3];
+        jit.call(
+            "LinearBVH.sizes",
+            &[tp.clone(), u64v(sizes.as_mut_ptr() as u64)],
+        )
+        .expect("sizes");
+        assert_eq!(sizes[1], u64::from(n_prims) * 40);
+        assert_eq!(sizes[2], u64::from(n_nodes) * 32);
+        let mut bufs: Vec<Vec<u64>> = sizes
+            .iter()
+            .map(|&b| vec![0u64; (b as usize).div_ceil(8).max(1)])
+            .collect();
+        let table: Vec<u64> = bufs.iter_mut().map(|b| b.as_mut_ptr() as u64).collect();
+        let st = jit
+            .call("LinearBVH.build", &[tp, u64v(table.as_ptr() as u64)])
+            .expect("build");
+        assert!(matches!(st[0], Val::Int(0, IntTy::I32)), "{st:?}");
+        let bytes = |b: &Vec<u64>, n: u64| -> Vec<u8> {
+            b.iter()
+                .flat_map(|w| w.to_le_bytes())
+                .take(n as usize)
+                .collect()
+        };
+        assert_eq!(bytes(&bufs[2], sizes[2]), s.nodes, "nodes, seed {seed}");
+        assert_eq!(
+            bytes(&bufs[1], sizes[1]),
+            s.prims,
+            "primitives, seed {seed}"
+        );
+    }
 }
