@@ -17,6 +17,7 @@ use scion_ir::Module;
 use std::rc::Rc;
 
 const MEM: &str = include_str!("data/pbrt-closest-hit.mem");
+const PTR_MEM: &str = include_str!("data/ptr-closest-hit.mem");
 
 type V3 = [f32; 3];
 type Tri = (V3, V3, V3, u32);
@@ -43,7 +44,11 @@ fn tree_module() -> Module {
 }
 
 fn lo_module() -> Module {
-    let mut m = scion_ir::parse_module(MEM, FileId(0)).expect("mem text parses");
+    lower_text(MEM)
+}
+
+fn lower_text(text: &str) -> Module {
+    let mut m = scion_ir::parse_module(text, FileId(0)).expect("mem text parses");
     let reg = passes::registry();
     let mut pm = PassManager::parse(&reg, "mem-to-lo,recursion-to-stack").unwrap();
     pm.options.verify_each = true;
@@ -352,5 +357,102 @@ fn the_jit_compiled_constructor_packs_linear_bvh() {
             s.prims,
             "primitives, seed {seed}"
         );
+    }
+}
+
+/// PtrBVH end to end: the JIT-compiled constructor packs the logical tree (absolute child
+/// pointers into its own nodes buffer), and closest-hit from the root pointer (the first node,
+/// pre-order) finds the tree interpreter's hits, also when both run in the lo interpreter.
+#[test]
+fn ptr_layout_built_and_traversed_by_the_jit_matches_the_tree_interpreter() {
+    let tree_m = tree_module();
+    let lo = lower_text(PTR_MEM);
+    let jit = JitModule::compile(&lo).expect("compiles");
+    for seed in 1..4u64 {
+        let s = scene(seed, 80);
+        let n_nodes = (s.nodes.len() / 32) as u32;
+        let n_prims = (s.prims.len() / 40) as u32;
+        let mut tree = [0u64; 4];
+        tree[0] = s.logical.as_ptr() as u64;
+        tree[1] = u64::from(n_nodes);
+        tree[2] = s.prims.as_ptr() as u64;
+        tree[3] = u64::from(n_prims);
+        let tp = u64v(tree.as_ptr() as u64);
+        let mut sizes = [0u64; 3];
+        jit.call(
+            "PtrBVH.sizes",
+            &[tp.clone(), u64v(sizes.as_mut_ptr() as u64)],
+        )
+        .expect("sizes");
+        assert_eq!(sizes[2], u64::from(n_nodes) * 48);
+        let mut bufs: Vec<Vec<u64>> = sizes
+            .iter()
+            .map(|&b| vec![0u64; (b as usize).div_ceil(8).max(1)])
+            .collect();
+        let table: Vec<u64> = bufs.iter_mut().map(|b| b.as_mut_ptr() as u64).collect();
+        let st = jit
+            .call("PtrBVH.build", &[tp, u64v(table.as_ptr() as u64)])
+            .expect("build");
+        assert!(matches!(st[0], Val::Int(0, IntTy::I32)), "{st:?}");
+        // The same build in the lo interpreter's memory.
+        let mut li = LoInterp::new(&lo);
+        let ln = li.alloc(&s.logical, 8);
+        let lp = li.alloc(&s.prims, 8);
+        let ltree: Vec<u8> = [ln, u64::from(n_nodes), lp, u64::from(n_prims)]
+            .iter()
+            .flat_map(|w| w.to_le_bytes())
+            .collect();
+        let ltp = li.alloc(&ltree, 8);
+        let lb: Vec<u64> = sizes
+            .iter()
+            .map(|&b| li.alloc(&vec![0u8; b as usize], 8))
+            .collect();
+        let ltable: Vec<u8> = lb.iter().flat_map(|w| w.to_le_bytes()).collect();
+        let ltab = li.alloc(&ltable, 8);
+        let st = li
+            .call("PtrBVH.build", vec![u64v(ltp), u64v(ltab)])
+            .expect("lo build");
+        assert!(matches!(st[0], Val::Int(0, IntTy::I32)));
+        let mut rng = Rng(seed * 91);
+        for k in 0..30 {
+            let o = [rng.f() * 6.0 - 1.0, rng.f() * 6.0 - 1.0, -2.0];
+            let t = [rng.f() * 4.0, rng.f() * 4.0, rng.f() * 4.0];
+            let d = [t[0] - o[0], t[1] - o[1], t[2] - o[2]];
+            let mut it = Interp::new(&tree_m);
+            let ray = rec(
+                "Ray",
+                None,
+                vec![v3(o), v3(d), Val::F32(0.0), Val::F32(f32::INFINITY)],
+            );
+            let cell = it.alloc(Val::Tuple(vec![
+                Val::F32(f32::INFINITY),
+                Val::Int(0xFFFF_FFFF, IntTy::U32),
+            ]));
+            it.call("closest_hit", vec![ray, s.adt.clone(), cell.clone()])
+                .expect("tree run");
+            let want = best_bits(it.read(&cell).unwrap());
+            let mut best = [f32::INFINITY.to_bits(), 0xFFFF_FFFF];
+            let mut args = vec![u64v(table.as_ptr() as u64)];
+            args.extend(ray_leaves(o, d));
+            args.push(u64v(table[2]));
+            args.push(u64v(best.as_mut_ptr() as u64));
+            let st = jit.call("closest_hit", &args).expect("jit run");
+            assert!(matches!(st[0], Val::Int(0, IntTy::I32)));
+            assert_eq!((best[0], best[1]), want, "JIT, seed {seed} ray {k}");
+            let mut init = f32::INFINITY.to_le_bytes().to_vec();
+            init.extend_from_slice(&0xFFFF_FFFFu32.to_le_bytes());
+            let bp = li.alloc(&init, 8);
+            args[0] = u64v(ltab);
+            let n = args.len();
+            args[n - 2] = u64v(lb[2]);
+            args[n - 1] = u64v(bp);
+            li.call("closest_hit", args).expect("lo run");
+            let got = li.bytes(bp, 8).unwrap();
+            let lo_best = (
+                u32::from_le_bytes(got[0..4].try_into().unwrap()),
+                u32::from_le_bytes(got[4..8].try_into().unwrap()),
+            );
+            assert_eq!(lo_best, want, "lo interpreter, seed {seed} ray {k}");
+        }
     }
 }
