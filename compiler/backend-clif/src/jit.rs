@@ -46,12 +46,31 @@ pub struct JitModule {
 }
 
 impl JitModule {
-    /// Compiles every function of the verified `lo` module `m`.
+    /// Compiles every function of the verified `lo` module `m`. Declarations it calls must be
+    /// given to [`JitModule::compile_with`].
     pub fn compile(m: &Module) -> Result<JitModule, ClifError> {
-        let builder = JITBuilder::with_isa(
+        JitModule::compile_with(m, &[])
+    }
+
+    /// Compiles `m`, binding each called declaration to a host function: `(name, address)`,
+    /// the address of an `extern "C"` function whose signature matches the declaration.
+    pub fn compile_with(m: &Module, symbols: &[(&str, *const u8)]) -> Result<JitModule, ClifError> {
+        for &f in &m.func_order {
+            let name = &m.funcs[f].name;
+            if m.is_declaration(f) && is_called(m, name) && !symbols.iter().any(|(s, _)| s == name)
+            {
+                return Err(ClifError(format!(
+                    "`@{name}` is declared and called but no host function was given for it"
+                )));
+            }
+        }
+        let mut builder = JITBuilder::with_isa(
             crate::host_isa()?,
             cranelift_module::default_libcall_names(),
         );
+        for &(name, addr) in symbols {
+            builder.symbol(name, addr);
+        }
         let mut cl = JITModule::new(builder);
         let syms = translate::declare_all(&mut cl, m).map_err(ClifError)?;
         let mut fctx = FunctionBuilderContext::new();
@@ -134,6 +153,15 @@ impl JitModule {
             .map(|(t, raw)| from_slot(raw, t))
             .collect())
     }
+}
+
+/// True when some `lo.call` of `m` names `callee`.
+fn is_called(m: &Module, callee: &str) -> bool {
+    m.ops.iter().any(|(_, o)| {
+        o.parent.is_some()
+            && o.kind == scion_ir::OpKind::Lo(scion_ir::lo::Op::Call)
+            && o.attr("callee").and_then(|a| a.as_sym()) == Some(callee)
+    })
 }
 
 fn to_slot(v: &Val, t: &Type) -> Option<u64> {

@@ -290,10 +290,7 @@ impl Fx<'_, '_> {
             L::Add => Some(self.b.ins().iadd(args[0], args[1])),
             L::Sub => Some(self.b.ins().isub(args[0], args[1])),
             L::Mul => Some(self.b.ins().imul(args[0], args[1])),
-            L::Div if signed => Some(self.b.ins().sdiv(args[0], args[1])),
-            L::Div => Some(self.b.ins().udiv(args[0], args[1])),
-            L::Rem if signed => Some(self.b.ins().srem(args[0], args[1])),
-            L::Rem => Some(self.b.ins().urem(args[0], args[1])),
+            L::Div | L::Rem => Some(self.int_div(kind == L::Div, signed, args[0], args[1])),
             L::And => Some(self.b.ins().band(args[0], args[1])),
             L::Or => Some(self.b.ins().bor(args[0], args[1])),
             L::Xor => Some(self.b.ins().bxor(args[0], args[1])),
@@ -442,6 +439,40 @@ impl Fx<'_, '_> {
             self.vals.insert(r, v);
         }
         Ok(())
+    }
+
+    /// Integer division without traps: `MIN / -1` wraps to `MIN` (and `MIN % -1` is 0) as in
+    /// `tree`; division by zero, undefined in the IR, divides by 1 instead of trapping.
+    fn int_div(&mut self, div: bool, signed: bool, x: ir::Value, y: ir::Value) -> ir::Value {
+        let t = self.b.func.dfg.value_type(y);
+        let one = self.b.ins().iconst(t, 1);
+        let zero = self.b.ins().iconst(t, 0);
+        let is_zero = self.b.ins().icmp(IntCC::Equal, y, zero);
+        if !signed {
+            let safe = self.b.ins().select(is_zero, one, y);
+            return if div {
+                self.b.ins().udiv(x, safe)
+            } else {
+                self.b.ins().urem(x, safe)
+            };
+        }
+        let all_ones = if t.bits() >= 64 {
+            -1i64
+        } else {
+            ((1u64 << t.bits()) - 1) as i64
+        };
+        let m1 = self.b.ins().iconst(t, all_ones);
+        let is_m1 = self.b.ins().icmp(IntCC::Equal, y, m1);
+        let bad = self.b.ins().bor(is_zero, is_m1);
+        let safe = self.b.ins().select(bad, one, y);
+        if div {
+            let q = self.b.ins().sdiv(x, safe);
+            let neg = self.b.ins().ineg(x);
+            self.b.ins().select(is_m1, neg, q)
+        } else {
+            let r = self.b.ins().srem(x, safe);
+            self.b.ins().select(is_m1, zero, r)
+        }
     }
 
     /// minNum/maxNum: the other operand when one is NaN (`q` when both are), `p` on ties.

@@ -10,7 +10,7 @@
 //! construction. Failures (out-of-bounds access, division by zero, step or depth limits,
 //! unverified IR) are [`InterpError`]s, never panics.
 
-use super::{err, intrinsics, InterpError, Val};
+use super::{err, intrinsics, ExternFn, InterpError, Val};
 use crate::entity::{BlockId, FuncId, OpId, TypeId, ValueId};
 use crate::lo::Op;
 use crate::module::Module;
@@ -24,6 +24,7 @@ use rustc_hash::FxHashMap;
 pub struct LoInterp<'m> {
     m: &'m Module,
     mem: Vec<u8>,
+    externs: FxHashMap<String, ExternFn>,
     steps: u64,
     depth: usize,
     /// The most ops one top-level [`LoInterp::call`] may execute.
@@ -43,11 +44,17 @@ impl<'m> LoInterp<'m> {
         LoInterp {
             m,
             mem: Vec::new(),
+            externs: FxHashMap::default(),
             steps: 0,
             depth: 0,
             max_steps: 50_000_000,
             max_depth: 256,
         }
+    }
+
+    /// Lets calls to the declaration `name` run `f` (on scalar arguments).
+    pub fn define_extern(&mut self, name: &str, f: ExternFn) {
+        self.externs.insert(name.to_string(), f);
     }
 
     /// Places `bytes` in memory at an address aligned to `align` (a power of two, at least 1)
@@ -81,10 +88,14 @@ impl<'m> LoInterp<'m> {
     fn call_func(&mut self, f: FuncId, args: Vec<Val>, at: Option<OpId>) -> R<Vec<Val>> {
         let m = self.m;
         if m.is_declaration(f) {
-            return Err(err(
-                at,
-                format!("call to declaration `@{}`", m.funcs[f].name),
-            ));
+            let name = &m.funcs[f].name;
+            let host = self.externs.get_mut(name).ok_or_else(|| {
+                err(
+                    at,
+                    format!("call to declaration `@{name}` without a host function"),
+                )
+            })?;
+            return host(&args).map_err(|e| err(at, format!("`@{name}`: {e}")));
         }
         if self.depth >= self.max_depth {
             return Err(err(
