@@ -116,7 +116,10 @@ pub fn compile(
     keep_reachable(&mut module, fe.inputs);
     if matches!(emit, Emit::Lo | Emit::Clif) {
         match crate::driver::lower::emit_low(&mut module, emit, popts.stack_size) {
-            Ok(text) => out.output = Some(text),
+            Ok((text, warnings)) => {
+                out.diagnostics.extend(warnings);
+                out.output = Some(text);
+            }
             Err(PassError::Diagnostics(d)) => out.diagnostics.extend(d),
             Err(PassError::Internal(i)) => out.internal_error = Some(i),
         }

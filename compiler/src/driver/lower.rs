@@ -7,15 +7,16 @@
 
 use super::cli::Emit;
 use crate::passes;
-use scion_ir::diag::InternalError;
+use scion_ir::diag::{Diagnostics, InternalError};
 use scion_ir::pass::{PassCx, PassError, PassManager};
 use scion_ir::Module;
 
 /// The passes from `tree`/`mem` to `lo`, in order.
 pub const LOWER_PIPELINE: &[&str] = &["mem-to-lo", "recursion-to-stack"];
 
-/// Lowers `m` to `lo` in place (partial mode) with the given traversal stack size.
-pub fn lower_to_lo(m: &mut Module, stack_size: Option<u32>) -> Result<(), PassError> {
+/// Lowers `m` to `lo` in place (partial mode) with the given traversal stack size; returns the
+/// warnings (functions left out).
+pub fn lower_to_lo(m: &mut Module, stack_size: Option<u32>) -> Result<Diagnostics, PassError> {
     let registry = passes::registry();
     let names: Vec<String> = LOWER_PIPELINE.iter().map(|s| s.to_string()).collect();
     let mut pm =
@@ -27,15 +28,20 @@ pub fn lower_to_lo(m: &mut Module, stack_size: Option<u32>) -> Result<(), PassEr
     }
     let mut dumps = String::new();
     pm.run(m, &mut cx, &mut dumps)?;
-    Ok(())
+    Ok(std::mem::take(&mut cx.diagnostics))
 }
 
-/// The text `--emit=lo` or `--emit=clif` prints for the `tree` module `m`.
-pub fn emit_low(m: &mut Module, emit: Emit, stack_size: Option<u32>) -> Result<String, PassError> {
-    lower_to_lo(m, stack_size)?;
-    match emit {
+/// The text `--emit=lo` or `--emit=clif` prints for the `tree` module `m`, and the warnings.
+pub fn emit_low(
+    m: &mut Module,
+    emit: Emit,
+    stack_size: Option<u32>,
+) -> Result<(String, Diagnostics), PassError> {
+    let warnings = lower_to_lo(m, stack_size)?;
+    let text = match emit {
         Emit::Clif => scion_clif::print_clif(m)
-            .map_err(|e| PassError::Internal(InternalError::new(e.to_string()))),
-        _ => Ok(scion_ir::print::print_module(m)),
-    }
+            .map_err(|e| PassError::Internal(InternalError::new(e.to_string())))?,
+        _ => scion_ir::print::print_module(m),
+    };
+    Ok((text, warnings))
 }

@@ -55,7 +55,16 @@ impl Pass for MemToLo {
             .option("mem-to-lo", "partial")
             .is_some_and(|v| v == "true");
         match lower_module(m, partial) {
-            Ok((lo, _skipped)) => {
+            Ok((lo, skipped)) => {
+                for (name, why) in skipped {
+                    cx.diagnostics.push(
+                        Diagnostic::warning(
+                            "W0970",
+                            format!("`@{name}` is not lowered to lo: {why}"),
+                        )
+                        .with_note("mem-to-lo:partial=true leaves it out (with its callers)"),
+                    );
+                }
                 *m = lo;
                 Ok(true)
             }
