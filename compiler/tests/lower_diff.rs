@@ -162,7 +162,11 @@ fn prelude_functions_agree_in_tree_lo_and_jit() {
     let (lo, skipped) = lower_module(&tree, false).expect("lowers");
     assert!(skipped.is_empty());
     scion_ir::verify(&lo).expect("lo verifies");
-    let jit = JitModule::compile(&lo).expect("compiles");
+    // The JIT runs the module after lo-inline (the slab test inlined into its callers).
+    let mut inlined = lo.clone();
+    scion_compiler::passes::lo_inline::run(&mut inlined, 48);
+    scion_ir::verify(&inlined).expect("inlined lo verifies");
+    let jit = JitModule::compile(&inlined).expect("compiles");
     let cases = if cfg!(debug_assertions) { 300 } else { 3000 };
     let mut runner = TestRunner::new(Config {
         cases,

@@ -50,7 +50,7 @@ fn lo_module() -> Module {
 fn lower_text(text: &str) -> Module {
     let mut m = scion_ir::parse_module(text, FileId(0)).expect("mem text parses");
     let reg = passes::registry();
-    let mut pm = PassManager::parse(&reg, "mem-to-lo,recursion-to-stack").unwrap();
+    let mut pm = PassManager::parse(&reg, "mem-to-lo,recursion-to-stack,lo-inline").unwrap();
     pm.options.verify_each = true;
     let mut dumps = String::new();
     pm.run(&mut m, &mut PassCx::new(), &mut dumps)

@@ -3,7 +3,7 @@
 //!
 //! Runs `mem-to-lo` (partial: functions that still need a layout, such as traversals of a sum
 //! ADT before destructor specialization exists for the input, are left out) and then
-//! `recursion-to-stack` with `--stack-size`, and prints the `lo` module or its Cranelift IR.
+//! `recursion-to-stack` with `--stack-size`, then `lo-inline`, and prints the `lo` module or its Cranelift IR.
 
 use super::cli::Emit;
 use crate::passes;
@@ -12,7 +12,7 @@ use scion_ir::pass::{PassCx, PassError, PassManager};
 use scion_ir::Module;
 
 /// The passes from `tree`/`mem` to `lo`, in order.
-pub const LOWER_PIPELINE: &[&str] = &["mem-to-lo", "recursion-to-stack"];
+pub const LOWER_PIPELINE: &[&str] = &["mem-to-lo", "recursion-to-stack", "lo-inline"];
 
 /// Lowers `m` to `lo` in place (partial mode) with the given traversal stack size; returns the
 /// warnings (functions left out).

@@ -5,6 +5,7 @@
 //! that need the compiler's knowledge (layouts, builds) will be registered here next to them.
 //! Pass order lives in `driver/pipelines.rs` alone.
 
+pub mod lo_inline;
 pub mod mem_to_lo;
 #[path = "mem/recursion_to_stack.rs"]
 pub mod recursion_to_stack;
@@ -33,5 +34,12 @@ fn lower_passes(reg: &mut PassRegistry) {
         input: scion_ir::pass::Level::Lo,
         output: scion_ir::pass::Level::Lo,
         create: || Box::new(recursion_to_stack::RecursionToStack),
+    });
+    reg.register(scion_ir::PassInfo {
+        name: "lo-inline",
+        summary: "inline calls of small leaf functions in lo (option max-ops, default 48)",
+        input: scion_ir::pass::Level::Lo,
+        output: scion_ir::pass::Level::Lo,
+        create: || Box::new(lo_inline::LoInline),
     });
 }
