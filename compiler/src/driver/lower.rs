@@ -17,6 +17,14 @@ pub const LOWER_PIPELINE: &[&str] = &["mem-to-lo", "recursion-to-stack", "lo-inl
 /// Lowers `m` to `lo` in place (partial mode) with the given traversal stack size; returns the
 /// warnings (functions left out).
 pub fn lower_to_lo(m: &mut Module, stack_size: Option<u32>) -> Result<Diagnostics, PassError> {
+    if stack_size == Some(0) {
+        let d = scion_ir::diag::Diagnostic::error(
+            "E0908",
+            "--stack-size=0: a traversal stack needs at least one entry",
+        )
+        .with_note("the default is 64 entries");
+        return Err(PassError::Diagnostics(d.into()));
+    }
     let registry = passes::registry();
     let names: Vec<String> = LOWER_PIPELINE.iter().map(|s| s.to_string()).collect();
     let mut pm =
