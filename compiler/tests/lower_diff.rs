@@ -14,7 +14,7 @@ use scion_ir::diag::{FileId, SourceMap};
 use scion_ir::entity::TypeId;
 use scion_ir::interp::lo::LoInterp;
 use scion_ir::interp::{AdtVal, Interp, Val};
-use scion_ir::types::{FloatTy, Type};
+use scion_ir::types::{FloatTy, IntTy, Type};
 use scion_ir::Module;
 use std::rc::Rc;
 
@@ -218,4 +218,76 @@ fn a_real_hit_is_found_by_every_engine() {
     let out = jit.call("t_hit", &flat).unwrap();
     assert!(matches!(out[0], Val::F32(t) if t == 1.0), "{out:?}");
     check_all(&tree, &lo, &jit, &floats).unwrap();
+}
+
+/// Integer intrinsics and conversions on every width: bit counts, shifts, division (including
+/// `MIN / -1`), casts between integers and floats (saturating, NaN to 0), bits fields.
+#[test]
+fn integer_ops_agree_on_every_width() {
+    let mut text = String::new();
+    for t in ["u8", "i8", "u16", "i16", "u32", "i32", "u64", "i64"] {
+        text.push_str(&format!(
+            r#"
+func @ints_{t}(%a: {t}, %b: {t}, %f: f32) -> ({t}, {t}, {t}, {t}, {t}, {t}, {t}, {t}, f64, {t}) {{
+  %p = "tree.intrinsic"(%a) {{name = "popcount"}} : ({t}) -> {t}
+  %l = "tree.intrinsic"(%a) {{name = "clz"}} : ({t}) -> {t}
+  %z = "tree.intrinsic"(%b) {{name = "ctz"}} : ({t}) -> {t}
+  %s = "tree.shr"(%a, %b) : ({t}, {t}) -> {t}
+  %h = "tree.shl"(%a, %b) : ({t}, {t}) -> {t}
+  %one = "tree.const"() {{value = 1}} : () -> {t}
+  %b1 = "tree.or"(%b, %one) : ({t}, {t}) -> {t}
+  %d = "tree.div"(%a, %b1) : ({t}, {t}) -> {t}
+  %r = "tree.rem"(%a, %b1) : ({t}, {t}) -> {t}
+  %c = "tree.cast"(%f) : (f32) -> {t}
+  %w = "tree.cast"(%a) : ({t}) -> f64
+  %x = "tree.bits"(%a) {{hi = 7, lo = 2}} : ({t}) -> {t}
+  "tree.return"(%p, %l, %z, %s, %h, %d, %r, %c, %w, %x) : ({t}, {t}, {t}, {t}, {t}, {t}, {t}, {t}, f64, {t}) -> ()
+}}
+"#
+        ));
+    }
+    let tree = scion_ir::parse_module(&text, FileId(0)).expect("parses");
+    scion_ir::verify(&tree).expect("verifies");
+    let (lo, _) = lower_module(&tree, false).expect("lowers");
+    let jit = JitModule::compile(&lo).expect("compiles");
+    let mut rng = 0x1234_5678_9abc_def0u64;
+    let mut next = || {
+        rng ^= rng << 13;
+        rng ^= rng >> 7;
+        rng ^= rng << 17;
+        rng
+    };
+    let floats = [
+        0.0f32,
+        -0.0,
+        1.5,
+        -1.5,
+        300.7,
+        -40000.0,
+        3e9,
+        -3e19,
+        f32::NAN,
+        f32::INFINITY,
+    ];
+    for t in IntTy::ALL {
+        let name = format!("ints_{}", t.name());
+        for k in 0..300 {
+            let (lo_v, hi_v) = t.range();
+            let pick = |r: u64| match r % 5 {
+                0 => lo_v,
+                1 => hi_v,
+                2 => -1i128,
+                _ => r as i128,
+            };
+            let a = Val::Int(t.wrap(pick(next())), t);
+            let b = Val::Int(t.wrap(pick(next())), t);
+            let f = Val::F32(floats[k % floats.len()]);
+            let args = vec![a, b, f];
+            let want = Interp::new(&tree).call(&name, args.clone()).expect("tree");
+            let got_lo = LoInterp::new(&lo).call(&name, args.clone()).expect("lo");
+            let got_jit = jit.call(&name, &args).expect("jit");
+            assert_eq!(keys(&want), keys(&got_lo), "{name}{args:?}: lo");
+            assert_eq!(keys(&want), keys(&got_jit), "{name}{args:?}: jit");
+        }
+    }
 }

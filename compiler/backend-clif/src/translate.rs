@@ -309,6 +309,9 @@ impl Fx<'_, '_> {
             L::Ceil => Some(self.b.ins().ceil(args[0])),
             L::Trunc => Some(self.b.ins().trunc(args[0])),
             L::Fma => Some(self.b.ins().fma(args[0], args[1], args[2])),
+            L::Popcount => Some(self.b.ins().popcnt(args[0])),
+            L::Clz => Some(self.b.ins().clz(args[0])),
+            L::Ctz => Some(self.b.ins().ctz(args[0])),
             L::Min | L::Max => Some(self.min_max(kind == L::Max, args[0], args[1], ct()?, signed)),
             L::NextUp | L::NextDown => Some(self.next(kind == L::NextUp, args[0], ct()?)),
             L::Cmp => {

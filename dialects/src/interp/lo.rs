@@ -254,10 +254,18 @@ impl<'m> LoInterp<'m> {
                 let to = m.types.get(res_ty()?);
                 Val::from_scalar(scalar::bitcast(sc(0)?, to).ok_or_else(bad)?)
             }
-            Op::Min | Op::Max | Op::Abs | Op::Sqrt | Op::Floor | Op::Ceil | Op::Trunc | Op::Fma => {
-                intrinsics::eval(m, kind.mnemonic(), vals, res_ty()?)
-                    .map_err(|e| err(Some(op), e))?
-            }
+            Op::Min
+            | Op::Max
+            | Op::Abs
+            | Op::Sqrt
+            | Op::Floor
+            | Op::Ceil
+            | Op::Trunc
+            | Op::Fma
+            | Op::Popcount
+            | Op::Clz
+            | Op::Ctz => intrinsics::eval(m, kind.mnemonic(), vals, res_ty()?)
+                .map_err(|e| err(Some(op), e))?,
             Op::NextUp | Op::NextDown => {
                 let up = kind == Op::NextUp;
                 match sc(0)? {

@@ -70,6 +70,12 @@ pub enum Op {
     NextUp,
     /// `lo.next_down` `(T) -> T`: the next float toward `-inf`.
     NextDown,
+    /// `lo.popcount` `(T) -> T`, integers: the number of one bits.
+    Popcount,
+    /// `lo.clz` `(T) -> T`, integers: leading zero bits within the width (the width for 0).
+    Clz,
+    /// `lo.ctz` `(T) -> T`, integers: trailing zero bits (the width for 0).
+    Ctz,
     /// `lo.load {offset}` `(ptr) -> T`: the scalar at `ptr + offset` (little-endian).
     Load,
     /// `lo.store {offset}` `(ptr, T) -> ()`.
@@ -92,7 +98,7 @@ pub enum Op {
 
 impl Op {
     /// Every op, in declaration order.
-    pub const ALL: [Op; 36] = [
+    pub const ALL: [Op; 39] = [
         Op::Const,
         Op::Add,
         Op::Sub,
@@ -121,6 +127,9 @@ impl Op {
         Op::Fma,
         Op::NextUp,
         Op::NextDown,
+        Op::Popcount,
+        Op::Clz,
+        Op::Ctz,
         Op::Load,
         Op::Store,
         Op::PtrAdd,
@@ -162,6 +171,9 @@ impl Op {
             Op::Fma => "fma",
             Op::NextUp => "next_up",
             Op::NextDown => "next_down",
+            Op::Popcount => "popcount",
+            Op::Clz => "clz",
+            Op::Ctz => "ctz",
             Op::Load => "load",
             Op::Store => "store",
             Op::PtrAdd => "ptr_add",

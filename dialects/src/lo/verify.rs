@@ -110,7 +110,7 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
                 format!("`{name}` needs a number")
             })
         }
-        Op::BitNot => {
+        Op::BitNot | Op::Popcount | Op::Clz | Op::Ctz => {
             counts(1, 1)?;
             require(all_same() && is_int(rt[0]), || {
                 format!("`{name}` needs an integer")

@@ -6,7 +6,7 @@
 //! is the round-to-nearest op followed by one ulp outward, unconditionally (`lo.next_down` /
 //! `lo.next_up`, layout catalog §3.8). `isnan` is `x != x`; `rsqrt` is `1 / sqrt`; `length`
 //! is `sqrt(dot(v, v))`; `normalize` divides each lane by the length. Intrinsics without a
-//! scalar form here (transcendentals, bit counts, `round`, options, sets, quantization frames)
+//! scalar form here (transcendentals, `round`, options, sets, quantization frames)
 //! are reported, never guessed.
 
 use super::{FnLower, R};
@@ -58,6 +58,9 @@ pub(super) fn lower(
         "floor" => lanewise1(cx, L::Floor)?,
         "ceil" => lanewise1(cx, L::Ceil)?,
         "trunc" => lanewise1(cx, L::Trunc)?,
+        "popcount" => lanewise1(cx, L::Popcount)?,
+        "clz" => lanewise1(cx, L::Clz)?,
+        "ctz" => lanewise1(cx, L::Ctz)?,
         "min" => lanewise2(cx, &[L::Min])?,
         "max" => lanewise2(cx, &[L::Max])?,
         "fadd_rd" => lanewise2(cx, &[L::Add, L::NextDown])?,
