@@ -1,0 +1,198 @@
+//! Build typing: parameters against the variant, targets, `this`, `build x`, `append`.
+
+use super::{err, ok};
+use crate::sema::{Prim, Resolution, Ty};
+use crate::syntax::ast::{ExprKind, Item, StmtKind};
+
+const PBRT: &str = include_str!("../../../../library/layouts/pbrt.scion");
+const PTR: &str = include_str!("../../../../library/layouts/ptr.scion");
+
+#[test]
+fn library_builds_type_check() {
+    let t = ok(PBRT);
+    assert_eq!(t.builds.len(), 1);
+    assert_eq!(t.builds[0].variants.len(), 2);
+    assert!(!t.build_targets.is_empty());
+    ok(PTR);
+}
+
+#[test]
+fn build_expression_yields_the_reference_type() {
+    let (program, typed, diags, sm) = super::check_with_prelude(PBRT);
+    assert!(diags.is_empty(), "{}", diags.render(&sm));
+    let Some(Item::Build(b)) = program.items.last() else {
+        panic!()
+    };
+    let body = &b.variants[0].body;
+    let StmtKind::Let { value, .. } = &body[3].kind else {
+        panic!("{:?}", body[3].kind)
+    };
+    assert!(matches!(value.kind, ExprKind::Build(_)));
+    assert_eq!(typed.expr_ty(value.id), &Ty::Prim(Prim::U32));
+    assert!(matches!(
+        typed.resolution(value.id),
+        Some(Resolution::BuildChild(_))
+    ));
+    // `build left;` is a recursive field: it builds the child.
+    let target = typed.build_targets.get(&body[2].id).unwrap();
+    assert!(target.child);
+    // `build bounds;` copies into the stored field.
+    let target = typed.build_targets.get(&body[0].id).unwrap();
+    assert!(target.member.is_some() && !target.child);
+}
+
+#[test]
+fn build_parameters_must_match_the_variant() {
+    err(
+        &PBRT.replace(
+            "build Leaf(bounds: AABB, nprims: u16, data: Triangle[nprims])",
+            "build Leaf(bounds: AABB, nprims: u16)",
+        ),
+        "E0452",
+    );
+    err(
+        &PBRT.replace(
+            "build Leaf(bounds: AABB, nprims: u16,",
+            "build Leaf(bounds: AABB, count: u16,",
+        ),
+        "E0453",
+    );
+    err(
+        &PBRT.replace(
+            "build Leaf(bounds: AABB, nprims: u16,",
+            "build Leaf(bounds: AABB, nprims: u32,",
+        ),
+        "E0454",
+    );
+    err(&PBRT.replace("build Leaf(", "build Leef("), "E0451");
+    err(&PBRT.replace("build LinearBVH[", "build Nope["), "E0450");
+}
+
+#[test]
+fn build_targets_and_values() {
+    err(
+        &PBRT.replace("build nprims = 0;", "build nope = 0;"),
+        "E0455",
+    );
+    err(
+        &PBRT.replace("build nprims = 0;", "build nprims = 70000;"),
+        "E0457",
+    );
+    err(
+        &PBRT.replace("build nprims = 0;", "build nprims = 1.5;"),
+        "E0456",
+    );
+    err(
+        &PBRT.replace(
+            "build c_o = R - this;",
+            "build c_o = R - this; build p_o = 1;",
+        ),
+        "E0455",
+    );
+    err(
+        &PBRT.replace("let R: u32 = build right;", "let R: u32 = build bounds;"),
+        "E0459",
+    );
+    err(
+        &PBRT.replace(
+            "build p_o = append(data, nprims);",
+            "build p_o = append(bounds, nprims);",
+        ),
+        "E0460",
+    );
+    err(
+        &PBRT.replace(
+            "return this;\n  };\n  build Leaf",
+            "return 1.5;\n  };\n  build Leaf",
+        ),
+        "E0461",
+    );
+    err(
+        &PBRT.replace(
+            "build Leaf(",
+            "build Interior(bounds: AABB, left: BVH, right: BVH) { return this; };\n  build Leaf(",
+        ),
+        "E0462",
+    );
+    err(
+        &PBRT.replace(
+            "build bounds;\n    build nprims;",
+            "build nothing;\n    build nprims;",
+        ),
+        "E0455",
+    );
+}
+
+#[test]
+fn build_copy_needs_equal_types() {
+    let src = PBRT.replace("nprims: u16;\n  };\n};", "nprims: u32;\n  };\n};");
+    err(&src, "E0458");
+    let src = PBRT
+        .replace("build nprims = 0;", "build nprims = 0; build I;")
+        .replace("P: u32;", "P: u32; I: u32;");
+    err(&src, "E0463");
+}
+
+#[test]
+fn build_root_sees_globals_and_shared_fields() {
+    let t = ok("
+layout G(I: u32) {
+  P: u32; N: u32; primitives: Triangle[P]; scene: AABB;
+  group nodes[size=N] by I {
+    bounds: AABB;
+    split nprims { > 0 -> Leaf { p_o: u32; data = primitives[p_o : p_o + nprims]; };
+                   0 -> Interior { c_o: u32; left = I + 1; right = I + c_o; }; };
+    nprims: u16;
+  };
+};
+build G[order=pre] {
+  build root { build scene = bounds; };
+  build Interior(bounds: AABB, left: BVH, right: BVH) {
+    build bounds; build nprims = 0; build left; let R: u32 = build right; build c_o = R - this; return this;
+  };
+  build Leaf(bounds: AABB, nprims: u16, data: Triangle[nprims]) {
+    build bounds; build nprims; build p_o = append(data, nprims);
+    let wide: u64 = append(data, nprims);
+    let narrow = append(data, 1);
+    this[0:4] = 1;
+    return this;
+  };
+};");
+    let ty = |n: &str| {
+        t.bindings
+            .iter()
+            .find(|b| b.name == n)
+            .map(|b| b.ty.clone())
+    };
+    assert_eq!(ty("wide"), Some(Ty::Prim(Prim::U64)));
+    assert_eq!(ty("narrow"), Some(Ty::Prim(Prim::U32)));
+}
+
+#[test]
+fn array_of_children_builds_to_array_of_references() {
+    ok("
+type BVH8 = Interior(child_bounds: AABB[8], children: BVH8[8]) | Leaf(nprims: u16, data: Triangle[nprims]);
+func lows(b: AABB[8]) -> f32x3 = b[0].low
+layout Bvh8(R: u32) {
+  P: u32; primitives: Triangle[P]; top: u32;
+  indirect group nodes { child: u32[8]; start: f32x3; children = child; child_bounds = boxes(start); };
+  split R {
+    < 0x10000000 -> Interior from nodes[R];
+    _ -> Leaf { nprims = R[28:32] as u16; data = primitives[R[0:28] : R[0:28] + nprims]; };
+  };
+};
+func boxes(s: f32x3) -> AABB[8] = boxes(s)
+build Bvh8[order=pre] {
+  build root { build top = 0; };
+  build Interior(child_bounds: AABB[8], children: BVH8[8]) {
+    build start = lows(child_bounds);
+    let C: u32[8] = build children;
+    build child = C;
+    return this;
+  };
+  build Leaf(nprims: u16, data: Triangle[nprims]) {
+    let p: u32 = append(data, nprims);
+    return ((nprims as u32) << 28) | p;
+  };
+};");
+}
