@@ -326,7 +326,20 @@ impl Checker<'_> {
                     let phys = self.physical_in_build(lt);
                     match member_ty {
                         Some(mt) => {
-                            if self.zonk(&mt) != phys && !mt.has_error() && !phys.has_error() {
+                            // A stored field that breaks its logical type is reported once, by the
+                            // layout's checks; here only a copy the layout cannot see (another
+                            // variant's field of the same name) is.
+                            let layout_ok = match (&self.ctx, member) {
+                                (Ctx::Build { layout, .. }, Some(m)) => self
+                                    .logical_expectation(*layout, m.0 as usize)
+                                    .is_none_or(|(_, expected)| expected == self.zonk(&mt)),
+                                _ => true,
+                            };
+                            if layout_ok
+                                && self.zonk(&mt) != phys
+                                && !mt.has_error()
+                                && !phys.has_error()
+                            {
                                 let (logical, stored) = (self.show(&phys), self.show(&mt));
                                 self.error(SemaError::BuildCopyType {
                                     field: field.name.clone(),

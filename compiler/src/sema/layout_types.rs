@@ -525,7 +525,7 @@ impl Checker<'_> {
 
     /// The logical field that member `m` of layout `layout` realizes by name, and the physical
     /// type it must therefore have.
-    fn logical_expectation(&self, layout: usize, m: usize) -> Option<(Ty, Ty)> {
+    pub(super) fn logical_expectation(&self, layout: usize, m: usize) -> Option<(Ty, Ty)> {
         let l = self.out.layouts.get(layout)?;
         let adt = l.adt?;
         let def = self.adts.get(adt)?;
@@ -579,23 +579,38 @@ impl Checker<'_> {
         }
     }
 
-    /// Checks "physical types preserve logical types" on the stored fields of every layout
-    /// (derived fields are checked where their value is typed).
+    /// Checks "physical types preserve logical types" on stored fields that hold children
+    /// (derived fields are checked where their value is typed). A stored field that breaks a
+    /// non-recursive logical type, or holds a child in the wrong number of bytes, is reported by
+    /// `check_layout` (E0327); what remains is a child stored in a same-sized wrong type
+    /// (`left: f32` for a `u32` reference).
     pub(super) fn check_physical_types(&mut self) {
         for li in 0..self.out.layouts.len() {
+            let Some(adt) = self.out.layouts[li].adt else {
+                continue;
+            };
             for m in 0..self.out.layouts[li].members.len() {
                 if self.out.layouts[li].members[m].kind != MemberKindInfo::Stored {
                     continue;
                 }
-                let Some((_, expected)) = self.logical_expectation(li, m) else {
+                let Some((logical, expected)) = self.logical_expectation(li, m) else {
                     continue;
                 };
                 let found = self.zonk(&self.out.layouts[li].members[m].ty);
-                if !found.has_error() && !expected.has_error() && found != expected {
+                let child = self.adts.mentions(&logical, adt);
+                if child && same_size(&found, &expected) && found != expected {
                     self.physical_error(li, m, &found);
                 }
             }
         }
+    }
+}
+
+/// True when both types have a known size and it is the same.
+fn same_size(a: &Ty, b: &Ty) -> bool {
+    match (a, b) {
+        (Ty::Array(x, n), Ty::Array(y, m)) => n == m && same_size(x, y),
+        _ => a.bit_size().is_some() && a.bit_size() == b.bit_size(),
     }
 }
 
