@@ -163,13 +163,8 @@ impl Checker<'_> {
                             .insert(e.id, Resolution::ParentParam(i));
                         self.binding_ty(Binding::LayoutParam(i))
                     }
-                    _ => {
-                        self.error(SemaError::UnknownParentField {
-                            name: name.name.clone(),
-                            span: name.span,
-                        });
-                        Ty::Error
-                    }
+                    // `parent.x` naming nothing is `check_layout`'s E0310.
+                    _ => Ty::Error,
                 }
             }
             ExprKind::Build(name) => self.infer_build_expr(e, name),
@@ -233,10 +228,13 @@ impl Checker<'_> {
                 return result;
             }
         }
-        self.error(SemaError::UnknownName {
-            name: name.to_string(),
-            span: e.span,
-        });
+        // In a layout, a name that resolves on no route is `check_layout`'s E0319.
+        if !matches!(self.ctx, Ctx::Layout { .. }) {
+            self.error(SemaError::UnknownName {
+                name: name.to_string(),
+                span: e.span,
+            });
+        }
         Ty::Error
     }
 }

@@ -109,6 +109,9 @@ impl Checker<'_> {
     /// Integer literals must fit their inferred type.
     fn check_literals(&mut self) {
         for (id, v, span) in std::mem::take(&mut self.int_literals) {
+            if self.literal_reported.contains(&id) {
+                continue;
+            }
             let t = self.zonk(self.out.expr_ty(id));
             if let Some(max) = t.as_int().and_then(|p| p.int_literal_max()) {
                 if v > max {

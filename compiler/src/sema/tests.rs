@@ -69,3 +69,22 @@ pub(super) fn err(src: &str, code: &str) -> String {
     }
     text
 }
+
+/// A structural mistake in a layout or build: `check_layout` / `check_build` report `code`, and
+/// semantic analysis stays silent so that the mistake is reported once.
+pub(super) fn structural(src: &str, code: &str) {
+    let (program, _, diags, sm) = check_with_prelude(src);
+    assert!(
+        diags.is_empty(),
+        "sema should leave this to the structural checks:\n{}",
+        diags.render(&sm)
+    );
+    let mut all = Diagnostics::new();
+    all.extend(crate::layout::check_layout::check_layouts(&program));
+    all.extend(crate::layout::check_build::check_builds(&program));
+    assert!(
+        all.list.iter().any(|d| d.code.as_deref() == Some(code)),
+        "expected {code}, got:\n{}",
+        all.render(&sm)
+    );
+}
