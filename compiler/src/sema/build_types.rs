@@ -284,39 +284,29 @@ impl Checker<'_> {
             }
             // `build x` of something that is neither a logical nor a stored field is
             // `check_build`'s error (E0406, E0417).
-            None => match &logical {
-                None => {}
-                Some((_, lt, _)) => {
+            None => {
+                if let (Some((_, lt, _)), Some(mt)) = (&logical, member_ty) {
                     let phys = self.physical_in_build(lt);
-                    match member_ty {
-                        Some(mt) => {
-                            // A stored field that breaks its logical type is reported once, by the
-                            // layout's checks; here only a copy the layout cannot see (another
-                            // variant's field of the same name) is.
-                            let layout_ok = match (&self.ctx, member) {
-                                (Ctx::Build { layout, .. }, Some(m)) => self
-                                    .logical_expectation(*layout, m.0 as usize)
-                                    .is_none_or(|(_, expected)| expected == self.zonk(&mt)),
-                                _ => true,
-                            };
-                            if layout_ok
-                                && self.zonk(&mt) != phys
-                                && !mt.has_error()
-                                && !phys.has_error()
-                            {
-                                let (logical, stored) = (self.show(&phys), self.show(&mt));
-                                self.error(SemaError::BuildCopyType {
-                                    field: field.name.clone(),
-                                    logical,
-                                    stored,
-                                    span: field.span,
-                                });
-                            }
-                        }
-                        None => {}
+                    // A stored field that breaks its logical type is reported once, by the
+                    // layout's checks; here only a copy the layout cannot see (another variant's
+                    // field of the same name) is.
+                    let layout_ok = match (&self.ctx, member) {
+                        (Ctx::Build { layout, .. }, Some(m)) => self
+                            .logical_expectation(*layout, m.0 as usize)
+                            .is_none_or(|(_, expected)| expected == self.zonk(&mt)),
+                        _ => true,
+                    };
+                    if layout_ok && self.zonk(&mt) != phys && !mt.has_error() && !phys.has_error() {
+                        let (logical, stored) = (self.show(&phys), self.show(&mt));
+                        self.error(SemaError::BuildCopyType {
+                            field: field.name.clone(),
+                            logical,
+                            stored,
+                            span: field.span,
+                        });
                     }
                 }
-            },
+            }
         }
         let (field_ix, child) = match logical {
             Some((i, _, rec)) => (Some(i), rec),

@@ -467,16 +467,11 @@ impl Checker<'_> {
                                     mi.name == group.name
                                         && mi.kind == MemberKindInfo::IndirectGroup
                                 });
-                                match g {
-                                    Some(g) => {
-                                        if let Some(a) =
-                                            self.out.layouts[layout].arms.get_mut(this_arm)
-                                        {
-                                            a.from_group = Some(MemberId(g as u32));
-                                        }
-                                    }
-                                    // Not an indirect group: `check_layout`'s E0309.
-                                    None => {}
+                                // Not an indirect group: `check_layout`'s E0309.
+                                if let (Some(g), Some(a)) =
+                                    (g, self.out.layouts[layout].arms.get_mut(this_arm))
+                                {
+                                    a.from_group = Some(MemberId(g as u32));
                                 }
                                 let t = self.infer_expr(k);
                                 self.solve_or_defer(Obligation::Int {
