@@ -176,14 +176,32 @@ pub fn bvh8_q8_align16() -> String {
         .replace("Bvh8Q8", "Bvh8Q8A16")
 }
 
-/// Prelude plus the given sources, parsed.
+/// Prelude plus the given sources, parsed by the project's parser; the fixture must parse
+/// without diagnostics.
 pub fn program(sources: &[&str]) -> crate::syntax::ast::Program {
+    let (p, d, sm) = parse_with_errors(sources);
+    assert!(d.is_empty(), "fixture does not parse:\n{}", d.render(&sm));
+    p
+}
+
+/// Prelude plus the given sources as one file, parsed with error recovery: the (possibly
+/// partial) program, the parser's diagnostics and the source map.
+pub fn parse_with_errors(
+    sources: &[&str],
+) -> (
+    crate::syntax::ast::Program,
+    scion_ir::diag::Diagnostics,
+    scion_ir::diag::SourceMap,
+) {
     let mut text = String::from(PRELUDE);
     for s in sources {
         text.push('\n');
         text.push_str(s);
     }
-    crate::layout::testparse::parse(&text)
+    let mut sm = scion_ir::diag::SourceMap::new();
+    let f = sm.add("fixture.scion", text);
+    let (p, d) = crate::syntax::parse_program(&sm, &[f]);
+    (p, d, sm)
 }
 
 /// Catalog §8.6: the shared slab (tree-carried box in a 28-byte reference), 16 B nodes.
