@@ -28,7 +28,9 @@ fn blocks(markdown: &str) -> Vec<(usize, String)> {
 }
 
 fn check_file(rel: &str) -> usize {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join(rel);
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(rel);
     let md = std::fs::read_to_string(&path).expect("reading the document");
     let mut previous = String::new();
     let mut checked = 0;
@@ -46,9 +48,17 @@ fn check_file(rel: &str) -> usize {
             vec![sources.add(PRELUDE_NAME, PRELUDE)]
         };
         let input = sources.add(format!("{rel}:{line}"), text);
-        let fe = Frontend { sources: &sources, prelude: &prelude, inputs: &[input] };
+        let fe = Frontend {
+            sources: &sources,
+            prelude: &prelude,
+            inputs: &[input],
+        };
         let r = compile(&fe, Emit::Tree, &[], &PassOptions::default());
-        assert!(r.internal_error.is_none(), "{rel}:{line}: {:?}", r.internal_error);
+        assert!(
+            r.internal_error.is_none(),
+            "{rel}:{line}: {:?}",
+            r.internal_error
+        );
         assert!(
             r.diagnostics.is_empty(),
             "the example at {rel}:{line} does not compile:\n{}",
