@@ -253,13 +253,13 @@ impl Checker<'_> {
             self.current_layout()
                 .map(|l| l.members[m.0 as usize].ty.clone())
         });
-        match value {
-            Some(e) => {
-                let t = self.infer_expr(e);
-                // An unknown target is `check_build`'s E0406.
-                let Some(mt) = member_ty else {
-                    return;
-                };
+        // `build x` without a value copies logical field `x`: a target that is neither a logical
+        // nor a stored field is `check_build`'s E0406 / E0417, and a stored field of another type
+        // than the logical field `check_layout`'s E0327 (on every variant's route).
+        if let Some(e) = value {
+            let t = self.infer_expr(e);
+            // An unknown target is `check_build`'s E0406.
+            if let Some(mt) = member_ty {
                 if let (ExprKind::Int(v), Some(p)) = (&e.kind, mt.as_int()) {
                     if p.int_literal_max().is_some_and(|max| *v > max) {
                         let ty = self.show(&mt);
@@ -280,31 +280,6 @@ impl Checker<'_> {
                         found,
                         span: e.span,
                     });
-                }
-            }
-            // `build x` of something that is neither a logical nor a stored field is
-            // `check_build`'s error (E0406, E0417).
-            None => {
-                if let (Some((_, lt, _)), Some(mt)) = (&logical, member_ty) {
-                    let phys = self.physical_in_build(lt);
-                    // A stored field that breaks its logical type is reported once, by the
-                    // layout's checks; here only a copy the layout cannot see (another variant's
-                    // field of the same name) is.
-                    let layout_ok = match (&self.ctx, member) {
-                        (Ctx::Build { layout, .. }, Some(m)) => self
-                            .logical_expectation(*layout, m.0 as usize)
-                            .is_none_or(|(_, expected)| expected == self.zonk(&mt)),
-                        _ => true,
-                    };
-                    if layout_ok && self.zonk(&mt) != phys && !mt.has_error() && !phys.has_error() {
-                        let (logical, stored) = (self.show(&phys), self.show(&mt));
-                        self.error(SemaError::BuildCopyType {
-                            field: field.name.clone(),
-                            logical,
-                            stored,
-                            span: field.span,
-                        });
-                    }
                 }
             }
         }

@@ -218,13 +218,6 @@ pub enum SemaError {
         ty: String,
         span: Span,
     },
-    /// E0458
-    BuildCopyType {
-        field: String,
-        logical: String,
-        stored: String,
-        span: Span,
-    },
     /// E0461
     BuildReturnType {
         expected: String,
@@ -295,7 +288,6 @@ impl SemaError {
             BuildParamType { .. } => "E0454",
             BuildValueType { .. } => "E0456",
             BuildLiteralFit { .. } => "E0457",
-            BuildCopyType { .. } => "E0458",
             BuildReturnType { .. } => "E0461",
         }
     }
@@ -432,9 +424,6 @@ impl SemaError {
                 .with_note("convert explicitly with `as`"),
             BuildLiteralFit { field, value, ty, span } => e(format!("literal {value} does not fit field `{field}` of type `{ty}`"))
                 .with_primary(*span, "out of range"),
-            BuildCopyType { field, logical, stored, span } => e(format!("`build {field}` copies a `{logical}` into a field of type `{stored}`"))
-                .with_primary(*span, "types differ")
-                .with_note(format!("write `build {field} = e` with an explicit conversion")),
             BuildReturnType { expected, found, span } => e(format!("a build returns the node's reference `{expected}`, found `{found}`"))
                 .with_primary(*span, format!("expected `{expected}`")),
         }
@@ -458,10 +447,9 @@ mod tests {
                 span: s,
             },
             SemaError::UnreachableArm { span: s },
-            SemaError::BuildCopyType {
-                field: "x".into(),
-                logical: "u16".into(),
-                stored: "u32".into(),
+            SemaError::BuildReturnType {
+                expected: "u32".into(),
+                found: "f32".into(),
                 span: s,
             },
         ];

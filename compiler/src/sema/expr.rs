@@ -228,8 +228,13 @@ impl Checker<'_> {
                 return result;
             }
         }
-        // In a layout, a name that resolves on no route is `check_layout`'s E0319.
-        if !matches!(self.ctx, Ctx::Layout { .. }) {
+        // In a layout, a name that resolves on no route is `check_layout`'s E0319; in a build,
+        // a field of another variant is `check_build`'s E0418.
+        let other_variant = matches!(self.ctx, Ctx::Build { .. })
+            && self
+                .current_layout()
+                .is_some_and(|l| l.members.iter().any(|m| m.name == name));
+        if !matches!(self.ctx, Ctx::Layout { .. }) && !other_variant {
             self.error(SemaError::UnknownName {
                 name: name.to_string(),
                 span: e.span,
