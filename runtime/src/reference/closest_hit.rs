@@ -98,6 +98,45 @@ pub fn closest_hit_tree_stats(tree: &LogicalTree, ray: &Ray, stats: &mut Travers
     Hit::from_best(best.0, best.1)
 }
 
+/// Why the traversal of `tree` could not reach primitive `prim` at distance `t`: the first
+/// node on the path from the root to the leaf holding `prim` whose box test fails
+/// (`!(enter <= exit)`) or whose entry distance exceeds `t` (`enter > t`), as
+/// `(node, enter, exit)`. `None` when every node on the path admits `t` (then a traversal
+/// must find the hit) or when no leaf holds `prim`.
+///
+/// This is the diagnosis of a brute-force/traversal mismatch: the prelude's slab test and its
+/// Moller-Trumbore test round differently, so for a triangle lying in a box face the computed
+/// entry distance can exceed the computed hit distance by an ulp and pruning on
+/// `enter > best.t` then drops the node (docs/runtime.md, "Brute force and traversal").
+pub fn why_pruned(tree: &LogicalTree, ray: &Ray, prim: u32, t: f32) -> Option<(u32, f32, f32)> {
+    if tree.is_empty() {
+        return None;
+    }
+    // Depth-first search for the path to the leaf holding `prim`.
+    let mut path: Vec<(u32, usize)> = vec![(tree.root, 0)];
+    while let Some(&(i, next)) = path.last() {
+        let node = &tree.nodes[i as usize];
+        if node.is_leaf() {
+            if tree.leaf_primitives(node).iter().any(|p| p.id == prim) {
+                break;
+            }
+            path.pop();
+        } else if next < 2 {
+            path.last_mut().expect("non-empty").1 += 1;
+            path.push((node.child[next], 0));
+            continue;
+        } else {
+            path.pop();
+        }
+        // Resume the parent.
+    }
+    path.iter().find_map(|&(i, _)| {
+        let (enter, exit) = slab_interval(ray, &tree.nodes[i as usize].aabb());
+        let meets = enter <= exit; // false when either is NaN
+        (!meets || enter > t).then_some((i, enter, exit))
+    })
+}
+
 /// Closest hits of all `rays` by tree traversal, in parallel blocks of 64 (see
 /// [`BatchDriver`]).
 pub fn closest_hits_tree(tree: &LogicalTree, rays: &[Ray], driver: &BatchDriver) -> Vec<Hit> {
@@ -150,5 +189,9 @@ mod tests {
         assert!(h.is_hit());
         assert_eq!(h, closest_hit_brute(&s.triangles, &r));
         assert!(st.triangles_tested < s.len() as u64 / 4, "{st:?}");
+        assert_eq!(why_pruned(&t, &r, h.prim, h.t), None);
+        // A hit distance before the box entry is reported as pruned at the root.
+        let (node, enter, _) = why_pruned(&t, &r, h.prim, 0.5).unwrap();
+        assert_eq!((node, enter), (t.root, 1.0));
     }
 }
