@@ -55,8 +55,15 @@ impl BatchDriver {
     /// Calls `f(begin, end)` for every block `[begin, end)` of `0..n` (blocks of [`BLOCK`],
     /// the last one shorter), each exactly once, in any order across threads.
     pub fn run(&self, n: usize, f: impl Fn(usize, usize) + Sync) {
+        self.run_range(0..n, f)
+    }
+
+    /// Calls `f(begin, end)` for every block of `range`: blocks of [`BLOCK`] queries starting
+    /// at `range.start`, the last one shorter, each exactly once.
+    pub fn run_range(&self, range: std::ops::Range<usize>, f: impl Fn(usize, usize) + Sync) {
+        let (start, n) = (range.start, range.end.saturating_sub(range.start));
         let blocks = n.div_ceil(BLOCK);
-        let block = |b: usize| f(b * BLOCK, ((b + 1) * BLOCK).min(n));
+        let block = |b: usize| f(start + b * BLOCK, start + ((b + 1) * BLOCK).min(n));
         match &self.pool {
             None => (0..blocks).for_each(block),
             Some(pool) => {
@@ -119,6 +126,11 @@ mod tests {
                 });
                 assert!(seen.into_inner().unwrap().iter().all(|&c| c == 1));
             }
+            let seen = Mutex::new(Vec::new());
+            d.run_range(100..230, |b, e| seen.lock().unwrap().push((b, e)));
+            let mut seen = seen.into_inner().unwrap();
+            seen.sort();
+            assert_eq!(seen, vec![(100, 164), (164, 228), (228, 230)]);
             let v: Vec<u32> = (0..1000).collect();
             let m = d.map(&v, |x| x * 2);
             assert_eq!(m, v.iter().map(|x| x * 2).collect::<Vec<_>>());
