@@ -102,6 +102,12 @@ pub struct TreeStats {
     pub primitives: usize,
     /// Largest leaf.
     pub max_leaf: usize,
+    /// Traversal stack a left-first traversal needs: the most left edges on any root-to-node
+    /// path, i.e. the most right children pending at once when a traversal descends into the
+    /// left child and pushes the right one (0 for a single leaf). A fixed stack of this many
+    /// entries never overflows on this tree (a traversal that pushes both children needs one
+    /// more).
+    pub stack_needed: usize,
     /// SAH cost with traversal and intersection costs 1: the sum over interior nodes of
     /// `area / root area` plus the sum over leaves of `count * area / root area`.
     pub sah_cost: f64,
@@ -262,11 +268,12 @@ impl LogicalTree {
                 1.0
             }
         };
-        let mut stack = vec![(self.root, 1usize)];
-        while let Some((i, depth)) = stack.pop() {
+        let mut stack = vec![(self.root, 1usize, 0usize)];
+        while let Some((i, depth, lefts)) = stack.pop() {
             let node = &self.nodes[i as usize];
             s.nodes += 1;
             s.depth = s.depth.max(depth);
+            s.stack_needed = s.stack_needed.max(lefts);
             if node.is_leaf() {
                 s.leaves += 1;
                 s.max_leaf = s.max_leaf.max(node.prim_count as usize);
@@ -274,8 +281,8 @@ impl LogicalTree {
             } else {
                 s.interior += 1;
                 s.sah_cost += rel(node.aabb());
-                stack.push((node.child[1], depth + 1));
-                stack.push((node.child[0], depth + 1));
+                stack.push((node.child[1], depth + 1, lefts));
+                stack.push((node.child[0], depth + 1, lefts + 1));
             }
         }
         s

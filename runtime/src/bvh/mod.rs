@@ -28,48 +28,62 @@ pub(crate) enum Decision {
     Split(usize),
 }
 
-/// Shared machinery of the top-down builders: per-primitive boxes and centroids, the index
-/// permutation, and pre-order node emission.
+/// One primitive as the top-down builders move it around: its box, its centroid, its
+/// original id (for unique median orders) and its index in the input.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Item {
+    pub bounds: Aabb,
+    pub centroid: Vec3,
+    pub id: u32,
+    pub index: u32,
+}
+
+/// Shared machinery of the top-down builders: the primitives as [`Item`]s, partitioned in
+/// place so that each node owns a contiguous range (sequential memory access), and pre-order
+/// node emission.
 pub(crate) struct TopDown<'a> {
     pub tris: &'a [Triangle],
-    pub boxes: Vec<Aabb>,
-    pub centroids: Vec<Vec3>,
-    /// A permutation of `0..tris.len()`; each node owns a contiguous range of it.
-    pub order: Vec<u32>,
+    pub items: Vec<Item>,
 }
 
 impl<'a> TopDown<'a> {
     pub fn new(tris: &'a [Triangle]) -> TopDown<'a> {
-        let boxes: Vec<Aabb> = tris.iter().map(Triangle::bounds).collect();
-        let centroids = boxes.iter().map(|b| b.center()).collect();
-        TopDown {
-            tris,
-            boxes,
-            centroids,
-            order: (0..tris.len() as u32).collect(),
-        }
+        let items = tris
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                let bounds = t.bounds();
+                Item {
+                    bounds,
+                    centroid: bounds.center(),
+                    id: t.id,
+                    index: i as u32,
+                }
+            })
+            .collect();
+        TopDown { tris, items }
     }
 
-    /// Box of the primitives and box of their centroids over `order[begin..end]`.
+    /// Box of the primitives and box of their centroids over `items[begin..end]`.
     pub fn range_bounds(&self, begin: usize, end: usize) -> (Aabb, Aabb) {
         let mut b = Aabb::EMPTY;
         let mut c = Aabb::EMPTY;
-        for &i in &self.order[begin..end] {
-            b = b.union(self.boxes[i as usize]);
-            c = c.grow(self.centroids[i as usize]);
+        for it in &self.items[begin..end] {
+            b = b.union(it.bounds);
+            c = c.grow(it.centroid);
         }
         (b, c)
     }
 
-    /// Splits `order[begin..end]` at its median along `axis`, ordering by (centroid, id) so
+    /// Splits `items[begin..end]` at its median along `axis`, ordering by (centroid, id) so
     /// that the result is unique. Returns the left count.
     pub fn median_split(&mut self, begin: usize, end: usize, axis: usize) -> usize {
         let mid = (end - begin) / 2;
-        let (cen, tris) = (&self.centroids, self.tris);
-        self.order[begin..end].select_nth_unstable_by(mid, |&a, &b| {
-            cen[a as usize][axis]
-                .total_cmp(&cen[b as usize][axis])
-                .then(tris[a as usize].id.cmp(&tris[b as usize].id))
+        self.items[begin..end].select_nth_unstable_by(mid, |a, b| {
+            a.centroid
+                .axis(axis)
+                .total_cmp(&b.centroid.axis(axis))
+                .then(a.id.cmp(&b.id))
         });
         mid
     }
@@ -114,7 +128,11 @@ impl<'a> TopDown<'a> {
                 }
             }
         }
-        let primitives = self.order.iter().map(|&i| self.tris[i as usize]).collect();
+        let primitives = self
+            .items
+            .iter()
+            .map(|it| self.tris[it.index as usize])
+            .collect();
         LogicalTree {
             nodes,
             root: 0,

@@ -13,7 +13,7 @@
 //!
 //! Sequential and deterministic.
 
-use super::{Decision, LogicalTree, TopDown, DEFAULT_MAX_LEAF};
+use super::{Decision, Item, LogicalTree, TopDown, DEFAULT_MAX_LEAF};
 use crate::geom::{Aabb, Triangle};
 
 /// Parameters of the binned SAH builder.
@@ -60,8 +60,9 @@ pub fn build_sah_binned(tris: &[Triangle], options: &SahOptions) -> LogicalTree 
     let min_leaf = options.min_leaf.min(max_leaf);
     let bins = options.bins.max(2);
     let (ct, ci) = (options.traversal_cost, options.intersection_cost);
-    let mut counts = vec![0usize; bins];
-    let mut boxes = vec![Aabb::EMPTY; bins];
+    // Per axis: bins of counts and boxes, and the area right of each plane.
+    let mut counts = vec![0usize; 3 * bins];
+    let mut boxes = vec![Aabb::EMPTY; 3 * bins];
     let mut right_area = vec![0f64; bins];
 
     TopDown::new(tris).build(|td, begin, end, bounds, cbounds| {
@@ -71,18 +72,26 @@ pub fn build_sah_binned(tris: &[Triangle], options: &SahOptions) -> LogicalTree 
         }
         let area = bounds.half_area();
         let leaf_cost = ci * n as f64 * area;
+        let binnings = [0, 1, 2].map(|axis| binning(cbounds, axis, bins));
+        counts.fill(0);
+        boxes.fill(Aabb::EMPTY);
+        // One pass over the primitives bins all three axes.
+        for it in &td.items[begin..end] {
+            for (axis, b) in binnings.iter().enumerate() {
+                if let Some((lo, scale)) = *b {
+                    let k = axis * bins + bin_of(it.centroid.axis(axis), lo, scale, bins);
+                    counts[k] += 1;
+                    boxes[k] = boxes[k].union(it.bounds);
+                }
+            }
+        }
         let mut best: Option<Plane> = None;
         for axis in 0..3 {
-            let Some((lo, scale)) = binning(cbounds, axis, bins) else {
+            if binnings[axis].is_none() {
                 continue;
-            };
-            counts.fill(0);
-            boxes.fill(Aabb::EMPTY);
-            for &i in &td.order[begin..end] {
-                let k = bin_of(td.centroids[i as usize][axis], lo, scale, bins);
-                counts[k] += 1;
-                boxes[k] = boxes[k].union(td.boxes[i as usize]);
             }
+            let counts = &counts[axis * bins..(axis + 1) * bins];
+            let boxes = &boxes[axis * bins..(axis + 1) * bins];
             // right_area[k]: area of bins k..bins.
             let mut acc = Aabb::EMPTY;
             for k in (1..bins).rev() {
@@ -117,12 +126,10 @@ pub fn build_sah_binned(tris: &[Triangle], options: &SahOptions) -> LogicalTree 
         }
         match best {
             Some(p) if n > max_leaf || p.cost < leaf_cost => {
-                let (lo, scale) = binning(cbounds, p.axis, bins).expect("axis was binned");
-                let range = &mut td.order[begin..end];
-                let centroids = &td.centroids;
+                let (lo, scale) = binnings[p.axis].expect("axis was binned");
                 let goes_left =
-                    |i: u32| bin_of(centroids[i as usize][p.axis], lo, scale, bins) <= p.bin;
-                Decision::Split(partition(range, goes_left))
+                    |it: &Item| bin_of(it.centroid.axis(p.axis), lo, scale, bins) <= p.bin;
+                Decision::Split(partition(&mut td.items[begin..end], goes_left))
             }
             Some(_) => Decision::Leaf,
             None if n <= max_leaf => Decision::Leaf,
@@ -145,11 +152,11 @@ fn bin_of(c: f32, lo: f64, scale: f64, bins: usize) -> usize {
 }
 
 /// Moves the elements for which `left` holds to the front; returns how many there are.
-fn partition(v: &mut [u32], left: impl Fn(u32) -> bool) -> usize {
+fn partition(v: &mut [Item], left: impl Fn(&Item) -> bool) -> usize {
     let mut i = 0;
     let mut j = v.len();
     while i < j {
-        if left(v[i]) {
+        if left(&v[i]) {
             i += 1;
         } else {
             j -= 1;
@@ -200,5 +207,6 @@ mod tests {
         assert_eq!(a, b);
         a.validate().unwrap();
         assert!(a.stats().depth > 64, "depth {}", a.stats().depth);
+        assert!(a.stats().stack_needed >= 64, "{:?}", a.stats());
     }
 }
