@@ -11,9 +11,9 @@
 //! centroid box is too thin for the binning arithmetic), the node splits at the median of the
 //! longest centroid axis instead, ordered by (centroid, id); so leaves never exceed `max_leaf`.
 //!
-//! Sequential and deterministic.
+//! Deterministic: the same tree whatever the number of threads (see [`super`]).
 
-use super::{Decision, Item, LogicalTree, TopDown, DEFAULT_MAX_LEAF};
+use super::{build_top_down, median_split, Decide, Decision, Item, LogicalTree, DEFAULT_MAX_LEAF};
 use crate::geom::{Aabb, Triangle};
 
 /// Parameters of the binned SAH builder.
@@ -24,7 +24,7 @@ pub struct SahOptions {
     /// Ranges of at most this many primitives always become leaves (default 1; values above
     /// `max_leaf` count as `max_leaf`).
     pub min_leaf: usize,
-    /// Number of bins per axis (default 32; values below 2 count as 2).
+    /// Number of bins per axis (default 32; clamped to `2..=MAX_BINS`).
     pub bins: usize,
     /// Cost of visiting an interior node, relative to `intersection_cost` (default 1).
     pub traversal_cost: f64,
@@ -54,44 +54,61 @@ struct Plane {
     bin: usize,
 }
 
+/// Most bins per axis (the per-node scratch lives on the stack).
+pub const MAX_BINS: usize = 64;
+
+/// The binned-SAH rule with its options resolved.
+struct Sah {
+    max_leaf: usize,
+    min_leaf: usize,
+    bins: usize,
+    ct: f64,
+    ci: f64,
+}
+
 /// Builds a binned-SAH tree over `tris` (see the module documentation).
 pub fn build_sah_binned(tris: &[Triangle], options: &SahOptions) -> LogicalTree {
     let max_leaf = options.max_leaf.max(1);
-    let min_leaf = options.min_leaf.min(max_leaf);
-    let bins = options.bins.max(2);
-    let (ct, ci) = (options.traversal_cost, options.intersection_cost);
-    // Per axis: bins of counts and boxes, and the area right of each plane.
-    let mut counts = vec![0usize; 3 * bins];
-    let mut boxes = vec![Aabb::EMPTY; 3 * bins];
-    let mut right_area = vec![0f64; bins];
+    let rule = Sah {
+        max_leaf,
+        min_leaf: options.min_leaf.min(max_leaf),
+        bins: options.bins.clamp(2, MAX_BINS),
+        ct: options.traversal_cost,
+        ci: options.intersection_cost,
+    };
+    build_top_down(tris, &rule)
+}
 
-    TopDown::new(tris).build(|td, begin, end, bounds, cbounds| {
-        let n = end - begin;
-        if n <= min_leaf {
+impl Decide for Sah {
+    fn decide(&self, items: &mut [Item], bounds: Aabb, cbounds: Aabb) -> Decision {
+        let (bins, ct, ci) = (self.bins, self.ct, self.ci);
+        let n = items.len();
+        if n <= self.min_leaf {
             return Decision::Leaf;
         }
         let area = bounds.half_area();
         let leaf_cost = ci * n as f64 * area;
         let binnings = [0, 1, 2].map(|axis| binning(cbounds, axis, bins));
-        counts.fill(0);
-        boxes.fill(Aabb::EMPTY);
+        // Per axis: bins of counts and boxes.
+        let mut counts = [[0usize; MAX_BINS]; 3];
+        let mut boxes = [[Aabb::EMPTY; MAX_BINS]; 3];
         // One pass over the primitives bins all three axes.
-        for it in &td.items[begin..end] {
+        for it in items.iter() {
             for (axis, b) in binnings.iter().enumerate() {
                 if let Some((lo, scale)) = *b {
-                    let k = axis * bins + bin_of(it.centroid.axis(axis), lo, scale, bins);
-                    counts[k] += 1;
-                    boxes[k] = boxes[k].union(it.bounds);
+                    let k = bin_of(it.centroid.axis(axis), lo, scale, bins);
+                    counts[axis][k] += 1;
+                    boxes[axis][k] = boxes[axis][k].union(it.bounds);
                 }
             }
         }
         let mut best: Option<Plane> = None;
+        let mut right_area = [0f64; MAX_BINS];
         for axis in 0..3 {
             if binnings[axis].is_none() {
                 continue;
             }
-            let counts = &counts[axis * bins..(axis + 1) * bins];
-            let boxes = &boxes[axis * bins..(axis + 1) * bins];
+            let (counts, boxes) = (&counts[axis], &boxes[axis]);
             // right_area[k]: area of bins k..bins.
             let mut acc = Aabb::EMPTY;
             for k in (1..bins).rev() {
@@ -125,17 +142,17 @@ pub fn build_sah_binned(tris: &[Triangle], options: &SahOptions) -> LogicalTree 
             }
         }
         match best {
-            Some(p) if n > max_leaf || p.cost < leaf_cost => {
+            Some(p) if n > self.max_leaf || p.cost < leaf_cost => {
                 let (lo, scale) = binnings[p.axis].expect("axis was binned");
                 let goes_left =
                     |it: &Item| bin_of(it.centroid.axis(p.axis), lo, scale, bins) <= p.bin;
-                Decision::Split(partition(&mut td.items[begin..end], goes_left))
+                Decision::Split(partition(items, goes_left))
             }
             Some(_) => Decision::Leaf,
-            None if n <= max_leaf => Decision::Leaf,
-            None => Decision::Split(td.median_split(begin, end, cbounds.longest_axis())),
+            None if n <= self.max_leaf => Decision::Leaf,
+            None => Decision::Split(median_split(items, cbounds.longest_axis())),
         }
-    })
+    }
 }
 
 /// The binning of `axis`: the centroid box's low end and `bins / extent`, or `None` when the
@@ -197,6 +214,27 @@ mod tests {
         assert!(s.max_leaf <= 15);
         // Median splits of 100 identical triangles: balanced, so shallow.
         assert!(s.depth <= 5, "depth {}", s.depth);
+    }
+
+    #[test]
+    fn same_tree_on_any_number_of_threads() {
+        let soup = gen::random_soup(3 * crate::bvh::PARALLEL_MIN as u32, 0.01, 8);
+        let on = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                (
+                    build_sah_binned(&soup.triangles, &SahOptions::default()),
+                    crate::bvh::build_median(&soup.triangles),
+                )
+            })
+        };
+        let one = on(1);
+        one.0.validate().unwrap();
+        one.1.validate_with_cap(1).unwrap();
+        assert_eq!(one, on(3));
     }
 
     #[test]
