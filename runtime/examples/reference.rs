@@ -2,10 +2,11 @@
 //! by the paper's method.
 //!
 //! ```text
-//! cargo run --release -p scion-runtime --example reference -- SCENE.obj OUT_PREFIX \
+//! cargo run --release -p scion-runtime --example reference -- SCENE OUT_PREFIX \
 //!     [primary W H | secondary N] [--seed S] [--threads T] [--max-leaf L]
 //! ```
 //!
+//! `SCENE` is an OBJ path or the name of a real scene (`bunny`: shared/scenes/bunny.obj).
 //! Writes `OUT_PREFIX.rays` and `OUT_PREFIX.hits` (docs/formats.md) and prints the tree's
 //! statistics and the timing (mean of the middle 5 of 9 runs, per ray and per second).
 
@@ -15,7 +16,7 @@ use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::{build_sah_binned, SahOptions};
 use scion_runtime::query::{primary_rays, secondary_rays, write_hits, write_rays};
 use scion_runtime::reference::closest_hits_tree;
-use scion_runtime::scene::load_obj;
+use scion_runtime::scene::{load_obj, manifest};
 use scion_runtime::timing::measure;
 
 fn parse<T: std::str::FromStr>(what: &str, v: Option<&String>) -> Result<T, String> {
@@ -47,7 +48,12 @@ fn run(args: &[String]) -> Result<(), String> {
                 .into(),
         );
     };
-    let scene = load_obj(scene_path).map_err(|e| e.to_string())?;
+    // A bare name (`bunny`) means that real scene from shared/scenes.
+    let scene_path = match (manifest::find(scene_path), manifest::scenes_dir()) {
+        (Some(info), Some(dir)) => info.path(&dir),
+        _ => std::path::PathBuf::from(scene_path),
+    };
+    let scene = load_obj(&scene_path).map_err(|e| e.to_string())?;
     let bounds = scene.bounds();
     let rays = match kind.as_str() {
         "primary" => primary_rays(

@@ -103,7 +103,10 @@ fn check_vertices(path: &Path, text: &str) -> Result<(), SceneError> {
         // tobj accepted the file, so the first three values parse.
         let mut xyz = [0f32; 3];
         for c in &mut xyz {
-            *c = words.next().and_then(|w| w.parse().ok()).unwrap_or(f32::NAN);
+            *c = words
+                .next()
+                .and_then(|w| w.parse().ok())
+                .unwrap_or(f32::NAN);
         }
         // Exactly one more value is `w`, which divides (three more are a color).
         if let (Some(w), None) = (words.next(), words.next()) {
