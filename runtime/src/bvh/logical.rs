@@ -251,7 +251,9 @@ impl LogicalTree {
         Ok(())
     }
 
-    /// Node counts, depth, largest leaf and SAH cost. Assumes the tree is valid.
+    /// Node counts, depth, largest leaf, stack need and SAH cost. Meant for valid trees; on an
+    /// invalid one it stops after as many visits as there are nodes (so a cycle cannot hang
+    /// it) and skips out-of-range children.
     pub fn stats(&self) -> TreeStats {
         let mut s = TreeStats {
             primitives: self.primitives.len(),
@@ -260,7 +262,10 @@ impl LogicalTree {
         if self.is_empty() {
             return s;
         }
-        let root_area = self.nodes[self.root as usize].aabb().half_area();
+        let Some(root) = self.nodes.get(self.root as usize) else {
+            return s;
+        };
+        let root_area = root.aabb().half_area();
         let rel = |b: Aabb| {
             if root_area > 0.0 {
                 b.half_area() / root_area
@@ -270,7 +275,12 @@ impl LogicalTree {
         };
         let mut stack = vec![(self.root, 1usize, 0usize)];
         while let Some((i, depth, lefts)) = stack.pop() {
-            let node = &self.nodes[i as usize];
+            let Some(node) = self.nodes.get(i as usize) else {
+                continue;
+            };
+            if s.nodes == self.nodes.len() {
+                break;
+            }
             s.nodes += 1;
             s.depth = s.depth.max(depth);
             s.stack_needed = s.stack_needed.max(lefts);
@@ -400,5 +410,11 @@ mod tests {
         let mut t = LogicalTree::empty();
         t.root = 0;
         assert!(t.validate().is_err());
+        assert_eq!(t.stats().nodes, 0);
+
+        // stats() terminates on a cycle.
+        let mut t = two_leaves();
+        t.nodes[0].child[1] = 0;
+        assert!(t.stats().nodes <= 3);
     }
 }
