@@ -18,7 +18,7 @@ use scion_runtime::scene::{load_obj, manifest};
 /// How many rays of each kind to check against brute force: about `budget` triangle tests.
 fn ray_count(triangles: usize) -> usize {
     let budget: usize = if common::release() {
-        150_000_000
+        100_000_000
     } else {
         2_000_000
     };
