@@ -11,7 +11,7 @@
 //! the scene keeps file order. An empty scene (no faces) is valid.
 //!
 //! Errors are [`SceneError`]s naming the file and, where it applies, the 1-based line. `tobj`
-//! reports what went wrong but not where; [`locate`] finds the first line that shows the
+//! reports what went wrong but not where; `locate` finds the first line that shows the
 //! reported problem by re-checking lines with the same rules. Coordinates that are NaN or
 //! infinite (including values like `1e39` that overflow `f32`) are rejected: `tobj` accepts
 //! them, so every `v` line is checked here, whether or not a face uses it.
