@@ -165,6 +165,8 @@ pub enum SemaError {
     RecursiveRecord { name: String, span: Span },
     /// E0238
     IndexRange { index: u128, len: u64, span: Span },
+    /// E0239
+    BitRange { lo: u128, hi: u128, ty: String, span: Span },
     /// E0353
     DiscriminantNotInt { ty: String, span: Span },
     /// E0354
@@ -277,6 +279,7 @@ impl SemaError {
             ReturnValueInUnit { .. } => "E0236",
             RecursiveRecord { .. } => "E0237",
             IndexRange { .. } => "E0238",
+            BitRange { .. } => "E0239",
             DiscriminantNotInt { .. } => "E0353",
             GroupSizeNotInt { .. } => "E0354",
             GroupByNotIndex { .. } => "E0355",
@@ -398,6 +401,9 @@ impl SemaError {
                 .with_note("only sum types may be recursive; store the value through a sum type or a slice"),
             IndexRange { index, len, span } => e(format!("index {index} is out of range for {len} elements"))
                 .with_primary(*span, "out of range"),
+            BitRange { lo, hi, ty, span } => e(format!("bit range [{lo}:{hi}] does not fit `{ty}`"))
+                .with_primary(*span, "bits outside the value")
+                .with_note(format!("`e[a:b]` takes bits a..b-1 of an integer: it needs a < b <= {}", ty_bits(ty))),
             DiscriminantNotInt { ty, span } => e(format!("split discriminant has type `{ty}`, not an integer"))
                 .with_primary(*span, "expected an integer"),
             GroupSizeNotInt { ty, span } => e(format!("group size has type `{ty}`, not an integer"))
@@ -467,4 +473,9 @@ mod tests {
         .to_diagnostic();
         assert!(d.message.contains("`Leaf`"), "{}", d.message);
     }
+}
+
+/// The width of an integer type named `ty` (for the note of E0239).
+fn ty_bits(ty: &str) -> u32 {
+    super::types::Prim::from_name(ty).map(|p| p.bits()).unwrap_or(0)
 }

@@ -65,9 +65,14 @@ impl Checker<'_> {
                 let l = self.infer_expr(lo);
                 let h = self.infer_expr(hi);
                 let result = self.fresh(VarKind::General);
+                let literal = match (&lo.kind, &hi.kind) {
+                    (ExprKind::Int(a), ExprKind::Int(z)) => Some((*a, *z)),
+                    _ => None,
+                };
                 self.solve_or_defer(Obligation::Slice {
                     base: b,
                     bounds: [(l, lo.span), (h, hi.span)],
+                    literal,
                     result: result.clone(),
                     span: e.span,
                 });
