@@ -166,7 +166,12 @@ pub enum SemaError {
     /// E0238
     IndexRange { index: u128, len: u64, span: Span },
     /// E0239
-    BitRange { lo: u128, hi: u128, ty: String, span: Span },
+    BitRange {
+        lo: u128,
+        hi: u128,
+        ty: String,
+        span: Span,
+    },
     /// E0353
     DiscriminantNotInt { ty: String, span: Span },
     /// E0354
@@ -477,5 +482,7 @@ mod tests {
 
 /// The width of an integer type named `ty` (for the note of E0239).
 fn ty_bits(ty: &str) -> u32 {
-    super::types::Prim::from_name(ty).map(|p| p.bits()).unwrap_or(0)
+    super::types::Prim::from_name(ty)
+        .map(|p| p.bits())
+        .unwrap_or(0)
 }
