@@ -32,7 +32,15 @@ impl Interp<'_> {
     /// ops are computed in [`Interp::exec_data`], which never recurses.
     pub(crate) fn exec(&mut self, op: OpId, env: &mut Env) -> Result<Option<Flow>, InterpError> {
         let o = &self.m.ops[op];
-        let OpKind::Tree(kind) = o.kind;
+        let kind = match o.kind {
+            OpKind::Tree(kind) => kind,
+            OpKind::Mem(_) => {
+                return Err(err(
+                    Some(op),
+                    "the interpreter runs the tree level only, not `mem` ops",
+                ))
+            }
+        };
         let args: Vec<Val> = o
             .operands
             .iter()

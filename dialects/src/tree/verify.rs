@@ -276,8 +276,13 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
         Op::Foreach => {
             counts(&ot, &rt, 1, 0)?;
             let elem = match t.get(ot[0]) {
-                Type::Array { elem, .. } | Type::Set(elem) => elem,
-                _ => return Err(format!("foreach over {}, not an array or set", show(ot[0]))),
+                Type::Array { elem, .. } | Type::Set(elem) | Type::View(elem) => elem,
+                _ => {
+                    return Err(format!(
+                        "foreach over {}, not an array, set or view",
+                        show(ot[0])
+                    ))
+                }
             };
             if o.regions.len() != 1 {
                 return Err("`tree.foreach` needs one body region".into());
@@ -303,7 +308,7 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
         Op::Index => {
             counts(&ot, &rt, 2, 1)?;
             let elem = match t.get(ot[0]) {
-                Type::Array { elem, .. } | Type::Vector { elem, .. } => *elem,
+                Type::Array { elem, .. } | Type::Vector { elem, .. } | Type::View(elem) => *elem,
                 _ => return Err(format!("index into {}", show(ot[0]))),
             };
             require(t.as_int(ot[1]).is_some(), || {
@@ -661,7 +666,7 @@ pub fn intrinsic_signature(m: &Module, name: &str, args: &[TypeId], result: Type
         "len" => sig(
             1,
             args.len() == 1
-                && matches!(t.get(args[0]), Type::Array { .. })
+                && matches!(t.get(args[0]), Type::Array { .. } | Type::View(_))
                 && t.as_int(result).is_some(),
         ),
         "some" => sig(
