@@ -1,0 +1,742 @@
+//! Reading one node of a layout: the values of its fields (loads at resolved paths, derived
+//! expressions, views of global arrays) and its variant tests (split predicates).
+//!
+//! A [`Reader`] serves one *destruction* (one `match` on a reference, or one field read). It
+//! keeps a stack of [`Layer`]s: layer 0 sits just before the destructing op (buffer bases,
+//! discriminants and shared fields go there), each further layer at the start of one arm. A name
+//! is computed at most once per layer chain: every value is cached in the layer it was emitted
+//! in and found again from any inner layer.
+
+use super::{ir_type, unsupported, LayoutSpec};
+use crate::layout::domain::{accepted, IntervalSet};
+use crate::layout::model::{ArmBody, GroupKind, ScopeId, ScopeKind, SplitId, Storage};
+use crate::layout::plan::BufferKind;
+use crate::layout::resolve::{Dep, FieldPath, Index, ResolveError, Resolver, Step};
+use crate::syntax::ast::{BinaryOp, Expr, ExprKind, UnaryOp};
+use rustc_hash::FxHashMap;
+use scion_ir::attr::Attr;
+use scion_ir::diag::Diagnostic;
+use scion_ir::tree::{CmpPred, Op};
+use scion_ir::types::Type;
+use scion_ir::{mem, Builder, InsertPoint, Module, OpSpec, TypeId, ValueId};
+
+type R<T> = Result<T, Diagnostic>;
+
+/// One place values are emitted, with the values already emitted there.
+pub(super) struct Layer {
+    /// Where new ops go.
+    pub point: InsertPoint,
+    names: FxHashMap<String, ValueId>,
+}
+
+impl Layer {
+    /// An empty layer inserting at `point`.
+    pub fn new(point: InsertPoint) -> Layer {
+        Layer {
+            point,
+            names: FxHashMap::default(),
+        }
+    }
+}
+
+/// Reads fields of the node a reference denotes.
+pub(super) struct Reader<'a> {
+    spec: &'a LayoutSpec,
+    resolver: Resolver<'a>,
+    /// The layout instance `%B`.
+    b: ValueId,
+    /// The reference's components, in declaration order.
+    components: Vec<ValueId>,
+    /// Innermost last.
+    pub layers: Vec<Layer>,
+}
+
+impl<'a> Reader<'a> {
+    /// A reader of the node `components` denotes, emitting its first values at `outer`.
+    pub fn new(
+        spec: &'a LayoutSpec,
+        b: ValueId,
+        components: Vec<ValueId>,
+        outer: InsertPoint,
+    ) -> Reader<'a> {
+        Reader {
+            spec,
+            resolver: Resolver::new(&spec.model),
+            b,
+            components,
+            layers: vec![Layer::new(outer)],
+        }
+    }
+
+    fn lookup(&self, key: &str) -> Option<ValueId> {
+        self.layers
+            .iter()
+            .rev()
+            .find_map(|l| l.names.get(key).copied())
+    }
+
+    fn remember(&mut self, key: String, v: ValueId, outer: bool) {
+        let layer = if outer {
+            self.layers.first_mut()
+        } else {
+            self.layers.last_mut()
+        };
+        if let Some(l) = layer {
+            l.names.insert(key, v);
+        }
+    }
+
+    fn builder<'m>(&self, m: &'m mut Module, outer: bool) -> Builder<'m> {
+        let layer = if outer {
+            &self.layers[0]
+        } else {
+            &self.layers[self.layers.len() - 1]
+        };
+        let mut b = Builder::new(m);
+        b.set_insertion_point(layer.point);
+        b
+    }
+
+    /// The base address of buffer `kind` (emitted once, in layer 0).
+    fn buffer(&mut self, m: &mut Module, kind: &BufferKind) -> R<(ValueId, u64)> {
+        let Some(index) = self.spec.buffer_index(kind) else {
+            return Err(unsupported(
+                Some(self.spec.model.span),
+                format!(
+                    "layout `{}` has no buffer for {kind:?}",
+                    self.spec.model.name.name
+                ),
+            ));
+        };
+        let buf = &self.spec.plan.buffers[index];
+        let stride = buf.stride;
+        let key = format!("#buffer{index}");
+        if let Some(v) = self.lookup(&key) {
+            return Ok((v, stride));
+        }
+        let name = buf.name.clone();
+        let mut bd = self.builder(m, true);
+        let p = bd.m.types.intern(Type::Ptr);
+        let op = bd.insert(
+            OpSpec::new(mem::Op::Buffer)
+                .operands(&[self.b])
+                .results(&[p])
+                .attr("index", Attr::Int(index as i128))
+                .attr("name", Attr::str(name)),
+        );
+        let v = bd.result(op, 0);
+        self.remember(key, v, true);
+        Ok((v, stride))
+    }
+
+    /// The value of logical field `name` of `variant` (a load, a derived value or a view).
+    pub fn field(&mut self, m: &mut Module, variant: &str, name: &str) -> R<ValueId> {
+        if let Some(v) = self.lookup(name) {
+            return Ok(v);
+        }
+        let path = self
+            .resolver
+            .resolve(variant, name)
+            .map_err(|e| resolve_error(self.spec, &e))?;
+        let v = self.path_value(m, variant, name, &path)?;
+        self.remember(name.to_string(), v, false);
+        Ok(v)
+    }
+
+    fn path_value(
+        &mut self,
+        m: &mut Module,
+        variant: &str,
+        name: &str,
+        path: &FieldPath,
+    ) -> R<ValueId> {
+        let model = &self.spec.model;
+        match path {
+            FieldPath::Stored {
+                member,
+                steps,
+                storage,
+                ty,
+                ..
+            } => {
+                let span = Some(model.members[*member].span);
+                let Some(t) = ir_type(m, ty) else {
+                    return Err(unsupported(
+                        span,
+                        format!("field `{name}` has a type the reader cannot load"),
+                    ));
+                };
+                let (base, index, offset, stride) =
+                    self.address(m, variant, steps, *storage, span)?;
+                Ok(self.load(m, base, index, offset, stride, t))
+            }
+            FieldPath::Derived {
+                member,
+                value,
+                deps,
+                ..
+            } => {
+                for (id, dep) in deps {
+                    let msg = match dep {
+                        Dep::Parent(_) => {
+                            "`parent.` values are not supported by destructor specialization"
+                        }
+                        Dep::Unknown(_) => {
+                            "a name of this derived field is on no route of the variant"
+                        }
+                        Dep::Ambiguous(_) => {
+                            "a name of this derived field has several declarations"
+                        }
+                        _ => continue,
+                    };
+                    return Err(unsupported(Some(id.span), msg)
+                        .with_note(format!("in derived field `{name}` of variant `{variant}`")));
+                }
+                let _ = member;
+                self.expr(m, variant, value, None)
+            }
+            FieldPath::Alternatives(_) => Err(unsupported(
+                None,
+                format!(
+                    "field `{name}` of `{variant}` is placed differently by several split arms"
+                ),
+            )),
+        }
+    }
+
+    fn load(
+        &mut self,
+        m: &mut Module,
+        base: ValueId,
+        index: Option<ValueId>,
+        offset: u64,
+        stride: u64,
+        t: TypeId,
+    ) -> ValueId {
+        let mut bd = self.builder(m, false);
+        let mut spec = OpSpec::new(mem::Op::Load)
+            .results(&[t])
+            .attr("offset", Attr::Int(offset as i128));
+        match index {
+            Some(i) => {
+                spec = spec
+                    .operands(&[base, i])
+                    .attr("stride", Attr::Int(stride as i128));
+            }
+            None => spec = spec.operands(&[base]),
+        }
+        let op = bd.insert(spec);
+        bd.result(op, 0)
+    }
+
+    /// Base, optional index, offset and stride of a stored field.
+    fn address(
+        &mut self,
+        m: &mut Module,
+        variant: &str,
+        steps: &[Step],
+        storage: Storage,
+        span: Option<scion_ir::diag::Span>,
+    ) -> R<(ValueId, Option<ValueId>, u64, u64)> {
+        match storage {
+            Storage::Globals { offset } => {
+                let (base, _) = self.buffer(m, &BufferKind::Globals)?;
+                Ok((base, None, offset, 0))
+            }
+            Storage::Element {
+                group,
+                array,
+                offset,
+            } => {
+                let model = &self.spec.model;
+                let n = steps.len();
+                let Some(last) = steps.last().filter(|s| s.group == group) else {
+                    return Err(unsupported(
+                        span,
+                        "a field path that does not end in its group",
+                    ));
+                };
+                match &last.index {
+                    Index::Value(e) | Index::Key(e) => {
+                        let idx = self.expr(m, variant, e, None)?;
+                        let (base, stride) =
+                            self.buffer(m, &BufferKind::GroupArray { group, array })?;
+                        Ok((base, Some(idx), offset, stride))
+                    }
+                    Index::Pointer(e) => {
+                        if array != 0 {
+                            return Err(unsupported(
+                                span,
+                                "`---` arrays of a pointer-indexed group",
+                            ));
+                        }
+                        let p = self.expr(m, variant, e, None)?;
+                        Ok((p, None, offset, 0))
+                    }
+                    Index::Tile { count } => {
+                        let g = &model.groups[group];
+                        let (Some((outer, outer_array, tile_off)), true) = (g.parent, n >= 2)
+                        else {
+                            return Err(unsupported(
+                                span,
+                                "a nested group without its outer group",
+                            ));
+                        };
+                        let inner_stride = g.arrays[array].stride;
+                        let block_off = g.arrays[array].offset;
+                        let count = *count;
+                        let prev = steps[n - 2].clone();
+                        let idx = match &prev.index {
+                            Index::Value(e) | Index::Key(e) | Index::Pointer(e) => {
+                                self.expr(m, variant, e, None)?
+                            }
+                            _ => {
+                                return Err(unsupported(span, "groups nested more than one level"))
+                            }
+                        };
+                        let it = m.values[idx].ty;
+                        let c = self.builder(m, false).const_int(it, count as i128);
+                        let (elem, slot) = {
+                            let mut bd = self.builder(m, false);
+                            (bd.binary(Op::Div, idx, c), bd.binary(Op::Rem, idx, c))
+                        };
+                        let addr_off = (tile_off + block_off) as i128;
+                        let (obase, ostride) = if matches!(prev.index, Index::Pointer(_)) {
+                            (idx, 0)
+                        } else {
+                            self.buffer(
+                                m,
+                                &BufferKind::GroupArray {
+                                    group: outer,
+                                    array: outer_array,
+                                },
+                            )?
+                        };
+                        let mut bd = self.builder(m, false);
+                        let p = bd.m.types.intern(Type::Ptr);
+                        let spec = if matches!(prev.index, Index::Pointer(_)) {
+                            OpSpec::new(mem::Op::Addr).operands(&[obase])
+                        } else {
+                            OpSpec::new(mem::Op::Addr)
+                                .operands(&[obase, elem])
+                                .attr("stride", Attr::Int(ostride as i128))
+                        };
+                        let op = bd.insert(spec.results(&[p]).attr("offset", Attr::Int(addr_off)));
+                        let a = bd.result(op, 0);
+                        Ok((a, Some(slot), offset, inner_stride))
+                    }
+                    Index::Missing => Err(unsupported(span, "a group without `by`")),
+                }
+            }
+            Storage::GlobalArray(_) => Err(unsupported(
+                span,
+                "a global array read whole (slice it, `a[lo : hi]`, or index it, `a[i]`)",
+            )),
+            Storage::None => Err(unsupported(span, "a field without storage")),
+        }
+    }
+
+    /// The global array a name denotes, if it does: its buffer kind and element type.
+    fn global_array(
+        &mut self,
+        m: &mut Module,
+        variant: &str,
+        name: &str,
+    ) -> Option<(BufferKind, TypeId)> {
+        let path = self.resolver.resolve(variant, name).ok()?;
+        let FieldPath::Stored {
+            member,
+            storage: Storage::GlobalArray(n),
+            ..
+        } = path
+        else {
+            return None;
+        };
+        let elem = ir_type(m, &self.spec.model.global_arrays[n].elem)?;
+        Some((BufferKind::GlobalArray { member }, elem))
+    }
+
+    /// Lowers a layout expression (a derived field, a group index, a discriminant, a key).
+    pub fn expr(
+        &mut self,
+        m: &mut Module,
+        variant: &str,
+        e: &Expr,
+        want: Option<TypeId>,
+    ) -> R<ValueId> {
+        match &e.kind {
+            ExprKind::Name(id) => {
+                if let Some(i) = self.spec.model.component(&id.name) {
+                    if self.spec.model.components[i].carried.is_some() {
+                        return Err(unsupported(
+                            Some(id.span),
+                            "tree-carried reference components (`parent.`)",
+                        ));
+                    }
+                    return Ok(self.components[i]);
+                }
+                self.field(m, variant, &id.name)
+            }
+            ExprKind::Int(n) => {
+                let t = want.unwrap_or_else(|| m.types.u32());
+                Ok(self.builder(m, false).const_int(t, *n as i128))
+            }
+            ExprKind::Bool(v) => Ok(self.builder(m, false).const_bool(*v)),
+            ExprKind::Binary { op, lhs, rhs } => {
+                let (l, r) = if matches!(lhs.kind, ExprKind::Int(_)) {
+                    let r = self.expr(m, variant, rhs, want)?;
+                    let l = self.expr(m, variant, lhs, Some(m.values[r].ty))?;
+                    (l, r)
+                } else {
+                    let l = self.expr(m, variant, lhs, want)?;
+                    let r = self.expr(m, variant, rhs, Some(m.values[l].ty))?;
+                    (l, r)
+                };
+                let (l, r) = self.unify(m, l, r);
+                let mut bd = self.builder(m, false);
+                let pred = |p| Some(p);
+                let (kind, cmp) = match op {
+                    BinaryOp::Add => (Op::Add, None),
+                    BinaryOp::Sub => (Op::Sub, None),
+                    BinaryOp::Mul => (Op::Mul, None),
+                    BinaryOp::Div => (Op::Div, None),
+                    BinaryOp::Rem => (Op::Rem, None),
+                    BinaryOp::BitAnd | BinaryOp::And => (Op::And, None),
+                    BinaryOp::BitOr | BinaryOp::Or => (Op::Or, None),
+                    BinaryOp::BitXor => (Op::Xor, None),
+                    BinaryOp::Shl => (Op::Shl, None),
+                    BinaryOp::Shr => (Op::Shr, None),
+                    BinaryOp::Eq => (Op::Cmp, pred(CmpPred::Eq)),
+                    BinaryOp::Ne => (Op::Cmp, pred(CmpPred::Ne)),
+                    BinaryOp::Lt => (Op::Cmp, pred(CmpPred::Lt)),
+                    BinaryOp::Le => (Op::Cmp, pred(CmpPred::Le)),
+                    BinaryOp::Gt => (Op::Cmp, pred(CmpPred::Gt)),
+                    BinaryOp::Ge => (Op::Cmp, pred(CmpPred::Ge)),
+                };
+                Ok(match cmp {
+                    Some(p) => bd.cmp(p, l, r),
+                    None => bd.binary(kind, l, r),
+                })
+            }
+            ExprKind::Unary { op, operand } => {
+                let v = self.expr(m, variant, operand, want)?;
+                let k = match op {
+                    UnaryOp::Neg => Op::Neg,
+                    UnaryOp::Not => Op::Not,
+                    UnaryOp::BitNot => Op::BitNot,
+                };
+                Ok(self.builder(m, false).unary(k, v))
+            }
+            ExprKind::Cast { expr, ty } => {
+                let v = self.expr(m, variant, expr, None)?;
+                let Some(t) = ir_type(m, ty) else {
+                    return Err(unsupported(Some(ty.span), "a cast to this type"));
+                };
+                Ok(self.builder(m, false).cast(v, t))
+            }
+            ExprKind::Slice { base, lo, hi } => {
+                if let ExprKind::Name(id) = &base.kind {
+                    if let Some((kind, elem)) = self.global_array(m, variant, &id.name) {
+                        return self.view(m, variant, kind, elem, lo, hi);
+                    }
+                }
+                let v = self.expr(m, variant, base, None)?;
+                let (Some(a), Some(z)) = (const_int(lo), const_int(hi)) else {
+                    return Err(unsupported(
+                        Some(e.span),
+                        "a bit slice with non-literal bounds",
+                    ));
+                };
+                let t = m.values[v].ty;
+                if m.types.as_int(t).is_none() || a >= z {
+                    return Err(unsupported(
+                        Some(e.span),
+                        "a slice of something other than an integer or a global array",
+                    ));
+                }
+                Ok(self.builder(m, false).bits(v, a as u32, z as u32, t))
+            }
+            ExprKind::Index { base, index } => {
+                let ExprKind::Name(id) = &base.kind else {
+                    return Err(unsupported(
+                        Some(e.span),
+                        "an index into something other than a global array",
+                    ));
+                };
+                let Some((kind, elem)) = self.global_array(m, variant, &id.name) else {
+                    return Err(unsupported(
+                        Some(e.span),
+                        "an index into something other than a global array",
+                    ));
+                };
+                let i = self.expr(m, variant, index, None)?;
+                let (base, stride) = self.buffer(m, &kind)?;
+                Ok(self.load(m, base, Some(i), 0, stride, elem))
+            }
+            ExprKind::Parent(id) => Err(unsupported(
+                Some(id.span),
+                "`parent.` values are not supported by destructor specialization",
+            )),
+            _ => Err(unsupported(Some(e.span), "this form of layout expression")),
+        }
+    }
+
+    /// `mem.view` of `array[lo : hi]`; when `hi` is written `lo + n` the length is `n` itself.
+    fn view(
+        &mut self,
+        m: &mut Module,
+        variant: &str,
+        kind: BufferKind,
+        elem: TypeId,
+        lo: &Expr,
+        hi: &Expr,
+    ) -> R<ValueId> {
+        let start = self.expr(m, variant, lo, None)?;
+        let st = m.values[start].ty;
+        let len = match (&lo.kind, &hi.kind) {
+            (
+                ExprKind::Name(a),
+                ExprKind::Binary {
+                    op: BinaryOp::Add,
+                    lhs,
+                    rhs,
+                },
+            ) if matches!(&lhs.kind, ExprKind::Name(b) if b.name == a.name) => {
+                let n = self.expr(m, variant, rhs, Some(st))?;
+                self.convert(m, n, st)
+            }
+            _ => {
+                let end = self.expr(m, variant, hi, Some(st))?;
+                let end = self.convert(m, end, st);
+                self.builder(m, false).binary(Op::Sub, end, start)
+            }
+        };
+        let (base, stride) = self.buffer(m, &kind)?;
+        let vt = m.ty(Type::View(elem));
+        let mut bd = self.builder(m, false);
+        let op = bd.insert(
+            OpSpec::new(mem::Op::View)
+                .operands(&[base, start, len])
+                .results(&[vt])
+                .attr("stride", Attr::Int(stride as i128)),
+        );
+        Ok(bd.result(op, 0))
+    }
+
+    fn convert(&mut self, m: &mut Module, v: ValueId, to: TypeId) -> ValueId {
+        if m.values[v].ty == to {
+            v
+        } else {
+            self.builder(m, false).cast(v, to)
+        }
+    }
+
+    /// Widens the narrower of two integers to the wider one's type (sema's widening rule).
+    fn unify(&mut self, m: &mut Module, l: ValueId, r: ValueId) -> (ValueId, ValueId) {
+        let (lt, rt) = (m.values[l].ty, m.values[r].ty);
+        match (m.types.as_int(lt), m.types.as_int(rt)) {
+            (Some(a), Some(b)) if a != b => {
+                if a.bits() >= b.bits() {
+                    (l, self.convert(m, r, lt))
+                } else {
+                    (self.convert(m, l, rt), r)
+                }
+            }
+            _ => (l, r),
+        }
+    }
+
+    /// The `i1` that is true when the node is of `variant`: the disjunction over the split arms
+    /// realizing it of their effective predicates (an arm takes what earlier arms left).
+    pub fn variant_test(&mut self, m: &mut Module, variant: &str) -> R<ValueId> {
+        let model = &self.spec.model;
+        let arms: Vec<(SplitId, usize)> = model
+            .splits
+            .iter()
+            .enumerate()
+            .flat_map(|(s, sp)| {
+                sp.arms
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, a)| a.variant.name == variant)
+                    .map(move |(k, _)| (s, k))
+            })
+            .collect();
+        if arms.is_empty() {
+            return Err(unsupported(
+                Some(model.span),
+                format!(
+                    "no split arm of layout `{}` realizes variant `{variant}`",
+                    model.name.name
+                ),
+            ));
+        }
+        let mut acc: Option<ValueId> = None;
+        for (s, k) in arms {
+            let c = self.arm_test(m, s, k)?;
+            acc = Some(match acc {
+                None => c,
+                Some(a) => self.builder(m, true).binary(Op::Or, a, c),
+            });
+        }
+        Ok(acc.expect("at least one arm"))
+    }
+
+    fn arm_test(&mut self, m: &mut Module, s: SplitId, k: usize) -> R<ValueId> {
+        let key = format!("#arm{s}.{k}");
+        if let Some(v) = self.lookup(&key) {
+            return Ok(v);
+        }
+        let model = &self.spec.model;
+        let split = &model.splits[s];
+        let scope = split.scope;
+        let disc = split.discriminant.clone();
+        let first_variant = split.arms[0].variant.name.clone();
+        let patterns: Vec<_> = split.arms.iter().map(|a| a.pattern.kind.clone()).collect();
+        // Discriminants are read before the chain of tests, in layer 0.
+        let saved = self.layers.split_off(1);
+        let d = self.expr(m, &first_variant, &disc, None);
+        self.layers.extend(saved);
+        let d = d?;
+        let t = m.values[d].ty;
+        let Some(it) = m.types.as_int(t) else {
+            return Err(unsupported(
+                Some(disc.span),
+                "a split on a non-integer discriminant",
+            ));
+        };
+        let (lo, hi) = match &disc.kind {
+            ExprKind::Slice { lo, hi, .. } => match (const_int(lo), const_int(hi)) {
+                (Some(a), Some(z)) if z > a && z - a < 64 => (0, (1i128 << (z - a)) - 1),
+                _ => it.range(),
+            },
+            _ => it.range(),
+        };
+        let mut taken = IntervalSet(Vec::new());
+        for p in &patterns[..k] {
+            let acc = accepted(p, lo, hi);
+            let mut all = taken.0.clone();
+            all.extend(acc.0);
+            all.sort_unstable();
+            taken = IntervalSet(all);
+        }
+        let own = accepted(&patterns[k], lo, hi).minus(&taken);
+        let pred = self.interval_test(m, d, t, &own, (lo, hi));
+        let outer = self.scope_test(m, scope)?;
+        let v = match outer {
+            Some(o) => self.builder(m, true).binary(Op::And, o, pred),
+            None => pred,
+        };
+        self.remember(key, v, true);
+        Ok(v)
+    }
+
+    /// The condition under which members of `scope` exist (true at the top level).
+    fn scope_test(&mut self, m: &mut Module, scope: ScopeId) -> R<Option<ValueId>> {
+        let model = &self.spec.model;
+        match model.scopes[scope].kind {
+            ScopeKind::Top => Ok(None),
+            ScopeKind::Arm { split, arm } => self.arm_test(m, split, arm).map(Some),
+            ScopeKind::Group(g) if model.groups[g].kind == GroupKind::Indirect => {
+                let from: Vec<(SplitId, usize)> = model
+                    .splits
+                    .iter()
+                    .enumerate()
+                    .flat_map(|(s, sp)| {
+                        sp.arms
+                            .iter()
+                            .enumerate()
+                            .filter_map(move |(k, a)| match &a.body {
+                                ArmBody::From { group: Some(h), .. } if *h == g => Some((s, k)),
+                                _ => None,
+                            })
+                    })
+                    .collect();
+                let mut acc = None;
+                for (s, k) in from {
+                    let c = self.arm_test(m, s, k)?;
+                    acc = Some(match acc {
+                        None => c,
+                        Some(a) => self.builder(m, true).binary(Op::Or, a, c),
+                    });
+                }
+                Ok(acc)
+            }
+            ScopeKind::Group(_) => match model.scopes[scope].parent {
+                Some(p) => self.scope_test(m, p),
+                None => Ok(None),
+            },
+        }
+    }
+
+    /// `d ∈ set` as comparisons against constants of `d`'s type, in layer 0.
+    fn interval_test(
+        &mut self,
+        m: &mut Module,
+        d: ValueId,
+        t: TypeId,
+        set: &IntervalSet,
+        dom: (i128, i128),
+    ) -> ValueId {
+        let mut bd = self.builder(m, true);
+        let (dlo, dhi) = dom;
+        if set.0.is_empty() {
+            return bd.const_bool(false);
+        }
+        if set.0 == [(dlo, dhi)] {
+            return bd.const_bool(true);
+        }
+        // The complement of one value reads best as `!=`.
+        if let [(a, b), (c, e)] = set.0[..] {
+            if a == dlo && e == dhi && c == b + 2 {
+                let k = bd.const_int(t, b + 1);
+                return bd.cmp(CmpPred::Ne, d, k);
+            }
+        }
+        let mut acc: Option<ValueId> = None;
+        for &(a, b) in &set.0 {
+            let c = if a == b {
+                let k = bd.const_int(t, a);
+                bd.cmp(CmpPred::Eq, d, k)
+            } else if a == dlo {
+                let k = bd.const_int(t, b);
+                bd.cmp(CmpPred::Le, d, k)
+            } else if b == dhi {
+                let k = bd.const_int(t, a - 1);
+                bd.cmp(CmpPred::Gt, d, k)
+            } else {
+                let ka = bd.const_int(t, a);
+                let kb = bd.const_int(t, b);
+                let x = bd.cmp(CmpPred::Ge, d, ka);
+                let y = bd.cmp(CmpPred::Le, d, kb);
+                bd.binary(Op::And, x, y)
+            };
+            acc = Some(match acc {
+                None => c,
+                Some(p) => bd.binary(Op::Or, p, c),
+            });
+        }
+        acc.expect("non-empty set")
+    }
+}
+
+fn const_int(e: &Expr) -> Option<i128> {
+    match e.kind {
+        ExprKind::Int(n) => Some(n as i128),
+        _ => None,
+    }
+}
+
+fn resolve_error(spec: &LayoutSpec, e: &ResolveError) -> Diagnostic {
+    let msg = match e {
+        ResolveError::UnknownVariant(v) => {
+            format!("layout `{}` has no variant `{v}`", spec.model.name.name)
+        }
+        ResolveError::Unrealized(v) => format!(
+            "no split arm of layout `{}` realizes `{v}`",
+            spec.model.name.name
+        ),
+        other => format!("no unique physical path: {other:?}"),
+    };
+    Diagnostic::error("E0381", msg).with_primary(spec.model.span, "in this layout")
+}
