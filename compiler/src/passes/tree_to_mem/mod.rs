@@ -122,3 +122,5 @@ fn prim(name: &str) -> Option<Type> {
         _ => return None,
     })
 }
+#[cfg(test)]
+mod tests;

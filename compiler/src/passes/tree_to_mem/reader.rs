@@ -195,12 +195,52 @@ impl<'a> Reader<'a> {
                 let _ = member;
                 self.expr(m, variant, value, None)
             }
-            FieldPath::Alternatives(_) => Err(unsupported(
-                None,
-                format!(
-                    "field `{name}` of `{variant}` is placed differently by several split arms"
-                ),
-            )),
+            FieldPath::Alternatives(cases) => {
+                // The variant is realized by several arms that place the field differently:
+                // read every placement (plain loads and pure expressions) and select by the
+                // arms' tests, which are disjoint.
+                let mut acc: Option<ValueId> = None;
+                for (guards, path) in cases.iter().rev() {
+                    if matches!(path, FieldPath::Alternatives(_)) {
+                        return Err(unsupported(
+                            None,
+                            format!("field `{name}` of `{variant}`: nested alternatives"),
+                        ));
+                    }
+                    let v = self.path_value(m, variant, name, path)?;
+                    acc = Some(match acc {
+                        None => v,
+                        Some(other) => {
+                            let mut test: Option<ValueId> = None;
+                            for &(s, k) in guards {
+                                let t = self.arm_test(m, s, k)?;
+                                test = Some(match test {
+                                    None => t,
+                                    Some(a) => self.builder(m, true).binary(Op::And, a, t),
+                                });
+                            }
+                            match test {
+                                Some(t) => {
+                                    if m.values[v].ty != m.values[other].ty {
+                                        return Err(unsupported(
+                                            None,
+                                            format!("field `{name}` of `{variant}` has different types in different arms"),
+                                        ));
+                                    }
+                                    self.builder(m, false).select(t, v, other)
+                                }
+                                None => v,
+                            }
+                        }
+                    });
+                }
+                acc.ok_or_else(|| {
+                    unsupported(
+                        None,
+                        format!("field `{name}` of `{variant}` has no placement"),
+                    )
+                })
+            }
         }
     }
 
@@ -473,11 +513,97 @@ impl<'a> Reader<'a> {
                 let (base, stride) = self.buffer(m, &kind)?;
                 Ok(self.load(m, base, Some(i), 0, stride, elem))
             }
+            ExprKind::Call { callee, args } => self.call(m, variant, e, &callee.name, args),
+            ExprKind::Field { base, name } => {
+                let v = self.expr(m, variant, base, None)?;
+                let mut bd = self.builder(m, false);
+                let lane = match name.name.as_str() {
+                    "x" => Some(0),
+                    "y" => Some(1),
+                    "z" => Some(2),
+                    "w" => Some(3),
+                    _ => None,
+                };
+                let r = match (bd.m.types.lanes(bd.value_type(v)), lane) {
+                    (Some(_), Some(i)) => bd.lane(v, i),
+                    _ => bd.field(v, &name.name),
+                };
+                r.ok_or_else(|| {
+                    unsupported(Some(e.span), format!("field `{}` of this value", name.name))
+                })
+            }
+            ExprKind::Tuple(items) => {
+                let mut vals = Vec::new();
+                for it in items {
+                    vals.push(self.expr(m, variant, it, None)?);
+                }
+                Ok(self.builder(m, false).tuple(&vals))
+            }
             ExprKind::Parent(id) => Err(unsupported(
                 Some(id.span),
                 "`parent.` values are not supported by destructor specialization",
             )),
             _ => Err(unsupported(Some(e.span), "this form of layout expression")),
+        }
+    }
+
+    /// A call in a layout expression: a record constructor, a vector constructor (`f32x3(..)`)
+    /// or a builtin whose result has its first argument's type (`fma`, `min`, `fadd_rd`, ...).
+    fn call(
+        &mut self,
+        m: &mut Module,
+        variant: &str,
+        e: &Expr,
+        callee: &str,
+        args: &[Expr],
+    ) -> R<ValueId> {
+        let mut vals: Vec<ValueId> = Vec::new();
+        for a in args {
+            let want = vals.first().map(|&v| m.values[v].ty);
+            vals.push(self.expr(m, variant, a, want)?);
+        }
+        if m.adt(callee).is_some_and(|a| a.is_record()) {
+            let t = m.types.adt(callee);
+            return Ok(self.builder(m, false).ctor(t, None, &vals));
+        }
+        if let Some(t) = vector_type(m, callee) {
+            let elem = match m.types.get(t) {
+                Type::Vector { elem, .. } => *elem,
+                _ => t,
+            };
+            let vals: Vec<ValueId> = vals.into_iter().map(|v| self.convert(m, v, elem)).collect();
+            return self
+                .builder(m, false)
+                .vector(&vals)
+                .ok_or_else(|| unsupported(Some(e.span), "a vector constructor with mixed lanes"));
+        }
+        const SAME_TYPE: [&str; 16] = [
+            "fma",
+            "min",
+            "max",
+            "abs",
+            "sqrt",
+            "floor",
+            "ceil",
+            "round",
+            "trunc",
+            "fadd_rd",
+            "fadd_ru",
+            "fsub_rd",
+            "fsub_ru",
+            "fmul_rd",
+            "fmul_ru",
+            "with_axis",
+        ];
+        match vals.first() {
+            Some(&first) if SAME_TYPE.contains(&callee) => {
+                let t = m.values[first].ty;
+                Ok(self.builder(m, false).intrinsic(callee, &vals, t))
+            }
+            _ => Err(unsupported(
+                Some(e.span),
+                format!("a call of `{callee}` in a layout expression"),
+            )),
         }
     }
 
@@ -718,6 +844,15 @@ impl<'a> Reader<'a> {
         }
         acc.expect("non-empty set")
     }
+}
+
+/// The vector type a constructor name denotes (`f32x3`, `u16x3`).
+fn vector_type(m: &mut Module, name: &str) -> Option<TypeId> {
+    let pos = name.rfind('x')?;
+    let lanes: u32 = name[pos + 1..].parse().ok()?;
+    let elem = super::prim(&name[..pos])?;
+    let e = m.ty(elem);
+    Some(m.types.vector(e, lanes))
 }
 
 fn const_int(e: &Expr) -> Option<i128> {
