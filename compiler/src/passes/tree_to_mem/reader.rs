@@ -323,6 +323,11 @@ impl<'a> Reader<'a> {
                             ));
                         };
                         let inner_stride = g.arrays[array].stride;
+                        let key = format!("#tile{group}.{array}");
+                        let slot_key = format!("#slot{group}");
+                        if let (Some(a), Some(slot)) = (self.lookup(&key), self.lookup(&slot_key)) {
+                            return Ok((a, Some(slot), offset, inner_stride));
+                        }
                         let block_off = g.arrays[array].offset;
                         let count = *count;
                         let prev = steps[n - 2].clone();
@@ -363,6 +368,8 @@ impl<'a> Reader<'a> {
                         };
                         let op = bd.insert(spec.results(&[p]).attr("offset", Attr::Int(addr_off)));
                         let a = bd.result(op, 0);
+                        self.remember(key, a, false);
+                        self.remember(slot_key, slot, false);
                         Ok((a, Some(slot), offset, inner_stride))
                     }
                     Index::Missing => Err(unsupported(span, "a group without `by`")),

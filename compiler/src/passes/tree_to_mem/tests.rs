@@ -310,16 +310,24 @@ layout Nest(I: u32) {
   };
 };
 "#;
-    match mem(&[COUNT, layout], "Nest") {
-        Ok(ir) => {
-            let f = func(&ir, "count");
-            assert!(f.contains("mem.addr"), "{f}");
-            assert!(f.contains("tree.rem"), "{f}");
-        }
-        // The layout language may word nested groups differently; then the error is the
-        // front end's, never a panic.
-        Err(e) => assert!(e.contains("error["), "{e}"),
-    }
+    let ir = mem(&[COUNT, layout], "Nest").unwrap_or_else(|e| panic!("{e}"));
+    let f = func(&ir, "count");
+    // Tile `I / 4` of the 128-byte `tiles` elements, slot `I % 4` of 32 bytes, computed once.
+    assert_eq!(
+        count(f, r#""mem.addr"(%5, %3) {offset = 0, stride = 128}"#),
+        1,
+        "{f}"
+    );
+    assert_eq!(count(f, r#""tree.div"(%1, %2)"#), 1, "{f}");
+    assert_eq!(count(f, r#""tree.rem"(%1, %2)"#), 1, "{f}");
+    assert!(
+        f.contains(r#""mem.load"(%6, %4) {offset = 28, stride = 32} : (ptr, u32) -> u16"#),
+        "{f}"
+    );
+    assert!(
+        f.contains(r#""mem.load"(%6, %4) {offset = 24, stride = 32} : (ptr, u32) -> u32"#),
+        "{f}"
+    );
 }
 
 #[test]
@@ -330,22 +338,19 @@ func mk(bvh: BVH) -> BVH = bvh
 "#;
     let e = mem(&[build, fixtures::PBRT], "LinearBVH").unwrap_err();
     assert!(e.contains("E0380"), "{e}");
-    // Arrays of children (BVH8's `children: BVH8[8]`) are not references of the layout.
-    let walk8 = r#"
-func n8(t: BVH8) -> u32 =
-  match t {
-    | Interior(_, children) -> 8
-    | Leaf(nprims, _) -> nprims as u32
+    // Tree values put in a tuple.
+    let tuple = r#"
+func pair(bvh: BVH) -> u32 =
+  match bvh {
+    | Interior(_, left, right) -> { let p: (BVH, BVH) = (left, right); pair(p[1]) }
+    | Leaf(_, _, _) -> 0
   }
 "#;
-    let e = mem(&[fixtures::BVH8_TYPE, walk8, fixtures::BVH8_Q8], "Bvh8Q8");
-    if let Ok(ir) = &e {
-        // `children` unused: the match still specializes, through `from nodes[R]`.
-        assert!(
-            func(ir, "n8").contains("mem.load") || func(ir, "n8").contains("tree.if"),
-            "{ir}"
-        );
-    }
+    let e = mem(&[tuple, fixtures::PBRT], "LinearBVH").unwrap_err();
+    assert!(
+        e.contains("E0380") && e.contains("`tree.tuple` on a tree value"),
+        "{e}"
+    );
     // A layout that does not exist.
     let e = mem(&[COUNT, fixtures::PBRT], "Nope").unwrap_err();
     assert!(e.contains("E0908"), "{e}");
@@ -368,8 +373,11 @@ layout Par(I: u32, lo: f32x3 = parent.lo) {
 };
 "#;
     let algo = "func lo(bvh: BVH) -> f32 = bvh.bounds.low.x";
-    match mem(&[algo, layout], "Par") {
-        Ok(ir) => panic!("parent components must be diagnosed, got\n{ir}"),
-        Err(e) => assert!(e.contains("error["), "{e}"),
-    }
+    let e = mem(&[algo, layout], "Par").unwrap_err();
+    assert!(
+        e.contains("E0380") && e.contains("tree-carried reference components"),
+        "{e}"
+    );
+    let e = mem(&[COUNT, layout], "Par").unwrap_err();
+    assert!(e.contains("E0380") && e.contains("(`parent.`)"), "{e}");
 }
