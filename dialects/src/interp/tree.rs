@@ -184,6 +184,11 @@ impl Interp<'_> {
         let results: Vec<Val> = match kind {
             Op::Yield => return Ok(Step::Leave(Flow::Yield(args))),
             Op::Return => return Ok(Step::Leave(Flow::Return(args))),
+            Op::This | Op::BuildStore | Op::BuildStoreBits | Op::BuildChild | Op::Append => {
+                return Err(bad(
+                    "build ops run only after constructor specialization, not in the interpreter",
+                ))
+            }
             Op::Const => {
                 let ty = self.result_type(op)?;
                 let a = o.attr("value").ok_or_else(|| bad("no value"))?;
