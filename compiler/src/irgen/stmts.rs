@@ -124,6 +124,10 @@ impl FuncCx<'_> {
                 b.insert(OpSpec::new(Op::Foreach).operands(&[arr]).region(region));
                 Ok(Flow::Next)
             }
+            StmtKind::Build { field, value } if self.build.is_some() => {
+                self.build_stmt(b, s, field, value.as_ref())?;
+                Ok(Flow::Next)
+            }
             StmtKind::Build { .. } => Err(self.bug("a `build` statement inside a function")),
         }
     }
