@@ -2,7 +2,8 @@
 //!
 //! * `-O0`: nothing (the IR exactly as generated, for reading and for pass tests).
 //! * `-O1` and up: `const-fold` first, so that `dce` sees the operands it made dead.
-//! * `--emit=mem` (with `--layout`): `destructor-specialize` first, then the level's passes.
+//! * `--emit=mem` (with `--layout`): `destructor-specialize` and `constructor-specialize`
+//!   first, then the level's passes.
 
 use super::cli::{Emit, Options};
 use crate::passes;
@@ -30,6 +31,7 @@ pub fn select(opts: &Options) -> Result<Vec<String>, Diagnostic> {
             let mut names = Vec::new();
             if opts.emit == Emit::Mem {
                 names.push("destructor-specialize".to_string());
+                names.push("constructor-specialize".to_string());
             }
             names.extend(for_level(opts.opt_level));
             names

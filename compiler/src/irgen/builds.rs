@@ -32,6 +32,8 @@ pub(super) struct BuildCx {
     pub this_ty: TypeId,
     /// Logical field names, by index.
     pub fields: Vec<String>,
+    /// The layout (index in `typed.layouts`).
+    pub layout: usize,
 }
 
 /// Adds the build functions of every `build` of `program`.
@@ -94,6 +96,7 @@ pub(super) fn generate_builds(
                 &[],
                 names,
                 this_ty,
+                layout.0 as usize,
                 &body,
                 &attrs,
             );
@@ -124,6 +127,7 @@ pub(super) fn generate_builds(
                 &[this_ty],
                 names,
                 this_ty,
+                layout.0 as usize,
                 &body,
                 &attrs,
             );
@@ -153,6 +157,7 @@ fn one(
     results: &[TypeId],
     fields: Vec<String>,
     this_ty: TypeId,
+    layout: usize,
     body: &Stmt,
     attrs: &[(&str, &str)],
 ) {
@@ -174,6 +179,7 @@ fn one(
             name: name.to_string(),
             this_ty,
             fields,
+            layout,
         }),
     };
     let ok = if results.is_empty() {
@@ -267,6 +273,17 @@ impl FuncCx<'_> {
         Ok(b.result(op, 0))
     }
 
+    /// True when `member` is a stored field of the build's layout.
+    fn stores(&self, member: Option<crate::sema::MemberId>) -> bool {
+        let Some(mid) = member else {
+            return false;
+        };
+        let bc = self.build.as_ref();
+        bc.and_then(|bc| self.typed.layouts.get(bc.layout))
+            .and_then(|l| l.members.get(mid.0 as usize))
+            .is_some_and(|mi| mi.kind == crate::sema::MemberKindInfo::Stored)
+    }
+
     /// `build x`, `build x = e`.
     pub(super) fn build_stmt(
         &mut self,
@@ -287,8 +304,13 @@ impl FuncCx<'_> {
                 let t = self.build_cx()?.this_ty;
                 let idx = self.params[i as usize];
                 b.set_span(Some(s.span));
-                self.child(b, &field.name, idx, t);
-                return Ok(());
+                let r = self.child(b, &field.name, idx, t);
+                // A recursive field the layout stores (`left: ptr`) keeps the child's
+                // reference; a derived one (`left = I + 1`) only places the child.
+                if !self.stores(target.member) {
+                    return Ok(());
+                }
+                r
             }
             (None, Some(i), false) => self.params[i as usize],
             (None, None, _) => {

@@ -19,5 +19,12 @@ pub fn registry() -> PassRegistry {
         output: Level::Mem,
         create: || Box::new(tree_to_mem::destructor::DestructorSpecialize),
     });
+    r.register(PassInfo {
+        name: "constructor-specialize",
+        summary: "generate @L.sizes and @L.build, the packer of the layout, from its build (needs --layout)",
+        input: Level::Mem,
+        output: Level::Mem,
+        create: || Box::new(tree_to_mem::constructor::ConstructorSpecialize),
+    });
     r
 }

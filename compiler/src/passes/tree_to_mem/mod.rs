@@ -15,6 +15,7 @@
 //! slices, slices and elements of global arrays) inline, each name at most once per
 //! destruction. This stands in for the per-layout accessor functions of the design note §1.
 
+pub mod constructor;
 pub mod destructor;
 mod reader;
 

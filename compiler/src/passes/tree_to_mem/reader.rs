@@ -383,6 +383,92 @@ impl<'a> Reader<'a> {
         }
     }
 
+    /// Stores `value` into stored field `name` of the node (constructor specialization).
+    pub fn store_field(
+        &mut self,
+        m: &mut Module,
+        variant: &str,
+        name: &str,
+        value: ValueId,
+    ) -> R<()> {
+        let path = self
+            .resolver
+            .resolve(variant, name)
+            .map_err(|e| resolve_error(self.spec, &e))?;
+        let FieldPath::Stored {
+            member,
+            steps,
+            storage,
+            ty,
+            ..
+        } = path
+        else {
+            return Err(unsupported(
+                Some(self.spec.model.span),
+                format!("`build {name}` of `{variant}` targets no single stored field"),
+            ));
+        };
+        let span = Some(self.spec.model.members[member].span);
+        let want = ir_type(m, &ty);
+        let value = match want {
+            Some(t) if t != m.values[value].ty => {
+                if m.types.as_int(t).is_some() && m.types.as_int(m.values[value].ty).is_some() {
+                    self.convert(m, value, t)
+                } else {
+                    return Err(unsupported(
+                        span,
+                        format!("`build {name}`: the value's type differs from the stored type"),
+                    ));
+                }
+            }
+            _ => value,
+        };
+        let (base, index, offset, stride) = self.address(m, variant, &steps, storage, span)?;
+        let mut bd = self.builder(m, false);
+        let mut spec = OpSpec::new(mem::Op::Store).attr("offset", Attr::Int(offset as i128));
+        spec = match index {
+            Some(i) => spec
+                .operands(&[base, i, value])
+                .attr("stride", Attr::Int(stride as i128)),
+            None => spec.operands(&[base, value]),
+        };
+        bd.insert(spec);
+        Ok(())
+    }
+
+    /// The global array behind logical array field `name` of `variant` (`data = primitives[..]`):
+    /// its buffer base, stride and element type.
+    pub fn array_of_field(
+        &mut self,
+        m: &mut Module,
+        variant: &str,
+        name: &str,
+    ) -> R<(ValueId, u64, TypeId)> {
+        let path = self
+            .resolver
+            .resolve(variant, name)
+            .map_err(|e| resolve_error(self.spec, &e))?;
+        if let FieldPath::Derived { value, .. } = &path {
+            if let ExprKind::Slice { base, .. } = &value.kind {
+                if let ExprKind::Name(id) = &base.kind {
+                    if let Some((kind, elem)) = self.global_array(m, variant, &id.name) {
+                        let (b, stride) = self.buffer(m, &kind)?;
+                        return Ok((b, stride, elem));
+                    }
+                }
+            }
+        }
+        Err(unsupported(
+            Some(self.spec.model.span),
+            format!("`append` to `{name}` of `{variant}`, which is no slice of a global array"),
+        ))
+    }
+
+    /// The buffer base of `kind` (for `this` of pointer layouts and the globals).
+    pub fn buffer_base(&mut self, m: &mut Module, kind: &BufferKind) -> R<(ValueId, u64)> {
+        self.buffer(m, kind)
+    }
+
     /// The global array a name denotes, if it does: its buffer kind and element type.
     fn global_array(
         &mut self,

@@ -1,0 +1,645 @@
+//! `constructor-specialize` (paper §7.2): the packer of a layout, from its `build`.
+//!
+//! Input: the build functions irgen made for the chosen layout (`@L.build.<Variant>`,
+//! `@L.build.root`, attribute `build_of = "L"`) and the [`LayoutSpec`]. Output:
+//! * the build functions rewritten to `mem`: extra first parameters `(%tree: ptr, %B: ptr,
+//!   %counter: !tree.ref<u32>, %cursor: !tree.ref<u32>, %status: !tree.ref<i32>)`; `tree.this`
+//!   becomes the node's placement index (the counter, taken on entry for `order=pre`, after the
+//!   last child is built for `order=post`), or its address `mem.addr` for pointer references;
+//!   `tree.build_store` a `mem.store` at the field's resolved path; `tree.build_child` a call of
+//!   `@L.node`; `tree.append` a copy loop into the global array at the running cursor;
+//! * `@L.node(%tree, %B, %i: u32, %counter, %cursor, %status) -> (R)`: reads logical node `%i`
+//!   and calls the build function of its variant;
+//! * `@L.sizes(%tree: ptr, %sizes: ptr)`: the byte size of every buffer (`u64` each, plan order);
+//! * `@L.build(%tree: ptr, %B: ptr) -> (i32)`: writes the globals that size arrays, runs
+//!   `build root`, builds the tree from its root and returns the status (0 = ok).
+//!
+//! `%tree` points to the C-ABI view of the logical tree (`docs/design/specialization.md` §3):
+//! `LogicalTreeView { nodes: ptr @0, node_count: u32 @8, root: u32 @12, prims: ptr @16,
+//! prim_count: u32 @24 }` (32 bytes); `LogicalNode` is 44 bytes (`kind` @0, `bounds` @4,
+//! `child[2]` @28, `prim_offset` @36, `prim_count` @40), primitives are 40-byte `Triangle`s.
+//! Build functions of other layouts are removed. The logical tree is a binary BVH; an ADT of
+//! another shape, `this[a:b] = e` and `from` groups are reported (E0380).
+
+use super::reader::Reader;
+use super::{spec_of, unsupported, LayoutSpec};
+use crate::layout::model::GroupKind;
+use crate::layout::plan::{BufferKind, Count};
+use scion_ir::attr::Attr;
+use scion_ir::diag::{Diagnostic, Diagnostics};
+use scion_ir::module::ValueDef;
+use scion_ir::rewrite::{erase_op, replace_all_uses};
+use scion_ir::tree::{CmpPred, Op};
+use scion_ir::types::{IntTy, Type};
+use scion_ir::walk::{func_ops, Order};
+use scion_ir::{
+    mem, Builder, FuncId, InsertPoint, Module, OpKind, OpSpec, Pass, PassCx, PassError, TypeId,
+    ValueId,
+};
+
+/// Byte offsets of the logical tree's C structs.
+mod abi {
+    pub const VIEW_NODES: u64 = 0;
+    pub const VIEW_NODE_COUNT: u64 = 8;
+    pub const VIEW_ROOT: u64 = 12;
+    pub const VIEW_PRIMS: u64 = 16;
+    pub const VIEW_PRIM_COUNT: u64 = 24;
+    pub const NODE_STRIDE: u64 = 44;
+    pub const NODE_KIND: u64 = 0;
+    pub const NODE_BOUNDS: u64 = 4;
+    pub const NODE_CHILD: u64 = 28;
+    pub const NODE_PRIM_OFFSET: u64 = 36;
+    pub const NODE_PRIM_COUNT: u64 = 40;
+    pub const PRIM_STRIDE: u64 = 40;
+}
+
+/// The pass object.
+#[derive(Default)]
+pub struct ConstructorSpecialize;
+
+impl Pass for ConstructorSpecialize {
+    fn name(&self) -> &'static str {
+        "constructor-specialize"
+    }
+
+    fn summary(&self) -> &'static str {
+        "generate @L.sizes and @L.build, the packer of the layout, from its build (needs --layout)"
+    }
+
+    fn run(&mut self, m: &mut Module, cx: &mut PassCx) -> Result<bool, PassError> {
+        let spec = spec_of(cx, self.name())?;
+        specialize(m, spec).map_err(PassError::Diagnostics)
+    }
+}
+
+/// The values every rewritten build function receives first.
+#[derive(Clone, Copy)]
+struct Ctx {
+    tree: ValueId,
+    b: ValueId,
+    counter: ValueId,
+    cursor: ValueId,
+    status: ValueId,
+}
+
+/// Generates the packer of `spec`'s layout. Returns whether anything changed.
+pub fn specialize(m: &mut Module, spec: &LayoutSpec) -> Result<bool, Diagnostics> {
+    let lname = spec.model.name.name.clone();
+    let mut ours = Vec::new();
+    let mut changed = false;
+    for f in m.func_order.clone() {
+        match m.funcs[f].attrs.get("build_of").and_then(Attr::as_str) {
+            Some(l) if l == lname => ours.push(f),
+            Some(_) => {
+                m.remove_func(f);
+                changed = true;
+            }
+            None => {}
+        }
+    }
+    if ours.is_empty() {
+        return Ok(changed);
+    }
+    let mut diags = Diagnostics::default();
+    if let Err(d) = generate(m, spec, &ours) {
+        diags.push(d);
+        return Err(diags);
+    }
+    Ok(true)
+}
+
+fn attr(m: &Module, f: FuncId, key: &str) -> String {
+    m.funcs[f]
+        .attrs
+        .get(key)
+        .and_then(Attr::as_str)
+        .unwrap_or_default()
+        .to_string()
+}
+
+fn generate(m: &mut Module, spec: &LayoutSpec, ours: &[FuncId]) -> Result<(), Diagnostic> {
+    let lname = spec.model.name.name.clone();
+    let span = Some(spec.model.span);
+    let adt_name = spec
+        .model
+        .adt
+        .as_ref()
+        .map(|a| a.name.clone())
+        .ok_or_else(|| unsupported(span, "a layout whose tree type is unknown"))?;
+    let adt = m
+        .adt(&adt_name)
+        .cloned()
+        .ok_or_else(|| unsupported(span, "the tree type is not declared"))?;
+    let tree_ty = m.types.adt(&adt_name);
+    // Interior: the variant with recursive fields; Leaf: the other.
+    let recursive =
+        |v: &scion_ir::module::Variant| v.fields.iter().filter(|f| f.ty == tree_ty).count();
+    let (interior, leaf) =
+        match adt.variants.as_slice() {
+            [a, b] if recursive(a) == 2 && recursive(b) == 0 => (a.name.clone(), b.name.clone()),
+            [a, b] if recursive(b) == 2 && recursive(a) == 0 => (b.name.clone(), a.name.clone()),
+            _ => return Err(unsupported(
+                span,
+                format!(
+                    "constructor specialization packs binary BVHs (`{adt_name}` has another shape)"
+                ),
+            )),
+        };
+    let find = |v: &str| ours.iter().copied().find(|&f| attr(m, f, "variant") == v);
+    let (Some(fi), Some(fl)) = (find(&interior), find(&leaf)) else {
+        return Err(unsupported(
+            span,
+            format!("the build of `{lname}` has no function for `{interior}` or `{leaf}` (a construct irgen cannot lower)"),
+        ));
+    };
+    let root_fn = find("root");
+    let logical_of = |v: &str| -> Vec<TypeId> {
+        adt.fields_of(Some(v))
+            .unwrap_or_default()
+            .iter()
+            .map(|f| f.ty)
+            .collect()
+    };
+    let (li, ll) = (logical_of(&interior), logical_of(&leaf));
+    let shared: Vec<TypeId> = adt.shared.iter().map(|f| f.ty).collect();
+    let post = attr(m, fi, "order") == "post";
+    let ref_ty = m.funcs[fi]
+        .results
+        .first()
+        .copied()
+        .ok_or_else(|| unsupported(span, "a variant build without a result"))?;
+    let ptr = m.ty(Type::Ptr);
+    let u32t = m.types.u32();
+    let i32t = m.types.i32();
+    let ru32 = m.types.reference(u32t);
+    let ri32 = m.types.reference(i32t);
+    let extra = [ptr, ptr, ru32, ru32, ri32];
+    // Declare @L.node first so that build functions can call it.
+    let node_name = format!("{lname}.node");
+    let node_params = [ptr, ptr, u32t, ru32, ru32, ri32];
+    let (node_fn, node_entry) = m.add_func(&node_name, &node_params, &[ref_ty]);
+    m.func_spans.insert(node_fn, spec.model.span);
+    for &f in ours {
+        let variant = attr(m, f, "variant");
+        rewrite_build(m, spec, f, &variant, &extra, &node_name, ref_ty, post)?;
+    }
+    // @L.node: dispatch on the logical node's kind.
+    {
+        let args = m.blocks[node_entry].args.to_vec();
+        let (tree, i) = (args[0], args[2]);
+        let pass = [args[0], args[1], args[3], args[4], args[5]];
+        let mut bd = Builder::at_end(m, node_entry);
+        let nodes = load(&mut bd, tree, None, abi::VIEW_NODES, 0, ptr);
+        let kind = load(
+            &mut bd,
+            nodes,
+            Some(i),
+            abi::NODE_KIND,
+            abi::NODE_STRIDE,
+            u32t,
+        );
+        let zero = bd.const_int(u32t, 0);
+        let is_interior = bd.cmp(CmpPred::Eq, kind, zero);
+        let fi_name = bd.m.funcs[fi].name.clone();
+        let fl_name = bd.m.funcs[fl].name.clone();
+        let fi_params = bd.m.funcs[fi].params.clone();
+        let fl_params = bd.m.funcs[fl].params.clone();
+        let prims = load(&mut bd, tree, None, abi::VIEW_PRIMS, 0, ptr);
+        let failed = std::cell::RefCell::new(None);
+        let arm = |bd: &mut Builder<'_>, name: &str, params: &[TypeId], logical: &[TypeId]| {
+            match logical_fields(bd, params, logical, nodes, prims, i, tree_ty) {
+                Ok(vals) => {
+                    let all: Vec<ValueId> = pass.iter().copied().chain(vals).collect();
+                    let c = bd.call(name, &all, &[ref_ty]);
+                    let r = bd.result(c, 0);
+                    bd.yield_(&[r]);
+                }
+                Err(e) => {
+                    *failed.borrow_mut() = Some(e);
+                    let r = bd.const_int(u32t, 0);
+                    bd.yield_(&[r]);
+                }
+            }
+        };
+        let if_op = bd.if_(
+            is_interior,
+            &[ref_ty],
+            |bd| arm(bd, &fi_name, &fi_params[5..], &li),
+            |bd| arm(bd, &fl_name, &fl_params[5..], &ll),
+        );
+        if let Some(e) = failed.into_inner() {
+            return Err(unsupported(span, e));
+        }
+        let r = bd.result(if_op, 0);
+        bd.ret(&[r]);
+    }
+    sizes_fn(m, spec, &lname)?;
+    build_fn(
+        m, spec, &lname, &node_name, root_fn, ref_ty, &shared, tree_ty,
+    )?;
+    Ok(())
+}
+
+fn load(
+    bd: &mut Builder<'_>,
+    base: ValueId,
+    index: Option<ValueId>,
+    offset: u64,
+    stride: u64,
+    t: TypeId,
+) -> ValueId {
+    let mut spec = OpSpec::new(mem::Op::Load)
+        .results(&[t])
+        .attr("offset", Attr::Int(offset as i128));
+    spec = match index {
+        Some(i) => spec
+            .operands(&[base, i])
+            .attr("stride", Attr::Int(stride as i128)),
+        None => spec.operands(&[base]),
+    };
+    let op = bd.insert(spec);
+    bd.result(op, 0)
+}
+
+fn store(bd: &mut Builder<'_>, base: ValueId, offset: u64, v: ValueId) {
+    bd.insert(
+        OpSpec::new(mem::Op::Store)
+            .operands(&[base, v])
+            .attr("offset", Attr::Int(offset as i128)),
+    );
+}
+
+/// The logical fields of node `i` for a build function's parameter types (after `%tree`..).
+fn logical_fields(
+    bd: &mut Builder<'_>,
+    params: &[TypeId],
+    logical: &[TypeId],
+    nodes: ValueId,
+    prims: ValueId,
+    i: ValueId,
+    tree_ty: TypeId,
+) -> Result<Vec<ValueId>, String> {
+    let u32t = bd.m.types.u32();
+    let mut out = Vec::new();
+    let mut child = 0;
+    for (&p, &l) in params.iter().zip(logical) {
+        let ty = bd.m.types.get(p).clone();
+        let v = match ty {
+            Type::Adt(name) if name == "AABB" => load(bd, nodes, Some(i), abi::NODE_BOUNDS, abi::NODE_STRIDE, p),
+            _ if l == tree_ty && p == u32t && child < 2 => {
+                // A recursive field (logical child index).
+                let v = load(bd, nodes, Some(i), abi::NODE_CHILD + 4 * child, abi::NODE_STRIDE, u32t);
+                child += 1;
+                v
+            }
+            Type::Int(_) => {
+                let n = load(bd, nodes, Some(i), abi::NODE_PRIM_COUNT, abi::NODE_STRIDE, u32t);
+                if p == u32t {
+                    n
+                } else {
+                    bd.cast(n, p)
+                }
+            }
+            Type::View(elem) if matches!(bd.m.types.get(elem), Type::Adt(n) if n == "Triangle") => {
+                let start = load(bd, nodes, Some(i), abi::NODE_PRIM_OFFSET, abi::NODE_STRIDE, u32t);
+                let len = load(bd, nodes, Some(i), abi::NODE_PRIM_COUNT, abi::NODE_STRIDE, u32t);
+                let op = bd.insert(
+                    OpSpec::new(mem::Op::View)
+                        .operands(&[prims, start, len])
+                        .results(&[p])
+                        .attr("stride", Attr::Int(abi::PRIM_STRIDE as i128)),
+                );
+                bd.result(op, 0)
+            }
+            _ => return Err(format!("a logical field of type {} (the logical tree has AABB bounds, two children, and triangles)", bd.m.types.display(p))),
+        };
+        out.push(v);
+    }
+    Ok(out)
+}
+
+/// Rewrites one build function in place (see the module docs).
+#[allow(clippy::too_many_arguments)]
+fn rewrite_build(
+    m: &mut Module,
+    spec: &LayoutSpec,
+    f: FuncId,
+    variant: &str,
+    extra: &[TypeId],
+    node_name: &str,
+    ref_ty: TypeId,
+    post: bool,
+) -> Result<(), Diagnostic> {
+    let span = m.func_spans.get(f).copied();
+    let entry = m.entry_block(f).expect("build functions have bodies");
+    // Extra parameters first; array parameters become views of the logical primitives.
+    let mut new_args = Vec::new();
+    for &t in extra {
+        new_args.push(m.add_block_arg(entry, t));
+    }
+    let n = extra.len();
+    let args = &mut m.blocks[entry].args;
+    args.rotate_right(n);
+    let args = args.clone();
+    for (k, &a) in args.iter().enumerate() {
+        m.values[a].def = ValueDef::BlockArg(entry, k as u32);
+        if let Type::Array { elem, len: None } = m.types.get(m.values[a].ty).clone() {
+            m.values[a].ty = m.ty(Type::View(elem));
+        }
+    }
+    m.funcs[f].params = args.iter().map(|&a| m.values[a].ty).collect();
+    let cx = Ctx {
+        tree: args[0],
+        b: args[1],
+        counter: args[2],
+        cursor: args[3],
+        status: args[4],
+    };
+    let is_root = variant == "root";
+    let variant = if is_root {
+        spec.model
+            .adt
+            .as_ref()
+            .and_then(|a| a.variants.first())
+            .map(|v| v.name.name.clone())
+            .unwrap_or_default()
+    } else {
+        variant.to_string()
+    };
+    let ops = func_ops(m, f, Order::Pre);
+    // Where `this` is taken: on entry (pre-order), or after the last top-level op that builds
+    // a child (post-order).
+    let body_ops = m.blocks[entry].ops.clone();
+    let mut at = InsertPoint::Before(body_ops[0]);
+    if post {
+        for &o in &body_ops {
+            let mut builds = false;
+            if m.ops[o].kind == OpKind::Tree(Op::BuildChild) {
+                builds = true;
+            }
+            for &r in &m.ops[o].regions {
+                scion_ir::walk::walk_region(m, r, Order::Pre, &mut |x| {
+                    if m.ops[x].kind == OpKind::Tree(Op::BuildChild) {
+                        builds = true;
+                    }
+                });
+            }
+            if builds {
+                at = InsertPoint::After(o);
+            }
+        }
+    }
+    let this = if is_root {
+        None
+    } else {
+        Some(take_this(m, spec, cx, at, ref_ty)?)
+    };
+    for op in ops {
+        let kind = m.ops[op].kind;
+        let field = m.ops[op].str_attr("field").unwrap_or_default().to_string();
+        match kind {
+            OpKind::Tree(Op::This) => {
+                let Some(t) = this else {
+                    return Err(unsupported(span, "`this` in `build root`"));
+                };
+                let r = m.ops[op].results[0];
+                replace_all_uses(m, r, t);
+                erase_op(m, op);
+            }
+            OpKind::Tree(Op::BuildStore) => {
+                let v = m.ops[op].operands[0];
+                let comps = this.into_iter().collect();
+                let mut rd = Reader::new(spec, cx.b, comps, InsertPoint::Before(op));
+                rd.store_field(m, &variant, &field, v)?;
+                erase_op(m, op);
+            }
+            OpKind::Tree(Op::BuildChild) => {
+                let idx = m.ops[op].operands[0];
+                let mut bd = Builder::new(m);
+                bd.set_insertion_point(InsertPoint::Before(op));
+                let c = bd.call(
+                    node_name,
+                    &[cx.tree, cx.b, idx, cx.counter, cx.cursor, cx.status],
+                    &[ref_ty],
+                );
+                let r = bd.result(c, 0);
+                let old = m.ops[op].results[0];
+                replace_all_uses(m, old, r);
+                erase_op(m, op);
+            }
+            OpKind::Tree(Op::Append) => {
+                let (data, count) = (m.ops[op].operands[0], m.ops[op].operands[1]);
+                let rt = m.values[m.ops[op].results[0]].ty;
+                let comps = this.into_iter().collect();
+                let mut rd = Reader::new(spec, cx.b, comps, InsertPoint::Before(op));
+                let (gbuf, stride, elem) = rd.array_of_field(m, &variant, &field)?;
+                let u32t = m.types.u32();
+                let mut bd = Builder::new(m);
+                bd.set_insertion_point(InsertPoint::Before(op));
+                let start = bd.load(cx.cursor).expect("cursor is a cell");
+                let n = if bd.value_type(count) == u32t {
+                    count
+                } else {
+                    bd.cast(count, u32t)
+                };
+                let next = bd.binary(Op::Add, start, n);
+                bd.store(cx.cursor, next);
+                let body = bd.region(&[elem, u32t], |bd, a| {
+                    let at = bd.binary(Op::Add, start, a[1]);
+                    bd.insert(
+                        OpSpec::new(mem::Op::Store)
+                            .operands(&[gbuf, at, a[0]])
+                            .attr("offset", Attr::Int(0))
+                            .attr("stride", Attr::Int(stride as i128)),
+                    );
+                    bd.yield_(&[]);
+                });
+                bd.insert(OpSpec::new(Op::Foreach).operands(&[data]).region(body));
+                let r = if rt == u32t {
+                    start
+                } else {
+                    bd.cast(start, rt)
+                };
+                let old = m.ops[op].results[0];
+                replace_all_uses(m, old, r);
+                erase_op(m, op);
+            }
+            OpKind::Tree(Op::BuildStoreBits) => {
+                return Err(unsupported(
+                    m.span(op).or(span),
+                    "`this[a:b] = e` in a build",
+                ));
+            }
+            _ => {}
+        }
+    }
+    m.funcs[f]
+        .attrs
+        .set("build_of", Attr::str(spec.model.name.name.clone()));
+    Ok(())
+}
+
+/// Takes the next placement index at `at`: `this` is the index, or the node's address for a
+/// pointer-referenced group.
+fn take_this(
+    m: &mut Module,
+    spec: &LayoutSpec,
+    cx: Ctx,
+    at: InsertPoint,
+    ref_ty: TypeId,
+) -> Result<ValueId, Diagnostic> {
+    let u32t = m.types.u32();
+    let mut bd = Builder::new(m);
+    bd.set_insertion_point(at);
+    let c = bd.load(cx.counter).expect("counter is a cell");
+    let one = bd.const_int(u32t, 1);
+    let next = bd.binary(Op::Add, c, one);
+    bd.store(cx.counter, next);
+    if ref_ty == u32t {
+        return Ok(c);
+    }
+    if matches!(m.types.get(ref_ty), Type::Ptr) {
+        let model = &spec.model;
+        let Some(g) = model
+            .groups
+            .iter()
+            .position(|g| g.kind == GroupKind::Pointer)
+        else {
+            return Err(unsupported(
+                Some(model.span),
+                "a pointer reference without a group indexed by it",
+            ));
+        };
+        let kind = BufferKind::GroupArray { group: g, array: 0 };
+        let mut rd = Reader::new(spec, cx.b, vec![], at);
+        let (base, stride) = rd.buffer_base(m, &kind)?;
+        let mut bd = Builder::new(m);
+        bd.set_insertion_point(at);
+        let ptr = bd.m.ty(Type::Ptr);
+        let op = bd.insert(
+            OpSpec::new(mem::Op::Addr)
+                .operands(&[base, c])
+                .results(&[ptr])
+                .attr("offset", Attr::Int(0))
+                .attr("stride", Attr::Int(stride as i128)),
+        );
+        return Ok(bd.result(op, 0));
+    }
+    Err(unsupported(
+        Some(spec.model.span),
+        "a reference type other than `u32` or `ptr` in a build",
+    ))
+}
+
+/// `@L.sizes(%tree, %sizes)`.
+fn sizes_fn(m: &mut Module, spec: &LayoutSpec, lname: &str) -> Result<(), Diagnostic> {
+    let ptr = m.ty(Type::Ptr);
+    let u32t = m.types.u32();
+    let u64t = m.types.int(IntTy::U64);
+    let (f, entry) = m.add_func(&format!("{lname}.sizes"), &[ptr, ptr], &[]);
+    m.func_spans.insert(f, spec.model.span);
+    let args = m.blocks[entry].args.to_vec();
+    let mut bd = Builder::at_end(m, entry);
+    let nc = load(&mut bd, args[0], None, abi::VIEW_NODE_COUNT, 0, u32t);
+    let pc = load(&mut bd, args[0], None, abi::VIEW_PRIM_COUNT, 0, u32t);
+    for (i, buf) in spec.plan.buffers.iter().enumerate() {
+        let count =
+            match &buf.count {
+                Count::One => bd.const_int(u32t, 1),
+                Count::Nodes { per_element: 1, .. } => nc,
+                Count::Nodes { per_element, .. } => {
+                    let k = bd.const_int(u32t, *per_element as i128 - 1);
+                    let d = bd.const_int(u32t, *per_element as i128);
+                    let s = bd.binary(Op::Add, nc, k);
+                    bd.binary(Op::Div, s, d)
+                }
+                Count::VariantNodes { .. } => nc,
+                Count::LogicalLength { .. } => pc,
+                Count::Global(g) => return Err(unsupported(
+                    Some(spec.model.span),
+                    format!(
+                        "buffer `{}` sized by global `{g}`, which the logical tree does not give",
+                        buf.name
+                    ),
+                )),
+            };
+        let c = bd.cast(count, u64t);
+        let stride = bd.const_int(u64t, buf.stride as i128);
+        let bytes = bd.binary(Op::Mul, c, stride);
+        store(&mut bd, args[1], 8 * i as u64, bytes);
+    }
+    bd.ret(&[]);
+    Ok(())
+}
+
+/// `@L.build(%tree, %B) -> (i32)`.
+#[allow(clippy::too_many_arguments)]
+fn build_fn(
+    m: &mut Module,
+    spec: &LayoutSpec,
+    lname: &str,
+    node_name: &str,
+    root_fn: Option<FuncId>,
+    ref_ty: TypeId,
+    shared: &[TypeId],
+    tree_ty: TypeId,
+) -> Result<(), Diagnostic> {
+    let ptr = m.ty(Type::Ptr);
+    let u32t = m.types.u32();
+    let i32t = m.types.i32();
+    let (f, entry) = m.add_func(&format!("{lname}.build"), &[ptr, ptr], &[i32t]);
+    m.func_spans.insert(f, spec.model.span);
+    let args = m.blocks[entry].args.to_vec();
+    let (tree, b) = (args[0], args[1]);
+    let mut bd = Builder::at_end(m, entry);
+    let zero = bd.const_int(u32t, 0);
+    let counter = bd.var(zero);
+    let cursor = bd.var(zero);
+    let szero = bd.const_int(i32t, 0);
+    let status = bd.var(szero);
+    let nc = load(&mut bd, tree, None, abi::VIEW_NODE_COUNT, 0, u32t);
+    let root = load(&mut bd, tree, None, abi::VIEW_ROOT, 0, u32t);
+    let pc = load(&mut bd, tree, None, abi::VIEW_PRIM_COUNT, 0, u32t);
+    // The globals that size arrays: node and primitive counts.
+    let first = bd.ret(&[szero]);
+    let mut rd = Reader::new(spec, b, vec![], InsertPoint::Before(first));
+    let variant = spec
+        .model
+        .adt
+        .as_ref()
+        .and_then(|a| a.variants.first())
+        .map(|v| v.name.name.clone())
+        .unwrap_or_default();
+    for buf in &spec.plan.buffers {
+        let (global, v) = match &buf.count {
+            Count::Nodes {
+                size_global: Some(g),
+                ..
+            } => (g, nc),
+            Count::LogicalLength { len_global, .. } => (len_global, pc),
+            _ => continue,
+        };
+        rd.store_field(m, &variant, global, v)?;
+    }
+    erase_op(m, first);
+    let mut bd = Builder::at_end(m, entry);
+    let pass = [tree, b, counter, cursor, status];
+    if let Some(rf) = root_fn {
+        let name = bd.m.funcs[rf].name.clone();
+        let params = bd.m.funcs[rf].params[5..].to_vec();
+        let nodes = load(&mut bd, tree, None, abi::VIEW_NODES, 0, ptr);
+        let prims = load(&mut bd, tree, None, abi::VIEW_PRIMS, 0, ptr);
+        let vals = logical_fields(&mut bd, &params, shared, nodes, prims, root, tree_ty)
+            .map_err(|e| unsupported(Some(spec.model.span), format!("`build root` reads {e}")))?;
+        let all: Vec<ValueId> = pass.iter().copied().chain(vals).collect();
+        bd.call(&name, &all, &[]);
+    }
+    bd.call(
+        node_name,
+        &[tree, b, root, counter, cursor, status],
+        &[ref_ty],
+    );
+    let s = bd.load(status).expect("status is a cell");
+    bd.ret(&[s]);
+    Ok(())
+}
