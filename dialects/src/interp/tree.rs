@@ -34,11 +34,17 @@ impl Interp<'_> {
         let o = &self.m.ops[op];
         let kind = match o.kind {
             OpKind::Tree(kind) => kind,
-            OpKind::Mem(_) => {
-                return Err(err(
-                    Some(op),
-                    "the interpreter runs the tree level only, not `mem` ops",
-                ))
+            OpKind::Mem(kind) => {
+                let args: Vec<Val> = o
+                    .operands
+                    .iter()
+                    .map(|&v| self.get(env, v, op))
+                    .collect::<Result<_, _>>()?;
+                let results = self.exec_mem(op, kind, args)?;
+                for (&r, v) in self.m.ops[op].results.iter().zip(results) {
+                    env.insert(r, v);
+                }
+                return Ok(None);
             }
         };
         let args: Vec<Val> = o

@@ -134,17 +134,18 @@ fn generate(m: &mut Module, spec: &LayoutSpec, ours: &[FuncId]) -> Result<(), Di
     // Interior: the variant with recursive fields; Leaf: the other.
     let recursive =
         |v: &scion_ir::module::Variant| v.fields.iter().filter(|f| f.ty == tree_ty).count();
-    let (interior, leaf) =
-        match adt.variants.as_slice() {
-            [a, b] if recursive(a) == 2 && recursive(b) == 0 => (a.name.clone(), b.name.clone()),
-            [a, b] if recursive(b) == 2 && recursive(a) == 0 => (b.name.clone(), a.name.clone()),
-            _ => return Err(unsupported(
+    let (interior, leaf) = match adt.variants.as_slice() {
+        [a, b] if recursive(a) == 2 && recursive(b) == 0 => (a.name.clone(), b.name.clone()),
+        [a, b] if recursive(b) == 2 && recursive(a) == 0 => (b.name.clone(), a.name.clone()),
+        _ => {
+            return Err(unsupported(
                 span,
                 format!(
                     "constructor specialization packs binary BVHs (`{adt_name}` has another shape)"
                 ),
-            )),
-        };
+            ))
+        }
+    };
     let find = |v: &str| ours.iter().copied().find(|&f| attr(m, f, "variant") == v);
     let (Some(fi), Some(fl)) = (find(&interior), find(&leaf)) else {
         return Err(unsupported(
@@ -543,26 +544,27 @@ fn sizes_fn(m: &mut Module, spec: &LayoutSpec, lname: &str) -> Result<(), Diagno
     let nc = load(&mut bd, args[0], None, abi::VIEW_NODE_COUNT, 0, u32t);
     let pc = load(&mut bd, args[0], None, abi::VIEW_PRIM_COUNT, 0, u32t);
     for (i, buf) in spec.plan.buffers.iter().enumerate() {
-        let count =
-            match &buf.count {
-                Count::One => bd.const_int(u32t, 1),
-                Count::Nodes { per_element: 1, .. } => nc,
-                Count::Nodes { per_element, .. } => {
-                    let k = bd.const_int(u32t, *per_element as i128 - 1);
-                    let d = bd.const_int(u32t, *per_element as i128);
-                    let s = bd.binary(Op::Add, nc, k);
-                    bd.binary(Op::Div, s, d)
-                }
-                Count::VariantNodes { .. } => nc,
-                Count::LogicalLength { .. } => pc,
-                Count::Global(g) => return Err(unsupported(
+        let count = match &buf.count {
+            Count::One => bd.const_int(u32t, 1),
+            Count::Nodes { per_element: 1, .. } => nc,
+            Count::Nodes { per_element, .. } => {
+                let k = bd.const_int(u32t, *per_element as i128 - 1);
+                let d = bd.const_int(u32t, *per_element as i128);
+                let s = bd.binary(Op::Add, nc, k);
+                bd.binary(Op::Div, s, d)
+            }
+            Count::VariantNodes { .. } => nc,
+            Count::LogicalLength { .. } => pc,
+            Count::Global(g) => {
+                return Err(unsupported(
                     Some(spec.model.span),
                     format!(
                         "buffer `{}` sized by global `{g}`, which the logical tree does not give",
                         buf.name
                     ),
-                )),
-            };
+                ))
+            }
+        };
         let c = bd.cast(count, u64t);
         let stride = bd.const_int(u64t, buf.stride as i128);
         let bytes = bd.binary(Op::Mul, c, stride);

@@ -124,4 +124,6 @@ fn prim(name: &str) -> Option<Type> {
     })
 }
 #[cfg(test)]
+mod exec_tests;
+#[cfg(test)]
 mod tests;
