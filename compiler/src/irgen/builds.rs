@@ -273,6 +273,32 @@ impl FuncCx<'_> {
         Ok(b.result(op, 0))
     }
 
+    /// An assignment in a build: `this[a:b] = e` is `tree.build_store_bits`; others as usual.
+    pub(super) fn build_assign(
+        &mut self,
+        b: &mut Builder<'_>,
+        s: &Stmt,
+        target: &Expr,
+        value: &Expr,
+    ) -> Result<(), InternalError> {
+        let v = self.expr(b, value)?;
+        if let ExprKind::Slice { base, lo, hi } = &target.kind {
+            if let (ExprKind::This, ExprKind::Int(a), ExprKind::Int(z)) =
+                (&base.kind, &lo.kind, &hi.kind)
+            {
+                b.set_span(Some(s.span));
+                b.insert(
+                    OpSpec::new(Op::BuildStoreBits)
+                        .operands(&[v])
+                        .attr("lo", Attr::Int(*a as i128))
+                        .attr("hi", Attr::Int(*z as i128)),
+                );
+                return Ok(());
+            }
+        }
+        self.assign(b, target, v)
+    }
+
     /// True when `member` is a stored field of the build's layout.
     fn stores(&self, member: Option<crate::sema::MemberId>) -> bool {
         let Some(mid) = member else {

@@ -56,6 +56,10 @@ impl FuncCx<'_> {
                 self.expr_effect(b, e)?;
                 Ok(Flow::Next)
             }
+            StmtKind::Assign { target, value } if self.build.is_some() => {
+                self.build_assign(b, s, target, value)?;
+                Ok(Flow::Next)
+            }
             StmtKind::Assign { target, value } => {
                 let v = self.expr(b, value)?;
                 self.assign(b, target, v)?;
@@ -341,7 +345,7 @@ impl FuncCx<'_> {
     }
 
     /// Stores `v` into an assignment target: a `mut` parameter or a tuple component of one.
-    fn assign(
+    pub(super) fn assign(
         &mut self,
         b: &mut Builder<'_>,
         target: &Expr,

@@ -18,8 +18,9 @@
 //! `LogicalTreeView { nodes: ptr @0, node_count: u32 @8, root: u32 @12, prims: ptr @16,
 //! prim_count: u32 @24 }` (32 bytes); `LogicalNode` is 44 bytes (`kind` @0, `bounds` @4,
 //! `child[2]` @28, `prim_offset` @36, `prim_count` @40), primitives are 40-byte `Triangle`s.
-//! Build functions of other layouts are removed. The logical tree is a binary BVH; an ADT of
-//! another shape, `this[a:b] = e` and `from` groups are reported (E0380).
+//! `this[a:b] = e` updates the returned reference and sets `%status` to 1 when the value does
+//! not fit. Build functions of other layouts are removed. The logical tree is a binary BVH; an
+//! ADT of another shape is reported (E0380).
 
 use super::reader::Reader;
 use super::{spec_of, unsupported, LayoutSpec};
@@ -395,6 +396,26 @@ fn rewrite_build(
     } else {
         Some(take_this(m, spec, cx, at, ref_ty)?)
     };
+    // With `this[a:b] = e` the reference is a cell starting as the placement value: `tree.this`
+    // reads it, the bit stores update it. Stores into the node still use the placement value.
+    let has_bits = ops
+        .iter()
+        .any(|&o| m.ops[o].kind == OpKind::Tree(Op::BuildStoreBits));
+    let cell = match (this, has_bits) {
+        (Some(t), true) => {
+            if m.types.as_int(ref_ty).is_none() {
+                return Err(unsupported(
+                    span,
+                    "`this[a:b] = e` with a reference that is not an integer",
+                ));
+            }
+            let def = m.def_op(t).expect("`this` is computed by an op");
+            let mut bd = Builder::new(m);
+            bd.set_insertion_point(InsertPoint::After(def));
+            Some(bd.var(t))
+        }
+        _ => None,
+    };
     for op in ops {
         let kind = m.ops[op].kind;
         let field = m.ops[op].str_attr("field").unwrap_or_default().to_string();
@@ -404,7 +425,28 @@ fn rewrite_build(
                     return Err(unsupported(span, "`this` in `build root`"));
                 };
                 let r = m.ops[op].results[0];
+                let t = match cell {
+                    Some(c) => {
+                        let mut bd = Builder::new(m);
+                        bd.set_insertion_point(InsertPoint::Before(op));
+                        bd.load(c).expect("a cell")
+                    }
+                    None => t,
+                };
                 replace_all_uses(m, r, t);
+                erase_op(m, op);
+            }
+            OpKind::Tree(Op::BuildStoreBits) => {
+                let Some(c) = cell else {
+                    return Err(unsupported(
+                        m.span(op).or(span),
+                        "`this[a:b] = e` in `build root`",
+                    ));
+                };
+                let lo = m.ops[op].int_attr("lo").unwrap_or(0);
+                let hi = m.ops[op].int_attr("hi").unwrap_or(0);
+                let v = m.ops[op].operands[0];
+                store_bits(m, op, c, cx.status, v, lo, hi, ref_ty);
                 erase_op(m, op);
             }
             OpKind::Tree(Op::BuildStore) => {
@@ -465,12 +507,6 @@ fn rewrite_build(
                 replace_all_uses(m, old, r);
                 erase_op(m, op);
             }
-            OpKind::Tree(Op::BuildStoreBits) => {
-                return Err(unsupported(
-                    m.span(op).or(span),
-                    "`this[a:b] = e` in a build",
-                ));
-            }
             _ => {}
         }
     }
@@ -478,6 +514,51 @@ fn rewrite_build(
         .attrs
         .set("build_of", Attr::str(spec.model.name.name.clone()));
     Ok(())
+}
+
+/// `this[lo:hi] = v` on the reference cell `c`: the bits are replaced by `v`'s low bits, and
+/// `%status` becomes 1 when `v` does not fit in `hi - lo` bits.
+#[allow(clippy::too_many_arguments)]
+fn store_bits(
+    m: &mut Module,
+    at: scion_ir::OpId,
+    c: ValueId,
+    status: ValueId,
+    v: ValueId,
+    lo: i128,
+    hi: i128,
+    ref_ty: TypeId,
+) {
+    let i32t = m.types.i32();
+    let bits = m.types.as_int(ref_ty).map_or(64, |t| t.bits() as i128);
+    let all = if bits >= 127 { -1 } else { (1i128 << bits) - 1 };
+    let width = hi - lo;
+    let mut bd = Builder::new(m);
+    bd.set_insertion_point(InsertPoint::Before(at));
+    let v = if bd.value_type(v) == ref_ty {
+        v
+    } else {
+        bd.cast(v, ref_ty)
+    };
+    let low_mask = if width >= bits {
+        all
+    } else {
+        (1i128 << width) - 1
+    };
+    let low = bd.const_int(ref_ty, low_mask);
+    let kept = bd.binary(Op::And, v, low);
+    let fits = bd.cmp(CmpPred::Eq, kept, v);
+    let old_status = bd.load(status).expect("status is a cell");
+    let one = bd.const_int(i32t, 1);
+    let new_status = bd.select(fits, old_status, one);
+    bd.store(status, new_status);
+    let old = bd.load(c).expect("a cell");
+    let mask = bd.const_int(ref_ty, ((low_mask << lo) & all) ^ all);
+    let cleared = bd.binary(Op::And, old, mask);
+    let shift = bd.const_int(ref_ty, lo);
+    let placed = bd.binary(Op::Shl, kept, shift);
+    let new = bd.binary(Op::Or, cleared, placed);
+    bd.store(c, new);
 }
 
 /// Takes the next placement index at `at`: `this` is the index, or the node's address for a

@@ -408,3 +408,40 @@ fn ptr_packs_and_traverses_like_the_tree_level() {
         .collect();
     assert_eq!(got, want);
 }
+
+/// The status of `@LinearBVH.build` for pbrt with `stmt` added to the leaf build.
+fn status_with(stmt: &str) -> i128 {
+    let src = PBRT.replace(
+        "build p_o = append(data, nprims);",
+        &format!("build p_o = append(data, nprims);\n    {stmt}"),
+    );
+    assert_ne!(src, PBRT);
+    let m = module(&src, Some("LinearBVH"));
+    let (nodes, root, prims) = scene();
+    let mut it = Interp::new(&m);
+    let tree = put_tree(&mut it, &nodes, root, &prims);
+    let sizes = it.alloc_bytes(&[0u8; 24], 8);
+    let ptr = |a: u64| Val::Int(a as i128, IntTy::U64);
+    it.call("LinearBVH.sizes", vec![ptr(tree), ptr(sizes)])
+        .expect("sizes runs");
+    let mut table = Vec::new();
+    for i in 0..3u64 {
+        let n = u64::from_le_bytes(it.bytes(sizes + 8 * i, 8).unwrap().try_into().unwrap());
+        table.extend(it.alloc_bytes(&vec![0u8; n as usize], 64).to_le_bytes());
+    }
+    let b = it.alloc_bytes(&table, 8);
+    match &it
+        .call("LinearBVH.build", vec![ptr(tree), ptr(b)])
+        .expect("build runs")[0]
+    {
+        Val::Int(s, _) => *s,
+        other => panic!("status {other}"),
+    }
+}
+
+#[test]
+fn bit_slice_stores_report_values_that_do_not_fit() {
+    // Leaves hold one or two triangles: `nprims - 1` fits in one bit, `nprims` does not.
+    assert_eq!(status_with("this[31:32] = (nprims as u32) - 1;"), 0);
+    assert_eq!(status_with("this[31:32] = nprims as u32;"), 1);
+}
