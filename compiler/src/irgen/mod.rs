@@ -5,7 +5,7 @@
 //! module's type table) and one `tree.func` per function (overloads under their unique names).
 //! This module is the only one that sees both the typed AST and the IR (architecture invariant
 //! 2). Layout declarations are read by the specialization passes; each `build` becomes one
-//! function per variant (and one for `build root`), see [`builds`].
+//! function per variant (and one for `build root`), see `irgen/builds.rs`.
 //!
 //! Lowering rules (docs/ir.md has the op reference):
 //! * `mut` parameters are `!tree.ref<T>` arguments; reading one is `tree.load`, assigning is

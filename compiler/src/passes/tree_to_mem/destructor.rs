@@ -7,7 +7,7 @@
 //!   `ptr` for `PtrBVH(R: ptr)`, a tuple for several components);
 //! * each `tree.match` on a tree value becomes a chain of `tree.if` on the variant tests (the
 //!   split predicates, first matching arm wins), and each arm's bound fields the values the
-//!   [`Reader`] computes for them: `mem.load` at the resolved path, derived expressions (inlined,
+//!   reader (`reader.rs`) computes for them: `mem.load` at the resolved path, derived expressions (inlined,
 //!   each at most once per destruction), `mem.view` for slices of global arrays; recursive fields
 //!   are references;
 //! * `tree.field` of a shared field and `tree.is` on a tree value are read the same way;

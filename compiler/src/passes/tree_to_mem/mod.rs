@@ -10,7 +10,7 @@
 //! `docs/design/specialization.md` §2.
 //!
 //! Layout expressions (group indices `by I`, split discriminants, derived fields such as
-//! `right = I + c_o`, `from g[key]` keys) are held by the layout model as syntax; [`reader`]
+//! `right = I + c_o`, `from g[key]` keys) are held by the layout model as syntax; `reader.rs`
 //! lowers the subset they use (names, integer literals, arithmetic, comparisons, casts, bit
 //! slices, slices and elements of global arrays) inline, each name at most once per
 //! destruction. This stands in for the per-layout accessor functions of the design note §1.
