@@ -11,8 +11,8 @@
 //! Constructor specialization (`passes::tree_to_mem::constructor`) turns them into stores.
 //!
 //! A build whose body uses something these functions cannot express (a layout member read
-//! inside the build, such as a global set by `build root`) gets no function; constructor
-//! specialization then reports the variant as unsupported.
+//! inside the build, such as a global set by `build root`) becomes a declaration with an
+//! `unsupported` attribute saying why; constructor specialization reports it.
 
 use super::types::TypeMap;
 use super::FuncCx;
@@ -196,8 +196,16 @@ fn one(
             Err(e) => Err(e),
         }
     };
-    if ok.is_err() {
-        m.remove_func(fid);
+    if let Err(e) = ok {
+        // Keep the signature as a declaration that says why it has no body; constructor
+        // specialization reports it for the chosen layout.
+        let body = m.funcs[fid].body;
+        m.regions[body].blocks.clear();
+        let why = e
+            .message
+            .split_once(": ")
+            .map_or(e.message.clone(), |(_, w)| w.to_string());
+        m.funcs[fid].attrs.set("unsupported", Attr::str(why));
     }
 }
 
@@ -231,7 +239,8 @@ impl FuncCx<'_> {
             ExprKind::Build(id) => {
                 let i = self.field_index(id)?;
                 let t = self.ty(b, &self.typed.expr_ty(e.id).clone())?;
-                Ok(self.child(b, &id.name, self.params[i], t))
+                let idx = self.param(i as u32)?;
+                Ok(self.child(b, &id.name, idx, t))
             }
             _ => Err(self.bug("not a build expression")),
         }
@@ -299,6 +308,13 @@ impl FuncCx<'_> {
         self.assign(b, target, v)
     }
 
+    fn param(&self, i: u32) -> Result<ValueId, InternalError> {
+        self.params
+            .get(i as usize)
+            .copied()
+            .ok_or_else(|| self.bug(format!("logical field {i} out of range")))
+    }
+
     /// True when `member` is a stored field of the build's layout.
     fn stores(&self, member: Option<crate::sema::MemberId>) -> bool {
         let Some(mid) = member else {
@@ -328,7 +344,7 @@ impl FuncCx<'_> {
             (Some(e), _, _) => self.expr(b, e)?,
             (None, Some(i), true) => {
                 let t = self.build_cx()?.this_ty;
-                let idx = self.params[i as usize];
+                let idx = self.param(i)?;
                 b.set_span(Some(s.span));
                 let r = self.child(b, &field.name, idx, t);
                 // A recursive field the layout stores (`left: ptr`) keeps the child's
@@ -338,7 +354,7 @@ impl FuncCx<'_> {
                 }
                 r
             }
-            (None, Some(i), false) => self.params[i as usize],
+            (None, Some(i), false) => self.param(i)?,
             (None, None, _) => {
                 return Err(self.bug(format!("`build {}` copies nothing", field.name)))
             }

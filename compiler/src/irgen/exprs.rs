@@ -65,6 +65,15 @@ impl FuncCx<'_> {
                         Ok(v)
                     }
                 }
+                Some(Resolution::LayoutMember(_)) if self.build.is_some() => {
+                    let t = self.expr_ty(b, e)?;
+                    let op = b.insert(
+                        scion_ir::OpSpec::new(Op::BuildLoad)
+                            .results(&[t])
+                            .attr("field", scion_ir::attr::Attr::str(id.name.clone())),
+                    );
+                    Ok(b.result(op, 0))
+                }
                 Some(Resolution::BuildField(i)) if self.build.is_some() => self
                     .params
                     .get(*i as usize)

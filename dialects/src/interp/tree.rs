@@ -190,7 +190,12 @@ impl Interp<'_> {
         let results: Vec<Val> = match kind {
             Op::Yield => return Ok(Step::Leave(Flow::Yield(args))),
             Op::Return => return Ok(Step::Leave(Flow::Return(args))),
-            Op::This | Op::BuildStore | Op::BuildStoreBits | Op::BuildChild | Op::Append => {
+            Op::This
+            | Op::BuildStore
+            | Op::BuildStoreBits
+            | Op::BuildChild
+            | Op::BuildLoad
+            | Op::Append => {
                 return Err(bad(
                     "build ops run only after constructor specialization, not in the interpreter",
                 ))

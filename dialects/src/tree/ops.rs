@@ -110,6 +110,9 @@ pub enum Op {
     /// `tree.build_child {field}` `(u32) -> (R)`: builds the subtree whose logical node index is
     /// the operand (the recursive field `field`) and yields its reference.
     BuildChild,
+    /// `tree.build_load {field}` `() -> T`: reads layout member `field` (a global, or a stored
+    /// field of the node being placed) inside a build function.
+    BuildLoad,
     /// `tree.append {field}` `(array<? x T>, integer) -> (integer)`: copies the first `n`
     /// elements of the logical array into the global array behind `field` at the running
     /// cursor and yields the start index.
@@ -118,7 +121,7 @@ pub enum Op {
 
 impl Op {
     /// Every op, in declaration order.
-    pub const ALL: [Op; 44] = [
+    pub const ALL: [Op; 45] = [
         Op::Const,
         Op::Add,
         Op::Sub,
@@ -162,6 +165,7 @@ impl Op {
         Op::BuildStore,
         Op::BuildStoreBits,
         Op::BuildChild,
+        Op::BuildLoad,
         Op::Append,
     ];
 
@@ -211,6 +215,7 @@ impl Op {
             Op::BuildStore => "build_store",
             Op::BuildStoreBits => "build_store_bits",
             Op::BuildChild => "build_child",
+            Op::BuildLoad => "build_load",
             Op::Append => "append",
         }
     }
@@ -242,6 +247,7 @@ impl Op {
                 | Op::BuildStore
                 | Op::BuildStoreBits
                 | Op::BuildChild
+                | Op::BuildLoad
                 | Op::Append
         )
     }
@@ -335,6 +341,7 @@ func @L.build.Leaf(%0: u16, %1: array<? x !tree.adt<"Triangle">>, %2: u32) -> (u
   %4 = "tree.append"(%1, %0) {field = "data"} : (array<? x !tree.adt<"Triangle">>, u16) -> u32
   "tree.build_store"(%4) {field = "p_o"} : (u32) -> ()
   %5 = "tree.build_child"(%2) {field = "left"} : (u32) -> u32
+  %6 = "tree.build_load"() {field = "wlo"} : () -> vector<3xf32>
   "tree.build_store_bits"(%5) {hi = 32, lo = 28} : (u32) -> ()
   "tree.return"(%3) : (u32) -> ()
 }

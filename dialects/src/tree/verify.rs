@@ -423,6 +423,10 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
             })?;
             field_attr(o)
         }
+        Op::BuildLoad => {
+            counts(&ot, &rt, 0, 1)?;
+            field_attr(o)
+        }
         Op::Append => {
             counts(&ot, &rt, 2, 1)?;
             let ok = matches!(t.get(ot[0]), Type::Array { .. } | Type::View(_))

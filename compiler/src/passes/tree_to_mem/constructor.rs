@@ -102,6 +102,18 @@ pub fn specialize(m: &mut Module, spec: &LayoutSpec) -> Result<bool, Diagnostics
         return Ok(changed);
     }
     let mut diags = Diagnostics::default();
+    for &f in &ours {
+        if let Some(why) = m.funcs[f].attrs.get("unsupported").and_then(Attr::as_str) {
+            let msg = format!(
+                "the build of `{lname}` for `{}` uses what build functions cannot express: {why}",
+                attr(m, f, "variant")
+            );
+            diags.push(unsupported(m.func_spans.get(f).copied(), msg));
+        }
+    }
+    if diags.has_errors() {
+        return Err(diags);
+    }
     if let Err(d) = generate(m, spec, &ours) {
         diags.push(d);
         return Err(diags);
@@ -454,6 +466,20 @@ fn rewrite_build(
                 let comps = this.into_iter().collect();
                 let mut rd = Reader::new(spec, cx.b, comps, InsertPoint::Before(op));
                 rd.store_field(m, &variant, &field, v)?;
+                erase_op(m, op);
+            }
+            OpKind::Tree(Op::BuildLoad) => {
+                let comps = this.into_iter().collect();
+                let mut rd = Reader::new(spec, cx.b, comps, InsertPoint::Before(op));
+                let v = rd.field(m, &variant, &field)?;
+                let old = m.ops[op].results[0];
+                if m.values[old].ty != m.values[v].ty {
+                    return Err(unsupported(
+                        m.span(op).or(span),
+                        format!("`{field}` read in a build with a type other than its stored one"),
+                    ));
+                }
+                replace_all_uses(m, old, v);
                 erase_op(m, op);
             }
             OpKind::Tree(Op::BuildChild) => {

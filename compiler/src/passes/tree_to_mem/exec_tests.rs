@@ -445,3 +445,31 @@ fn bit_slice_stores_report_values_that_do_not_fit() {
     assert_eq!(status_with("this[31:32] = (nprims as u32) - 1;"), 0);
     assert_eq!(status_with("this[31:32] = nprims as u32;"), 1);
 }
+
+#[test]
+fn soa_layout_packs_and_traverses_like_the_tree_level() {
+    // `pbrt-soaos`: `low` and the split in one array, `high` and `nprims` in another (`---`).
+    let (nodes, root, prims) = scene();
+    let want = reference(&nodes, root, prims.as_slice());
+    let m = module(crate::layout::fixtures::PBRT_SOAOS, Some("PbrtSoAoS"));
+    let mut it = Interp::new(&m);
+    let tree = put_tree(&mut it, &nodes, root, &prims);
+    let (b, _) = pack(&mut it, "PbrtSoAoS", 4, tree);
+    let got: Vec<(u32, u32)> = rays()
+        .into_iter()
+        .map(|ray| {
+            let cell = it.alloc(Val::Tuple(vec![
+                Val::F32(f32::INFINITY),
+                Val::Int(0xFFFF_FFFF, IntTy::U32),
+            ]));
+            let bv = Val::Int(b as i128, IntTy::U64);
+            best_of(
+                &mut it,
+                "closest_hit",
+                vec![bv, ray, Val::Int(0, IntTy::U32)],
+                cell,
+            )
+        })
+        .collect();
+    assert_eq!(got, want);
+}

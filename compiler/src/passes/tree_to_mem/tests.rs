@@ -381,3 +381,56 @@ layout Par(I: u32, lo: f32x3 = parent.lo) {
     let e = mem(&[COUNT, layout], "Par").unwrap_err();
     assert!(e.contains("E0380") && e.contains("(`parent.`)"), "{e}");
 }
+
+#[test]
+fn every_catalog_layout_specializes_or_is_diagnosed() {
+    let dop = COUNT.replace("BVH", "DopBVH");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec![COUNT, fixtures::PBRT], "LinearBVH"),
+        (vec![COUNT, fixtures::PTR], "PtrBVH"),
+        (vec![COUNT, fixtures::PBRT_ALIGN16], "PbrtAlign16"),
+        (vec![COUNT, fixtures::PBRT_SOAOS], "PbrtSoAoS"),
+        (vec![COUNT, fixtures::PBRT_Q16], "PbrtQ16"),
+        (vec![COUNT, fixtures::SG_EQ], "SgEq"),
+        (vec![COUNT, fixtures::SHARED_SLAB], "SharedSlab"),
+        (vec![&dop, fixtures::DOP_SPLIT], "DopSplit"),
+    ];
+    for (sources, layout) in cases {
+        let mut map = SourceMap::new();
+        let prelude = map.add("prelude.scion", PRELUDE.to_string());
+        let inputs: Vec<_> = sources
+            .iter()
+            .enumerate()
+            .map(|(i, s)| map.add(format!("input{i}.scion"), s.to_string()))
+            .collect();
+        let fe = Frontend {
+            sources: &map,
+            prelude: &[prelude],
+            inputs: &inputs,
+        };
+        let popts = PassOptions {
+            layout: Some(layout.to_string()),
+            ..PassOptions::default()
+        };
+        let pipeline = [
+            "destructor-specialize",
+            "constructor-specialize",
+            "const-fold",
+            "dce",
+        ]
+        .map(String::from);
+        let r = compile(&fe, Emit::Mem, &pipeline, &popts);
+        assert!(
+            r.internal_error.is_none(),
+            "{layout}: {:?}",
+            r.internal_error
+        );
+        let text = r.diagnostics.render(&map);
+        if r.diagnostics.has_errors() {
+            assert!(text.contains("error[E0"), "{layout}: {text}");
+        } else {
+            let ir = r.output.expect("output");
+            assert!(ir.contains("mem.load"), "{layout}: {ir}");
+        }
+    }
+}
