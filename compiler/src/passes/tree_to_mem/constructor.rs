@@ -733,21 +733,50 @@ fn build_fn(
     erase_op(m, first);
     let mut bd = Builder::at_end(m, entry);
     let pass = [tree, b, counter, cursor, status];
-    if let Some(rf) = root_fn {
-        let name = bd.m.funcs[rf].name.clone();
-        let params = bd.m.funcs[rf].params[5..].to_vec();
-        let nodes = load(&mut bd, tree, None, abi::VIEW_NODES, 0, ptr);
-        let prims = load(&mut bd, tree, None, abi::VIEW_PRIMS, 0, ptr);
-        let vals = logical_fields(&mut bd, &params, shared, nodes, prims, root, tree_ty)
-            .map_err(|e| unsupported(Some(spec.model.span), format!("`build root` reads {e}")))?;
-        let all: Vec<ValueId> = pass.iter().copied().chain(vals).collect();
-        bd.call(&name, &all, &[]);
-    }
-    bd.call(
-        node_name,
-        &[tree, b, root, counter, cursor, status],
-        &[ref_ty],
+    // An empty tree (`root = NO_NODE`) only gets its globals.
+    let no_node = bd.const_int(u32t, u32::MAX as i128);
+    let nonempty = bd.cmp(CmpPred::Ne, root, no_node);
+    let root_call = match root_fn {
+        Some(rf) => {
+            let name = bd.m.funcs[rf].name.clone();
+            let params = bd.m.funcs[rf].params[5..].to_vec();
+            Some((name, params))
+        }
+        None => None,
+    };
+    let failed = std::cell::RefCell::new(None);
+    bd.if_(
+        nonempty,
+        &[],
+        |bd| {
+            if let Some((name, params)) = &root_call {
+                let nodes = load(bd, tree, None, abi::VIEW_NODES, 0, ptr);
+                let prims = load(bd, tree, None, abi::VIEW_PRIMS, 0, ptr);
+                match logical_fields(bd, params, shared, nodes, prims, root, tree_ty) {
+                    Ok(vals) => {
+                        let all: Vec<ValueId> = pass.iter().copied().chain(vals).collect();
+                        bd.call(name, &all, &[]);
+                    }
+                    Err(e) => *failed.borrow_mut() = Some(e),
+                }
+            }
+            bd.call(
+                node_name,
+                &[tree, b, root, counter, cursor, status],
+                &[ref_ty],
+            );
+            bd.yield_(&[]);
+        },
+        |bd| {
+            bd.yield_(&[]);
+        },
     );
+    if let Some(e) = failed.into_inner() {
+        return Err(unsupported(
+            Some(spec.model.span),
+            format!("`build root` reads {e}"),
+        ));
+    }
     let s = bd.load(status).expect("status is a cell");
     bd.ret(&[s]);
     Ok(())

@@ -473,3 +473,13 @@ fn soa_layout_packs_and_traverses_like_the_tree_level() {
         .collect();
     assert_eq!(got, want);
 }
+
+#[test]
+fn an_empty_tree_packs_to_zero_counts() {
+    let m = module(PBRT, Some("LinearBVH"));
+    let mut it = Interp::new(&m);
+    let tree = put_tree(&mut it, &[], u32::MAX, &[]);
+    let (_, bufs) = pack(&mut it, "LinearBVH", 3, tree);
+    assert_eq!(u32_at(&it, bufs[0]), 0);
+    assert_eq!(u32_at(&it, bufs[0] + 4), 0);
+}
