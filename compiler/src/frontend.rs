@@ -94,9 +94,21 @@ pub fn compile(
 
     let (typed, diags) = sema::check_program(&program);
     out.diagnostics.extend(diags);
-    out.diagnostics
-        .extend(check_layout::check_layouts(&program));
-    out.diagnostics.extend(check_build::check_builds(&program));
+    // The structural checks of paper §6 overlap with sema's typing of layouts and builds on
+    // a few rules (an unknown variant, a duplicate member, ...); report each place once.
+    let structural = check_layout::check_layouts(&program).list.into_iter();
+    for d in structural.chain(check_build::check_builds(&program).list) {
+        let dup = d.is_error()
+            && d.primary_span().is_some()
+            && out
+                .diagnostics
+                .list
+                .iter()
+                .any(|e| e.is_error() && e.primary_span() == d.primary_span());
+        if !dup {
+            out.diagnostics.push(d);
+        }
+    }
     if out.diagnostics.has_errors() || emit == Emit::Check {
         return out;
     }
