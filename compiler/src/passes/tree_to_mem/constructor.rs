@@ -402,6 +402,51 @@ fn rewrite_build(
                 at = InsertPoint::After(o);
             }
         }
+        // Stores written before the children are built need `this`, known only after them:
+        // they move (in order) to just after the last child build.
+        if let InsertPoint::After(anchor) = at {
+            let pos = body_ops.iter().position(|&o| o == anchor).unwrap_or(0);
+            let mut early = Vec::new();
+            for &o in &body_ops[..pos] {
+                let needs_this = |k: OpKind| {
+                    matches!(
+                        k,
+                        OpKind::Tree(Op::BuildStore | Op::BuildStoreBits | Op::This)
+                    )
+                };
+                if needs_this(m.ops[o].kind) {
+                    early.push(o);
+                    continue;
+                }
+                let mut nested = false;
+                for &r in &m.ops[o].regions {
+                    scion_ir::walk::walk_region(m, r, Order::Pre, &mut |x| {
+                        nested |= needs_this(m.ops[x].kind);
+                    });
+                }
+                if nested {
+                    return Err(unsupported(
+                        m.span(o).or(span),
+                        "in an `order=post` build, a store inside a branch before the last child is built",
+                    ));
+                }
+            }
+            if early
+                .iter()
+                .any(|&o| m.ops[o].kind == OpKind::Tree(Op::This))
+            {
+                return Err(unsupported(
+                    span,
+                    "in an `order=post` build, `this` used before the children are built",
+                ));
+            }
+            for &o in early.iter().rev() {
+                erase_op(m, o);
+                let mut bd = Builder::new(m);
+                bd.set_insertion_point(InsertPoint::After(anchor));
+                bd.place(o);
+            }
+        }
     }
     let this = if is_root {
         None

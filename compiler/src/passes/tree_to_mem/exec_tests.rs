@@ -483,3 +483,68 @@ fn an_empty_tree_packs_to_zero_counts() {
     assert_eq!(u32_at(&it, bufs[0]), 0);
     assert_eq!(u32_at(&it, bufs[0] + 4), 0);
 }
+
+/// A post-order variant of pbrt: children first, the right child just before its parent.
+const POST: &str = r#"
+layout PostBVH(I: u32) {
+  P: u32;
+  N: u32;
+  primitives: Triangle[P];
+  group nodes[size=N, align=32] by I {
+    bounds: AABB;
+    split nprims {
+      > 0 -> Leaf { p_o: u32; data = primitives[p_o : p_o + nprims]; };
+      0 -> Interior { c_o: u32; left = I - c_o; right = I - 1; };
+    };
+    nprims: u16;
+  };
+};
+
+build PostBVH[order=post] {
+  build Interior(bounds: AABB, left: BVH, right: BVH) {
+    build bounds;
+    build nprims = 0;
+    let L: u32 = build left;
+    build right;
+    build c_o = this - L;
+    return this;
+  };
+  build Leaf(bounds: AABB, nprims: u16, data: Triangle[nprims]) {
+    build bounds;
+    build nprims;
+    build p_o = append(data, nprims);
+    return this;
+  };
+};
+"#;
+
+#[test]
+fn post_order_builds_place_children_first() {
+    let (nodes, root, prims) = scene();
+    let want = reference(&nodes, root, prims.as_slice());
+    let m = module(POST, Some("PostBVH"));
+    let mut it = Interp::new(&m);
+    let tree = put_tree(&mut it, &nodes, root, &prims);
+    let (b, bufs) = pack(&mut it, "PostBVH", 3, tree);
+    // The root is placed last; its right child just before it.
+    let last = nodes.len() as u32 - 1;
+    let root_nprims = u32_at(&it, bufs[2] + 32 * last as u64 + 28) & 0xFFFF;
+    assert_eq!(root_nprims, 0, "the root is an interior node");
+    let got: Vec<(u32, u32)> = rays()
+        .into_iter()
+        .map(|ray| {
+            let cell = it.alloc(Val::Tuple(vec![
+                Val::F32(f32::INFINITY),
+                Val::Int(0xFFFF_FFFF, IntTy::U32),
+            ]));
+            let bv = Val::Int(b as i128, IntTy::U64);
+            best_of(
+                &mut it,
+                "closest_hit",
+                vec![bv, ray, Val::Int(last as i128, IntTy::U32)],
+                cell,
+            )
+        })
+        .collect();
+    assert_eq!(got, want);
+}
