@@ -17,6 +17,8 @@
 
 pub mod constructor;
 pub mod destructor;
+mod entries;
+mod predicates;
 mod reader;
 
 use crate::layout::model::LayoutModel;
