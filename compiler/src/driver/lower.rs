@@ -19,7 +19,7 @@ pub const LOWER_PIPELINE: &[&str] = &["mem-to-lo", "recursion-to-stack", "lo-inl
 pub fn lower_to_lo(m: &mut Module, stack_size: Option<u32>) -> Result<Diagnostics, PassError> {
     if stack_size == Some(0) {
         let d = scion_ir::diag::Diagnostic::error(
-            "E0908",
+            "E0909",
             "--stack-size=0: a traversal stack needs at least one entry",
         )
         .with_note("the default is 64 entries");

@@ -9,92 +9,14 @@ pub const PBRT: &str = include_str!("../../../library/layouts/pbrt.scion");
 /// library/layouts/ptr.scion.
 pub const PTR: &str = include_str!("../../../library/layouts/ptr.scion");
 
-/// Catalog §3.3: `pbrt` with `align=16`.
-pub const PBRT_ALIGN16: &str = r#"
-layout PbrtAlign16(I: u32) {
-  P: u32; N: u32; primitives: Triangle[P];
-  group nodes[size=N, align=16] by I {
-    bounds: AABB;
-    split nprims {
-      > 0 -> Leaf     { p_o: u32; data = primitives[p_o : p_o + nprims]; };
-      0   -> Interior { c_o: u32; left = I + 1; right = I + c_o; };
-    };
-    nprims: u16;
-  };
-};
-"#;
+/// library/layouts/pbrt_align16.scion (catalog §3.3).
+pub const PBRT_ALIGN16: &str = include_str!("../../../library/layouts/pbrt_align16.scion");
 
-/// Catalog §8.2: `pbrt-soaos` (16 + 16 with `---`) and its build.
-pub const PBRT_SOAOS: &str = r#"
-layout PbrtSoAoS(I: u32) {
-  P: u32; N: u32; primitives: Triangle[P];
-  group nodes[size=N] by I {
-    low: f32x3;
-    split nprims {
-      > 0 -> Leaf     { p_o: u32; data = primitives[p_o : p_o + nprims]; };
-      0   -> Interior { c_o: u32; left = I + 1; right = I + c_o; };
-    };
-    ---
-    high: f32x3;
-    nprims: u16;
-    2;
-    bounds = AABB(low, high);
-  };
-};
+/// library/layouts/pbrt_soaos.scion (catalog §3.4, §8.2): 16 + 16 with `---`.
+pub const PBRT_SOAOS: &str = include_str!("../../../library/layouts/pbrt_soaos.scion");
 
-build PbrtSoAoS[order=pre] {
-  build Interior(bounds: AABB, left: BVH, right: BVH) {
-    build low = bounds.low; build high = bounds.high; build nprims = 0;
-    build left; let R: u32 = build right;
-    build c_o = R - this; return this;
-  };
-  build Leaf(bounds: AABB, nprims: u16, data: Triangle[nprims]) {
-    build low = bounds.low; build high = bounds.high; build nprims;
-    build p_o = append(data, nprims);
-    return this;
-  };
-};
-"#;
-
-/// Catalog §8.3: `pbrt-q16` (16 B) and its build.
-pub const PBRT_Q16: &str = r#"
-layout PbrtQ16(I: u32) {
-  P: u32; N: u32; primitives: Triangle[P];
-  wlo: f32x3; wstep: f32x3;
-  group nodes[size=N, align=16] by I {
-    qlo: u16x3;
-    qhi: u16x3;
-    w: u32;
-    bounds = AABB(fma(qlo as f32x3, wstep, wlo), fma(qhi as f32x3, wstep, wlo));
-    split w[28:32] {
-      0 -> Interior { c_o = w[0:28]; left = I + 1; right = I + c_o; };
-      _ -> Leaf     { nprims = w[28:32] as u16; p_o = w[0:28];
-                      data = primitives[p_o : p_o + nprims]; };
-    };
-  };
-};
-
-build PbrtQ16[order=pre] {
-  build root {
-    build wlo = frame_origin(bounds.low);
-    build wstep = frame_step(wlo, bounds.high, 65535);
-  };
-  build Interior(bounds: AABB, left: BVH, right: BVH) {
-    build qlo = quant_lo(bounds.low,  wlo, wstep, 65535) as u16x3;
-    build qhi = quant_hi(bounds.high, wlo, wstep, 65535) as u16x3;
-    build left; let R: u32 = build right;
-    build w = R - this;
-    return this;
-  };
-  build Leaf(bounds: AABB, nprims: u16, data: Triangle[nprims]) {
-    build qlo = quant_lo(bounds.low,  wlo, wstep, 65535) as u16x3;
-    build qhi = quant_hi(bounds.high, wlo, wstep, 65535) as u16x3;
-    let p: u32 = append(data, nprims);
-    build w = ((nprims as u32) << 28) | p;
-    return this;
-  };
-};
-"#;
+/// library/layouts/pbrt_q16.scion (catalog §3.6, §8.3): 16 B.
+pub const PBRT_Q16: &str = include_str!("../../../library/layouts/pbrt_q16.scion");
 
 /// Catalog §8.4: `sg-eq` (12 B).
 pub const SG_EQ: &str = r#"
@@ -176,14 +98,32 @@ pub fn bvh8_q8_align16() -> String {
         .replace("Bvh8Q8", "Bvh8Q8A16")
 }
 
-/// Prelude plus the given sources, parsed.
+/// Prelude plus the given sources, parsed by the project's parser; the fixture must parse
+/// without diagnostics.
 pub fn program(sources: &[&str]) -> crate::syntax::ast::Program {
+    let (p, d, sm) = parse_with_errors(sources);
+    assert!(d.is_empty(), "fixture does not parse:\n{}", d.render(&sm));
+    p
+}
+
+/// Prelude plus the given sources as one file, parsed with error recovery: the (possibly
+/// partial) program, the parser's diagnostics and the source map.
+pub fn parse_with_errors(
+    sources: &[&str],
+) -> (
+    crate::syntax::ast::Program,
+    scion_ir::diag::Diagnostics,
+    scion_ir::diag::SourceMap,
+) {
     let mut text = String::from(PRELUDE);
     for s in sources {
         text.push('\n');
         text.push_str(s);
     }
-    crate::layout::testparse::parse(&text)
+    let mut sm = scion_ir::diag::SourceMap::new();
+    let f = sm.add("fixture.scion", text);
+    let (p, d) = crate::syntax::parse_program(&sm, &[f]);
+    (p, d, sm)
 }
 
 /// Catalog §8.6: the shared slab (tree-carried box in a 28-byte reference), 16 B nodes.

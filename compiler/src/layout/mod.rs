@@ -20,8 +20,6 @@ pub mod types;
 #[cfg(test)]
 pub(crate) mod fixtures;
 #[cfg(test)]
-pub(crate) mod testparse;
-#[cfg(test)]
 mod tests;
 
 #[path = "../sema/check_layout.rs"]

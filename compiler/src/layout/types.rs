@@ -231,10 +231,9 @@ pub fn same_type(a: &TypeExpr, b: &TypeExpr) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::layout::testparse::parse;
 
     fn shape_of(src: &str, ty: &str) -> Shape {
-        let prog = parse(&format!("{src}\ntype Probe(x: {ty});"));
+        let prog = crate::layout::fixtures::program(&[&format!("{src}\ntype Probe(x: {ty});")]);
         let env = TypeEnv::new(&prog);
         let probe = prog
             .items

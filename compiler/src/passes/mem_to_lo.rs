@@ -402,6 +402,17 @@ impl FnLower<'_> {
             T::Is | T::Slice => {
                 return self.err(format!("`tree.{}` needs a layout", kind.mnemonic()))
             }
+            T::This
+            | T::BuildStore
+            | T::BuildStoreBits
+            | T::BuildChild
+            | T::BuildLoad
+            | T::Append => {
+                return self.err(format!(
+                    "`tree.{}` needs constructor specialization first",
+                    kind.mnemonic()
+                ))
+            }
             T::Call => {
                 let callee = o.attr("callee").and_then(Attr::as_sym).unwrap_or("");
                 let Some(g) = self.dst.func_by_name(callee) else {

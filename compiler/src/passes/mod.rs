@@ -2,21 +2,37 @@
 //! output level, constructor).
 //!
 //! Generic passes that work on any dialect (`const-fold`, `dce`) come from `scion-ir`; passes
-//! that need the compiler's knowledge (layouts, builds) will be registered here next to them.
-//! Pass order lives in `driver/pipelines.rs` alone.
+//! that need the compiler's knowledge of layouts are registered here next to them
+//! ([`tree_to_mem`]) and below them to `lo` ([`mem_to_lo`], [`recursion_to_stack`],
+//! [`lo_inline`]). Pass order lives in `driver/pipelines.rs` alone.
 
 pub mod lo_inline;
 pub mod mem_to_lo;
 #[path = "mem/recursion_to_stack.rs"]
 pub mod recursion_to_stack;
+pub mod tree_to_mem;
 
-use scion_ir::pass::PassRegistry;
+use scion_ir::pass::{Level, PassInfo, PassRegistry};
 
 /// Every pass `scionc --passes=...` and `--help-passes` know.
 pub fn registry() -> PassRegistry {
-    let mut reg = PassRegistry::with_builtin();
-    lower_passes(&mut reg);
-    reg
+    let mut r = PassRegistry::with_builtin();
+    r.register(PassInfo {
+        name: "destructor-specialize",
+        summary: "rewrite traversals of the layout's tree type into reads of the layout (needs --layout)",
+        input: Level::Tree,
+        output: Level::Mem,
+        create: || Box::new(tree_to_mem::destructor::DestructorSpecialize),
+    });
+    r.register(PassInfo {
+        name: "constructor-specialize",
+        summary: "generate @L.sizes and @L.build, the packer of the layout, from its build (needs --layout)",
+        input: Level::Mem,
+        output: Level::Mem,
+        create: || Box::new(tree_to_mem::constructor::ConstructorSpecialize),
+    });
+    lower_passes(&mut r);
+    r
 }
 
 /// The passes from `tree`/`mem` down to `lo`.

@@ -40,7 +40,7 @@ fn pbrt_with(from: &str, to: &str) -> String {
 
 #[test]
 fn library_layouts_pass_every_check() {
-    let d = diags(&[PBRT, PTR]);
+    let d = diags(&[PBRT, PTR, PBRT_ALIGN16, PBRT_SOAOS, PBRT_Q16]);
     assert!(d.is_empty(), "{:#?}", d.list);
 }
 

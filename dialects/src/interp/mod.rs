@@ -1,5 +1,5 @@
-//! A reference interpreter for the `tree` level: runs a function of a verified module on
-//! argument values and returns its results. Input: a [`Module`] and [`Val`]s; output: [`Val`]s
+//! A reference interpreter for the `tree` level, and for the `mem` ops over a byte memory
+//! ([`mem`]): runs a function of a verified module on argument values and returns its results. Input: a [`Module`] and [`Val`]s; output: [`Val`]s
 //! or an [`InterpError`].
 //!
 //! It is the oracle for the layout-free meaning of a program (paper §3: the traversal as
@@ -15,6 +15,7 @@
 
 pub mod intrinsics;
 pub mod lo;
+pub mod mem;
 mod tree;
 
 use crate::entity::{FuncId, OpId, ValueId};
@@ -195,6 +196,8 @@ pub type ExternFn = Box<dyn FnMut(&[Val]) -> Result<Vec<Val>, String>>;
 pub struct Interp<'m> {
     m: &'m Module,
     heap: Vec<Val>,
+    /// The byte memory of `mem` ops (see [`mem`]).
+    memory: Vec<u8>,
     externs: FxHashMap<String, ExternFn>,
     steps: u64,
     depth: usize,
@@ -222,6 +225,7 @@ impl<'m> Interp<'m> {
         Interp {
             m,
             heap: Vec::new(),
+            memory: Vec::new(),
             externs: FxHashMap::default(),
             steps: 0,
             depth: 0,

@@ -34,11 +34,17 @@ impl Interp<'_> {
         let o = &self.m.ops[op];
         let kind = match o.kind {
             OpKind::Tree(kind) => kind,
-            OpKind::Mem(_) => {
-                return Err(err(
-                    Some(op),
-                    "the interpreter runs the tree level only, not `mem` ops",
-                ))
+            OpKind::Mem(kind) => {
+                let args: Vec<Val> = o
+                    .operands
+                    .iter()
+                    .map(|&v| self.get(env, v, op))
+                    .collect::<Result<_, _>>()?;
+                let results = self.exec_mem(op, kind, args)?;
+                for (&r, v) in self.m.ops[op].results.iter().zip(results) {
+                    env.insert(r, v);
+                }
+                return Ok(None);
             }
             OpKind::Lo(_) => {
                 return Err(err(Some(op), "the tree interpreter runs only tree ops"));
@@ -187,6 +193,16 @@ impl Interp<'_> {
         let results: Vec<Val> = match kind {
             Op::Yield => return Ok(Step::Leave(Flow::Yield(args))),
             Op::Return => return Ok(Step::Leave(Flow::Return(args))),
+            Op::This
+            | Op::BuildStore
+            | Op::BuildStoreBits
+            | Op::BuildChild
+            | Op::BuildLoad
+            | Op::Append => {
+                return Err(bad(
+                    "build ops run only after constructor specialization, not in the interpreter",
+                ))
+            }
             Op::Const => {
                 let ty = self.result_type(op)?;
                 let a = o.attr("value").ok_or_else(|| bad("no value"))?;
