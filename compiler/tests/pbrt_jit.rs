@@ -226,10 +226,56 @@ fn best_bits(v: &Val) -> (u32, u32) {
     }
 }
 
+/// The `lo` module `scionc --emit=lo --layout LinearBVH` produces today (the live front end,
+/// specialization and lowering), as opposed to the fixed mem snapshot.
+fn live_lo_module() -> Module {
+    let mut sources = SourceMap::new();
+    let lib = concat!(env!("CARGO_MANIFEST_DIR"), "/../library");
+    let read = |p: &str| std::fs::read_to_string(format!("{lib}/{p}")).unwrap();
+    let p = sources.add("prelude.scion", read("prelude.scion"));
+    let a = sources.add("closest_hit.scion", read("algorithms/closest_hit.scion"));
+    let l = sources.add("pbrt.scion", read("layouts/pbrt.scion"));
+    let fe = Frontend {
+        sources: &sources,
+        prelude: &[p],
+        inputs: &[a, l],
+    };
+    let popts = PassOptions {
+        layout: Some("LinearBVH".into()),
+        ..PassOptions::default()
+    };
+    let pipeline: Vec<String> = [
+        "destructor-specialize",
+        "constructor-specialize",
+        "const-fold",
+        "dce",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let out = compile(&fe, Emit::Lo, &pipeline, &popts);
+    assert!(
+        !out.diagnostics.has_errors() && out.internal_error.is_none(),
+        "{}{:?}",
+        out.diagnostics.render(&sources),
+        out.internal_error
+    );
+    scion_ir::parse_module(&out.output.unwrap(), FileId(0)).unwrap()
+}
+
 #[test]
 fn closest_hit_over_linear_bvh_matches_the_tree_interpreter() {
+    closest_hit_linear_bvh(&lo_module());
+}
+
+#[test]
+fn the_live_pipeline_closest_hit_matches_the_tree_interpreter() {
+    closest_hit_linear_bvh(&live_lo_module());
+}
+
+fn closest_hit_linear_bvh(lo: &Module) {
     let tree = tree_module();
-    let lo = lo_module();
+    let lo = lo.clone();
     let jit = JitModule::compile(&lo).expect("the whole pbrt module compiles");
     let mut hits = 0;
     for seed in 1..6u64 {
