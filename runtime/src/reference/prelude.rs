@@ -32,8 +32,8 @@ pub fn slab_interval(ray: &Ray, b: &Aabb) -> (f32, f32) {
     let y = slab_lane(b.low.y, b.high.y, o.y, inv.y);
     let z = slab_lane(b.low.z, b.high.z, o.z, inv.z);
     let w = FAR_WIDENING;
-    let enter = ray.tmin.max(x.0.max(y.0.max(z.0)));
-    let exit = ray.tmax.min((x.1 * w).min((y.1 * w).min(z.1 * w)));
+    let enter = max_num(ray.tmin, max_num(x.0, max_num(y.0, z.0)));
+    let exit = min_num(ray.tmax, min_num(x.1 * w, min_num(y.1 * w, z.1 * w)));
     (enter, exit)
 }
 
@@ -49,7 +49,32 @@ pub fn slab_lane(lo: f32, hi: f32, o: f32, inv: f32) -> (f32, f32) {
     }
     let t0 = (lo - o) * inv;
     let t1 = (hi - o) * inv;
-    (t0.min(t1), t0.max(t1))
+    (min_num(t0, t1), max_num(t0, t1))
+}
+
+/// The language's float `min`: the non-NaN operand when one is NaN, else the smaller, and the
+/// first operand on ties (so `min(+0, -0)` is `+0`), exactly as the interpreters and the JIT.
+#[inline]
+pub fn min_num(a: f32, b: f32) -> f32 {
+    if a.is_nan() {
+        b
+    } else if b.is_nan() || b >= a {
+        a
+    } else {
+        b
+    }
+}
+
+/// The language's float `max`: as [`min_num`], the larger, first operand on ties.
+#[inline]
+pub fn max_num(a: f32, b: f32) -> f32 {
+    if a.is_nan() {
+        b
+    } else if b.is_nan() || b <= a {
+        a
+    } else {
+        b
+    }
 }
 
 /// The prelude's `intersects(ray, box)`.
