@@ -1,0 +1,41 @@
+//! Median-split builder with one primitive per leaf, as FCL builds its BVHs (FCL's
+//! `BVSplitter` with `SPLIT_METHOD_MEDIAN`): triangles -> [`LogicalTree`].
+//!
+//! Each node splits its primitives at the median (left gets `n / 2`) along the longest axis
+//! of the node's box, ordering by (centroid coordinate, id) so the split is unique; recursion
+//! stops at single primitives. The tree is balanced: depth `ceil(log2 n) + 1`.
+
+use super::{Decision, LogicalTree, TopDown};
+use crate::geom::Triangle;
+
+/// Builds the median-split tree over `tris` (one primitive per leaf).
+pub fn build_median(tris: &[Triangle]) -> LogicalTree {
+    TopDown::new(tris).build(|td, begin, end, bounds, _| {
+        if end - begin == 1 {
+            Decision::Leaf
+        } else {
+            Decision::Split(td.median_split(begin, end, bounds.longest_axis()))
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::gen;
+
+    #[test]
+    fn one_primitive_per_leaf_and_balanced() {
+        for scene in gen::hard_cases() {
+            let t = build_median(&scene.triangles);
+            t.validate_with_cap(1)
+                .unwrap_or_else(|e| panic!("{}: {e}", scene.name));
+            let s = t.stats();
+            assert_eq!(s.leaves, scene.len());
+            if !scene.is_empty() {
+                let expected = (scene.len() as f64).log2().ceil() as usize + 1;
+                assert_eq!(s.depth, expected, "{}", scene.name);
+            }
+        }
+    }
+}

@@ -1,0 +1,10 @@
+//! Queries: ray generators ([`rays`]) and the binary query/result files ([`io`]).
+//!
+//! Input: a scene box and a seed, or a file; output: `Vec<Ray>` / `Vec<Hit>`. These are the
+//! workloads of the paper's evaluation (§9: primary and secondary rays).
+
+pub mod io;
+pub mod rays;
+
+pub use io::{read_hits, read_rays, write_hits, write_rays, QueryFileError};
+pub use rays::{axis_rays, primary_rays, secondary_rays, Camera};

@@ -1,0 +1,197 @@
+//! The layout-free reference for closest-hit ray tracing (paper Figure 4,
+//! `library/algorithms/closest_hit.scion`): rays and triangles -> [`Hit`]s, bit for bit what
+//! every unquantized layout must return (architecture §6).
+//!
+//! Two versions with the same arithmetic ([`super::prelude`]):
+//! - [`closest_hit_brute`] tests every triangle;
+//! - [`closest_hit_tree`] traverses a [`LogicalTree`] exactly as the Scion algorithm does:
+//!   `best` starts at `(ray.tmax, u32::MAX)`; a node (interior or leaf) is entered iff the ray
+//!   meets its box and the entry distance is `<= best.t` (prune on `>` only); an interior
+//!   node visits its left child, then its right child; a leaf tests its primitives in order.
+//!
+//! Tie rule (language notes, "Results and ties"): the smallest `t` wins, and on equal `t` the
+//! smallest original primitive id. With it, the result does not depend on the order in which
+//! triangles are tested, so brute force and traversal agree whenever pruning never drops the
+//! node holding the answer (see docs/runtime.md for the one known exception: rays lying exactly
+//! in a box face with a zero direction lane).
+//!
+//! Results are normalized with [`Hit::from_best`]: a miss is `(+inf, u32::MAX)` whatever the
+//! ray's `tmax`.
+
+use super::prelude::{hit_distance, slab_interval};
+use crate::batch::BatchDriver;
+use crate::bvh::LogicalTree;
+use crate::geom::{Hit, Ray, Triangle};
+
+/// Counters of one traversal, for comparing layouts' work (e.g. extra visits of quantized
+/// layouts, paper §9).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TraversalStats {
+    /// Boxes tested (nodes popped).
+    pub boxes_tested: u64,
+    /// Nodes entered (box hit and not pruned).
+    pub nodes_entered: u64,
+    /// Triangle tests.
+    pub triangles_tested: u64,
+}
+
+impl TraversalStats {
+    /// Adds another traversal's counters.
+    pub fn add(&mut self, o: &TraversalStats) {
+        self.boxes_tested += o.boxes_tested;
+        self.nodes_entered += o.nodes_entered;
+        self.triangles_tested += o.triangles_tested;
+    }
+}
+
+/// The algorithm's update of `best` by one triangle.
+#[inline]
+fn consider(ray: &Ray, tri: &Triangle, best: &mut (f32, u32)) {
+    let d = hit_distance(ray, tri);
+    if d < f32::INFINITY && (d < best.0 || (d == best.0 && tri.id < best.1)) {
+        *best = (d, tri.id);
+    }
+}
+
+/// Closest hit by testing every triangle.
+pub fn closest_hit_brute(triangles: &[Triangle], ray: &Ray) -> Hit {
+    let mut best = (ray.tmax, u32::MAX);
+    for tri in triangles {
+        consider(ray, tri, &mut best);
+    }
+    Hit::from_best(best.0, best.1)
+}
+
+/// Closest hit by traversing the logical tree (see the module documentation).
+pub fn closest_hit_tree(tree: &LogicalTree, ray: &Ray) -> Hit {
+    closest_hit_tree_stats(tree, ray, &mut TraversalStats::default())
+}
+
+/// [`closest_hit_tree`] that also counts its work into `stats`.
+pub fn closest_hit_tree_stats(tree: &LogicalTree, ray: &Ray, stats: &mut TraversalStats) -> Hit {
+    let mut best = (ray.tmax, u32::MAX);
+    if tree.is_empty() {
+        return Hit::from_best(best.0, best.1);
+    }
+    // An explicit stack replays the recursion's order: pop = enter, push right then left.
+    let mut stack: Vec<u32> = Vec::with_capacity(64);
+    stack.push(tree.root);
+    while let Some(i) = stack.pop() {
+        let node = &tree.nodes[i as usize];
+        stats.boxes_tested += 1;
+        let (enter, exit) = slab_interval(ray, &node.aabb());
+        // intersects(ray, bounds) && distmin(ray, bounds) <= best.t
+        if !(enter <= exit && enter <= best.0) {
+            continue;
+        }
+        stats.nodes_entered += 1;
+        if node.is_leaf() {
+            for tri in tree.leaf_primitives(node) {
+                stats.triangles_tested += 1;
+                consider(ray, tri, &mut best);
+            }
+        } else {
+            stack.push(node.child[1]);
+            stack.push(node.child[0]);
+        }
+    }
+    Hit::from_best(best.0, best.1)
+}
+
+/// Why the traversal of `tree` could not reach primitive `prim` at distance `t`: the first
+/// node on the path from the root to the leaf holding `prim` whose box test fails
+/// (`!(enter <= exit)`) or whose entry distance exceeds `t` (`enter > t`), as
+/// `(node, enter, exit)`. `None` when every node on the path admits `t` (then a traversal
+/// must find the hit) or when no leaf holds `prim`.
+///
+/// This is the diagnosis of a brute-force/traversal mismatch: the prelude's slab test and its
+/// Moller-Trumbore test round differently, so for a triangle lying in a box face the computed
+/// entry distance can exceed the computed hit distance by an ulp and pruning on
+/// `enter > best.t` then drops the node (docs/runtime.md, "Brute force and traversal").
+pub fn why_pruned(tree: &LogicalTree, ray: &Ray, prim: u32, t: f32) -> Option<(u32, f32, f32)> {
+    if tree.is_empty() {
+        return None;
+    }
+    // Depth-first search for the path to the leaf holding `prim`.
+    let mut path: Vec<(u32, usize)> = vec![(tree.root, 0)];
+    while let Some(&(i, next)) = path.last() {
+        let node = &tree.nodes[i as usize];
+        if node.is_leaf() {
+            if tree.leaf_primitives(node).iter().any(|p| p.id == prim) {
+                break;
+            }
+            path.pop();
+        } else if next < 2 {
+            path.last_mut().expect("non-empty").1 += 1;
+            path.push((node.child[next], 0));
+            continue;
+        } else {
+            path.pop();
+        }
+        // Resume the parent.
+    }
+    path.iter().find_map(|&(i, _)| {
+        let (enter, exit) = slab_interval(ray, &tree.nodes[i as usize].aabb());
+        let meets = enter <= exit; // false when either is NaN
+        (!meets || enter > t).then_some((i, enter, exit))
+    })
+}
+
+/// Closest hits of all `rays` by tree traversal, in parallel blocks of 64 (see
+/// [`BatchDriver`]).
+pub fn closest_hits_tree(tree: &LogicalTree, rays: &[Ray], driver: &BatchDriver) -> Vec<Hit> {
+    driver.map(rays, |r| closest_hit_tree(tree, r))
+}
+
+/// Closest hits of all `rays` by brute force, in parallel blocks of 64.
+pub fn closest_hits_brute(triangles: &[Triangle], rays: &[Ray], driver: &BatchDriver) -> Vec<Hit> {
+    driver.map(rays, |r| closest_hit_brute(triangles, r))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::{build_median, build_sah_binned, SahOptions};
+    use crate::geom::Vec3;
+    use crate::scene::gen;
+
+    #[test]
+    fn tie_goes_to_the_smaller_id_in_every_order() {
+        let s = gen::duplicated(&gen::one_triangle(), 5);
+        let r = Ray::new(Vec3::new(0.25, 0.25, 1.0), Vec3::new(0.0, 0.0, -1.0));
+        let mut reversed = s.triangles.clone();
+        reversed.reverse();
+        let expected = Hit { t: 1.0, prim: 0 };
+        assert_eq!(closest_hit_brute(&s.triangles, &r), expected);
+        assert_eq!(closest_hit_brute(&reversed, &r), expected);
+        let t = build_median(&reversed);
+        assert_eq!(closest_hit_tree(&t, &r), expected);
+    }
+
+    #[test]
+    fn miss_is_normalized_and_empty_tree_misses() {
+        let s = gen::one_triangle();
+        let mut r = Ray::new(Vec3::new(5.0, 5.0, 1.0), Vec3::new(0.0, 0.0, -1.0));
+        r.tmax = 10.0;
+        assert_eq!(closest_hit_brute(&s.triangles, &r), Hit::MISS);
+        let t = build_sah_binned(&s.triangles, &SahOptions::default());
+        assert_eq!(closest_hit_tree(&t, &r), Hit::MISS);
+        assert_eq!(closest_hit_tree(&LogicalTree::empty(), &r), Hit::MISS);
+    }
+
+    #[test]
+    fn pruning_skips_far_nodes() {
+        let s = gen::quad_grid(8, 8);
+        let t = build_sah_binned(&s.triangles, &SahOptions::default());
+        let r = Ray::new(Vec3::new(3.5, 3.25, 1.0), Vec3::new(0.0, 0.0, -1.0));
+        let mut st = TraversalStats::default();
+        let h = closest_hit_tree_stats(&t, &r, &mut st);
+        assert!(h.is_hit());
+        assert_eq!(h, closest_hit_brute(&s.triangles, &r));
+        assert!(st.triangles_tested < s.len() as u64 / 4, "{st:?}");
+        assert_eq!(why_pruned(&t, &r, h.prim, h.t), None);
+        // A hit distance before the box entry is reported as pruned at the root.
+        let (node, enter, _) = why_pruned(&t, &r, h.prim, 0.5).unwrap();
+        assert_eq!((node, enter), (t.root, 1.0));
+    }
+}

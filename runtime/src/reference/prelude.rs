@@ -1,0 +1,158 @@
+//! The geometric tests of `library/prelude.scion` in Rust, with exactly the prelude's
+//! arithmetic: the same operations, in the same order, each rounded once to `f32`.
+//!
+//! This is what makes the reference bit-identical to generated code (architecture §6). Rules
+//! that generated code must follow too:
+//! - No fused multiply-add contraction: `a * b + c` is two roundings. Rust never contracts
+//!   (it has no `-ffast-math`); LLVM and Cranelift backends must not set `contract` or
+//!   fast-math flags on these operations, and PTX must use `mul.rn`/`add.rn` (which nvcc and
+//!   LLVM's NVPTX backend otherwise fuse into `fma.rn`).
+//! - `min`/`max` are IEEE 754 minNum/maxNum: when one operand is NaN the other is returned
+//!   (`f32::min`/`f32::max` in Rust, `llvm.minnum`/`llvm.maxnum`, `min.f32`/`max.f32` in PTX).
+//!   A slab with a zero direction lane computes `0 * inf = NaN` when the origin lies on the slab
+//!   plane; minNum/maxNum then drop that lane.
+//! - `dot(a, b) = (a.x*b.x + a.y*b.y) + a.z*b.z`, left to right;
+//!   `cross(a, b) = (a.y*b.z - a.z*b.y, a.z*b.x - a.x*b.z, a.x*b.y - a.y*b.x)`.
+//! - Division is IEEE division (`1.0 / d`), never a reciprocal approximation.
+//! - The widening factor is the literal `1.0000004` rounded to `f32` (`1 + 3 * 2^-23`).
+
+use crate::geom::{Aabb, Ray, Triangle, Vec3};
+
+/// `1.0000004` as the prelude writes it, rounded to `f32`.
+pub const FAR_WIDENING: f32 = 1.000_000_4;
+
+/// The prelude's `slab_interval(ray, box)`: `(enter, exit)`; the ray meets the box iff
+/// `enter <= exit` (false when either is NaN).
+#[inline]
+pub fn slab_interval(ray: &Ray, b: &Aabb) -> (f32, f32) {
+    let d = ray.dir;
+    let inv = Vec3::new(1.0 / d.x, 1.0 / d.y, 1.0 / d.z);
+    let t0 = (b.low - ray.origin).mul_lanes(inv);
+    let t1 = (b.high - ray.origin).mul_lanes(inv);
+    let near = t0.min(t1);
+    let far = t0.max(t1).mul_lanes(Vec3::splat(FAR_WIDENING));
+    let enter = ray.tmin.max(near.x.max(near.y.max(near.z)));
+    let exit = ray.tmax.min(far.x.min(far.y.min(far.z)));
+    (enter, exit)
+}
+
+/// The prelude's `intersects(ray, box)`.
+#[inline]
+pub fn intersects_box(ray: &Ray, b: &Aabb) -> bool {
+    let (enter, exit) = slab_interval(ray, b);
+    enter <= exit
+}
+
+/// The prelude's `distmin(ray, box)`: the entry distance, or `+inf` on a miss.
+#[inline]
+pub fn distmin_box(ray: &Ray, b: &Aabb) -> f32 {
+    let (enter, exit) = slab_interval(ray, b);
+    if enter <= exit {
+        enter
+    } else {
+        f32::INFINITY
+    }
+}
+
+/// The prelude's `hit_distance(ray, tri)` (Moller-Trumbore): the hit distance in
+/// `(tmin, tmax)`, or `+inf`. A zero determinant (parallel ray or zero-area triangle) misses.
+#[inline]
+// `u < 0.0 || u > 1.0` is not `!(0.0..=1.0).contains(&u)`: a NaN `u` passes the prelude's test.
+#[allow(clippy::manual_range_contains)]
+pub fn hit_distance(ray: &Ray, tri: &Triangle) -> f32 {
+    let e1 = tri.p1 - tri.p0;
+    let e2 = tri.p2 - tri.p0;
+    let pv = ray.dir.cross(e2);
+    let det = e1.dot(pv);
+    if det == 0.0 {
+        return f32::INFINITY;
+    }
+    let inv_det = 1.0 / det;
+    let tv = ray.origin - tri.p0;
+    let u = tv.dot(pv) * inv_det;
+    if u < 0.0 || u > 1.0 {
+        return f32::INFINITY;
+    }
+    let qv = tv.cross(e1);
+    let v = ray.dir.dot(qv) * inv_det;
+    if v < 0.0 || u + v > 1.0 {
+        return f32::INFINITY;
+    }
+    let t = e2.dot(qv) * inv_det;
+    if t > ray.tmin && t < ray.tmax {
+        return t;
+    }
+    f32::INFINITY
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn widening_literal_is_three_ulps_above_one() {
+        assert_eq!(FAR_WIDENING.to_bits(), 1.0f32.to_bits() + 3);
+    }
+
+    #[test]
+    fn zero_direction_lanes_use_min_num() {
+        let b = Aabb::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 1.0, 1.0));
+        // Origin strictly inside the slab 0 <= x <= 1 with dir.x = 0: t0.x = -inf, t1.x = +inf.
+        let r = Ray::new(Vec3::new(0.5, 0.5, -1.0), Vec3::new(0.0, 0.0, 1.0));
+        assert!(intersects_box(&r, &b));
+        assert_eq!(distmin_box(&r, &b), 1.0);
+        // Origin ON the slab plane x = 0 with dir.x = 0: t0.x = 0 * inf = NaN, t1.x = +inf, and
+        // minNum makes near.x = +inf, so the prelude's test MISSES a ray lying in a box face
+        // (PBRT's IntersectP, which skips NaN comparisons, would accept it). The reference
+        // keeps the prelude's answer; see docs/runtime.md.
+        let r = Ray::new(Vec3::new(0.0, 0.5, -1.0), Vec3::new(0.0, 0.0, 1.0));
+        assert!(!intersects_box(&r, &b));
+        let r = Ray::new(Vec3::new(1.0, 0.5, -1.0), Vec3::new(0.0, 0.0, 1.0));
+        assert!(!intersects_box(&r, &b));
+        // Negative zero direction: inv = -inf, still inside the slab.
+        let r = Ray::new(Vec3::new(0.5, 0.5, -1.0), Vec3::new(-0.0, -0.0, 1.0));
+        assert!(intersects_box(&r, &b));
+        // Outside the slab with a zero lane: a miss.
+        let r = Ray::new(Vec3::new(2.0, 0.5, -1.0), Vec3::new(0.0, 0.0, 1.0));
+        assert!(!intersects_box(&r, &b));
+        assert_eq!(distmin_box(&r, &b), f32::INFINITY);
+    }
+
+    #[test]
+    fn moller_trumbore_hits_and_misses() {
+        let t = Triangle::new(
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+            0,
+        );
+        let down = Vec3::new(0.0, 0.0, -1.0);
+        assert_eq!(
+            hit_distance(&Ray::new(Vec3::new(0.25, 0.25, 2.0), down), &t),
+            2.0
+        );
+        assert_eq!(
+            hit_distance(&Ray::new(Vec3::new(0.75, 0.75, 2.0), down), &t),
+            f32::INFINITY
+        );
+        // Behind the origin, and at t == tmax: misses.
+        assert_eq!(
+            hit_distance(&Ray::new(Vec3::new(0.25, 0.25, -2.0), down), &t),
+            f32::INFINITY
+        );
+        let mut r = Ray::new(Vec3::new(0.25, 0.25, 2.0), down);
+        r.tmax = 2.0;
+        assert_eq!(hit_distance(&r, &t), f32::INFINITY);
+        // Parallel ray and zero-area triangle: det == 0.
+        let side = Vec3::new(1.0, 0.0, 0.0);
+        assert_eq!(
+            hit_distance(&Ray::new(Vec3::new(-1.0, 0.25, 0.0), side), &t),
+            f32::INFINITY
+        );
+        let flat = Triangle::new(t.p0, t.p1, Vec3::new(2.0, 0.0, 0.0), 1);
+        assert_eq!(
+            hit_distance(&Ray::new(Vec3::new(0.5, 0.0, 2.0), down), &flat),
+            f32::INFINITY
+        );
+    }
+}

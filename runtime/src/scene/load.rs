@@ -1,0 +1,393 @@
+//! OBJ loading: a `.obj` file -> [`Scene`] of triangles in file order, through `tobj`.
+//!
+//! What is read: `v` lines (positions; an optional fourth value `w` divides the three
+//! coordinates, as `tobj` does; three extra values are vertex colors and are ignored) and `f`
+//! lines. Everything else (normals, texture coordinates, groups, objects, materials, `l` lines)
+//! is read by `tobj` but does not change the triangles. A polygon face `f a b c d ...` is
+//! triangulated as a fan around its first vertex: `(a, b, c)`, `(a, c, d)`, ... Faces with fewer
+//! than three vertices are skipped.
+//!
+//! Ids: triangle `i` of the file (counting the triangles of fans in order) gets `id == i`, so
+//! the scene keeps file order. An empty scene (no faces) is valid.
+//!
+//! Errors are [`SceneError`]s naming the file and, where it applies, the 1-based line. `tobj`
+//! reports what went wrong but not where; [`locate`] finds the first line that shows the
+//! reported problem by re-checking lines with the same rules. Coordinates that are NaN or
+//! infinite (including values like `1e39` that overflow `f32`) are rejected: `tobj` accepts
+//! them, so every `v` line is checked here, whether or not a face uses it.
+
+use std::io::Cursor;
+use std::path::{Path, PathBuf};
+
+use super::{check_count, Scene, SceneError};
+use crate::geom::{Triangle, Vec3};
+
+/// Loads an OBJ file (see the module documentation for what is read and rejected).
+pub fn load_obj(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let text = std::str::from_utf8(&bytes).map_err(|e| SceneError::NotText {
+        path: path.to_path_buf(),
+        line: 1 + bytes[..e.valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count(),
+    })?;
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    parse_obj(path, &name, text)
+}
+
+/// Parses OBJ text already in memory; `path` is used only in error messages.
+pub fn parse_obj(path: &Path, name: &str, text: &str) -> Result<Scene, SceneError> {
+    let options = tobj::LoadOptions {
+        single_index: true,
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let (models, _materials) = tobj::load_obj_buf(
+        &mut Cursor::new(text.as_bytes()),
+        &options,
+        // Materials never change the geometry: do not open .mtl files.
+        |_| Err(tobj::LoadError::OpenFileFailed),
+    )
+    .map_err(|e| locate(path, text, e))?;
+
+    check_vertices(path, text)?;
+
+    let count: usize = models.iter().map(|m| m.mesh.indices.len() / 3).sum();
+    check_count(path, count)?;
+    let mut triangles = Vec::with_capacity(count);
+    for model in &models {
+        let pos = &model.mesh.positions;
+        let vertex = |i: u32| {
+            let i = i as usize * 3;
+            Vec3::new(pos[i], pos[i + 1], pos[i + 2])
+        };
+        for face in model.mesh.indices.chunks_exact(3) {
+            let id = triangles.len() as u32;
+            triangles.push(Triangle::new(
+                vertex(face[0]),
+                vertex(face[1]),
+                vertex(face[2]),
+                id,
+            ));
+        }
+    }
+    Ok(Scene::new(name, triangles))
+}
+
+/// The lines of `text` as `tobj` sees them: split on `\n`, a trailing `\r` dropped, numbered
+/// from 1.
+fn lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
+    text.split('\n')
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.strip_suffix('\r').unwrap_or(l)))
+}
+
+/// Rejects NaN and infinite coordinates on every `v` line (after the `w` division).
+fn check_vertices(path: &Path, text: &str) -> Result<(), SceneError> {
+    let mut vertex = 0usize;
+    for (line_no, line) in lines(text) {
+        let mut words = line.split_whitespace();
+        if words.next() != Some("v") {
+            continue;
+        }
+        vertex += 1;
+        let rest: Vec<&str> = words.collect();
+        // tobj accepted the file, so the first three values parse.
+        let mut xyz = [0f32; 3];
+        for (c, w) in xyz.iter_mut().zip(&rest) {
+            *c = w.parse::<f32>().unwrap_or(f32::NAN);
+        }
+        if rest.len() == 4 {
+            let w: f32 = rest[3].parse().unwrap_or(f32::NAN);
+            for c in &mut xyz {
+                *c /= w;
+            }
+        }
+        if xyz.iter().any(|c| !c.is_finite()) {
+            return Err(SceneError::NonFiniteCoordinate {
+                path: path.to_path_buf(),
+                line: line_no,
+                vertex,
+                text: line.trim().to_string(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// One vertex reference of a face, `v/vt/vn`, as written (each part optional).
+type FaceRef = [Option<isize>; 3];
+
+/// Parses one face word by `tobj`'s rules; `None` when `tobj` would reject it.
+fn parse_face_ref(word: &str) -> Option<FaceRef> {
+    let mut refs: FaceRef = [None; 3];
+    for (i, part) in word.split('/').enumerate() {
+        if part.is_empty() {
+            continue;
+        }
+        let value: isize = part.parse().ok()?;
+        *refs.get_mut(i)? = Some(value);
+    }
+    Some(refs)
+}
+
+/// True when `count` floats parse from the start of `words` (extra words are ignored).
+fn floats_ok(words: &[&str], count: usize) -> bool {
+    words.len() >= count && words[..count].iter().all(|w| w.parse::<f32>().is_ok())
+}
+
+/// True when a `v` line's values are accepted by `tobj`.
+fn vertex_line_ok(words: &[&str]) -> bool {
+    if !floats_ok(words, 3) {
+        return false;
+    }
+    match words.len() - 3 {
+        0 | 3 => true,
+        1 => matches!(words[3].parse::<f32>(), Ok(w) if w != 0.0),
+        _ => false,
+    }
+}
+
+/// Resolves a written index (1-based, or negative = relative to `seen` elements so far) to a
+/// 0-based index, or `None` when it is out of `0..total`.
+fn resolve(index: isize, seen: usize, total: usize) -> Option<usize> {
+    let i = if index < 0 {
+        seen as isize + index
+    } else {
+        index - 1
+    };
+    (i >= 0 && (i as usize) < total).then_some(i as usize)
+}
+
+/// Counts of `v`, `vt`, `vn` lines.
+#[derive(Clone, Copy, Default)]
+struct Counts {
+    v: usize,
+    vt: usize,
+    vn: usize,
+}
+
+fn count_elements(text: &str) -> Counts {
+    let mut c = Counts::default();
+    for (_, line) in lines(text) {
+        match line.split_whitespace().next() {
+            Some("v") => c.v += 1,
+            Some("vt") => c.vt += 1,
+            Some("vn") => c.vn += 1,
+            _ => {}
+        }
+    }
+    c
+}
+
+/// Which lane of a face reference an out-of-bounds error is about.
+#[derive(Clone, Copy, PartialEq)]
+enum Lane {
+    Position = 0,
+    Texcoord = 1,
+    Normal = 2,
+}
+
+/// Finds the first face with a reference out of range in `lane`. With `strict`, positive
+/// indices are checked against the elements declared so far rather than in the whole file
+/// (tobj resolves faces when an object ends, so a later vertex may or may not count).
+fn find_out_of_range(text: &str, lane: Lane, strict: bool) -> Option<(usize, isize, String)> {
+    let totals = count_elements(text);
+    let mut seen = Counts::default();
+    for (line_no, line) in lines(text) {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        match words.first().copied() {
+            Some("v") => seen.v += 1,
+            Some("vt") => seen.vt += 1,
+            Some("vn") => seen.vn += 1,
+            Some("f") if words.len() >= 4 => {
+                let (seen_n, total_n) = match lane {
+                    Lane::Position => (seen.v, totals.v),
+                    Lane::Texcoord => (seen.vt, totals.vt),
+                    Lane::Normal => (seen.vn, totals.vn),
+                };
+                // tobj ignores texture and normal indices when the file has none.
+                if lane != Lane::Position && total_n == 0 {
+                    continue;
+                }
+                let limit = if strict { seen_n } else { total_n };
+                for word in &words[1..] {
+                    let Some(refs) = parse_face_ref(word) else {
+                        continue;
+                    };
+                    if let Some(index) = refs[lane as usize] {
+                        if resolve(index, seen_n, limit).is_none() {
+                            return Some((line_no, index, line.trim().to_string()));
+                        }
+                    } else if lane == Lane::Position {
+                        // A missing position index is index 0 for tobj: out of range.
+                        return Some((line_no, 0, line.trim().to_string()));
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
+/// Finds the first line whose keyword is one of `keys` and which `ok` rejects.
+fn find_line(text: &str, keys: &[&str], ok: impl Fn(&[&str]) -> bool) -> Option<(usize, String)> {
+    lines(text).find_map(|(line_no, line)| {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let key = *words.first()?;
+        (keys.contains(&key) && !ok(&words[1..])).then(|| (line_no, line.trim().to_string()))
+    })
+}
+
+/// Turns a `tobj` error into a [`SceneError`], finding the line it is about.
+fn locate(path: &Path, text: &str, error: tobj::LoadError) -> SceneError {
+    use tobj::LoadError as E;
+    let path: PathBuf = path.to_path_buf();
+    let found = match error {
+        E::PositionParseError | E::ScalingByZeroError | E::ColorParseError => {
+            find_line(text, &["v"], vertex_line_ok)
+        }
+        E::TexcoordParseError => find_line(text, &["vt"], |w| floats_ok(w, 2)),
+        E::NormalParseError => find_line(text, &["vn"], |w| floats_ok(w, 3)),
+        E::FaceParseError => find_line(text, &["f", "l"], |w| {
+            w.iter().all(|x| parse_face_ref(x).is_some())
+        }),
+        E::MaterialParseError => find_line(text, &["usemtl"], |w| !w.is_empty()),
+        E::FaceVertexOutOfBounds | E::FaceTexCoordOutOfBounds | E::FaceNormalOutOfBounds => {
+            let lane = match error {
+                E::FaceVertexOutOfBounds => Lane::Position,
+                E::FaceTexCoordOutOfBounds => Lane::Texcoord,
+                _ => Lane::Normal,
+            };
+            let hit = find_out_of_range(text, lane, false)
+                .or_else(|| find_out_of_range(text, lane, true));
+            if lane == Lane::Position {
+                let vertex_count = count_elements(text).v;
+                return match hit {
+                    Some((line, index, _)) => SceneError::FaceIndexOutOfRange {
+                        path,
+                        line: Some(line),
+                        index: index as i64,
+                        vertex_count,
+                    },
+                    None => SceneError::FaceIndexOutOfRange {
+                        path,
+                        line: None,
+                        index: 0,
+                        vertex_count,
+                    },
+                };
+            }
+            hit.map(|(line, _, text)| (line, text))
+        }
+        _ => None,
+    };
+    let message = error.to_string();
+    match found {
+        Some((line, text)) => SceneError::Malformed {
+            path,
+            line: Some(line),
+            message,
+            text: Some(text),
+        },
+        None => SceneError::Malformed {
+            path,
+            line: None,
+            message,
+            text: None,
+        },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Scene, SceneError> {
+        parse_obj(Path::new("mem.obj"), "mem", text)
+    }
+
+    #[test]
+    fn triangles_keep_file_order_and_polygons_become_fans() {
+        let s = parse(
+            "# a quad and a pentagon\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv -1 0.5 0\n\
+             f 1 2 3 4\nf 1 2 3\no second\nf 1/1 2 3 4 5\n",
+        );
+        // The pentagon line uses a texture index although the file has none: tobj ignores it.
+        let s = s.unwrap();
+        assert_eq!(s.len(), 6);
+        for (i, t) in s.triangles.iter().enumerate() {
+            assert_eq!(t.id as usize, i);
+        }
+        let v = |x: f32, y: f32| Vec3::new(x, y, 0.0);
+        assert_eq!(s.triangles[0].p2, v(1.0, 1.0));
+        assert_eq!(
+            (s.triangles[1].p0, s.triangles[1].p1),
+            (v(0.0, 0.0), v(1.0, 1.0))
+        );
+        assert_eq!(s.triangles[1].p2, v(0.0, 1.0));
+        assert_eq!(s.triangles[2].p1, v(1.0, 0.0));
+        assert_eq!(s.triangles[5].p2, v(-1.0, 0.5));
+    }
+
+    #[test]
+    fn relative_indices_and_w_are_honored() {
+        let s = parse("v 0 0 0\nv 2 0 0 2\nv 0 1 0\nf -3 -2 -1\n").unwrap();
+        assert_eq!(s.triangles[0].p1, Vec3::new(1.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn empty_scene_is_valid() {
+        assert!(parse("# nothing\n").unwrap().is_empty());
+        assert!(parse("v 0 0 0\nv 1 0 0\nl 1 2\n").unwrap().is_empty());
+    }
+
+    #[test]
+    fn errors_name_the_line() {
+        let e = parse("v 0 0 0\nv 1 0 0\nv 0 x 0\nf 1 2 3\n").unwrap_err();
+        assert_eq!(e.line(), Some(3), "{e}");
+        let e = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n").unwrap_err();
+        assert!(
+            matches!(e, SceneError::FaceIndexOutOfRange { index: 4, .. }),
+            "{e}"
+        );
+        assert_eq!(e.line(), Some(4));
+        let e = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n").unwrap_err();
+        assert_eq!(e.line(), Some(4), "{e}");
+        let e = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n").unwrap_err();
+        assert_eq!(e.line(), Some(4), "{e}");
+        let e = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3/a\n").unwrap_err();
+        assert_eq!(e.line(), Some(4), "{e}");
+        let e = parse("v 0 0 0\nv 1 0 0\nv 0 1 0 0\nf 1 2 3\n").unwrap_err();
+        assert_eq!(e.line(), Some(3), "{e}");
+        let e = parse("v 0 0 0\nvn 1 0\nv 0 1 0\n").unwrap_err();
+        assert_eq!(e.line(), Some(2), "{e}");
+    }
+
+    #[test]
+    fn non_finite_coordinates_are_rejected_with_their_line() {
+        for bad in ["nan", "inf", "-inf", "1e39", "NaN"] {
+            let text = format!("v 0 0 0\n# c\nv 1 0 0\nv 0 {bad} 0\nf 1 2 3\n");
+            let e = parse(&text).unwrap_err();
+            match &e {
+                SceneError::NonFiniteCoordinate { line, vertex, .. } => {
+                    assert_eq!((*line, *vertex), (4, 3), "{e}");
+                }
+                other => panic!("expected NonFiniteCoordinate, got {other}"),
+            }
+        }
+        // A tiny w overflows the division.
+        let e = parse("v 0 0 0\nv 1e30 0 0 1e-30\nv 0 1 0\nf 1 2 3\n").unwrap_err();
+        assert_eq!(e.line(), Some(2), "{e}");
+    }
+}

@@ -1,0 +1,99 @@
+//! Helpers shared by the integration tests: where the real scenes are, and a scratch folder.
+
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+use scion_runtime::bvh::LogicalTree;
+use scion_runtime::geom::{Hit, Ray};
+use scion_runtime::reference::why_pruned;
+
+/// The real scenes of `shared/scenes` (README there), beside the repository root, or the
+/// folder named by `SCION_SCENES`. `None` (with a printed line) when missing.
+pub fn scenes_dir() -> Option<PathBuf> {
+    let dir = match std::env::var_os("SCION_SCENES") {
+        Some(d) => PathBuf::from(d),
+        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes"),
+    };
+    if dir.join("teapot.obj").is_file() {
+        Some(dir)
+    } else {
+        println!(
+            "SKIPPED: no real scenes at {} (set SCION_SCENES to the shared/scenes folder)",
+            dir.display()
+        );
+        None
+    }
+}
+
+/// The real scenes with their triangle counts (shared/scenes/README.md), smallest first.
+pub const REAL_SCENES: &[(&str, usize)] = &[
+    ("teapot", 992),
+    ("pine", 1_650),
+    ("suzanne", 15_488),
+    ("balloon", 35_698),
+    ("fzk_haus", 35_906),
+    ("sponza_dabrovic", 66_454),
+    ("bunny", 69_630),
+    ("engine", 110_336),
+    ("cruiser_cg57", 180_063),
+    ("dragon", 871_306),
+];
+
+/// True when this is an optimized build (the large-scene tests run only then).
+pub fn release() -> bool {
+    !cfg!(debug_assertions)
+}
+
+/// A fresh scratch folder for one test.
+pub fn scratch(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("scion-runtime-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create scratch folder");
+    dir
+}
+
+/// Compares traversal results with brute force. Every difference must be the documented
+/// rounding case (docs/runtime.md, "Brute force and traversal"): the brute-force hit is in a
+/// node whose computed entry distance exceeds that hit's distance (or whose box test fails),
+/// so pruning dropped it; the traversal's hit is then never better than brute force's.
+/// Returns the number of such rays.
+pub fn check_against_brute(
+    what: &str,
+    tree: &LogicalTree,
+    rays: &[Ray],
+    got: &[Hit],
+    brute: &[Hit],
+) -> usize {
+    let mut explained = 0;
+    for (i, (g, b)) in got.iter().zip(brute).enumerate() {
+        if g.bit_eq(b) {
+            continue;
+        }
+        let ray = &rays[i];
+        assert!(
+            b.is_hit() && (b.t < g.t || (b.t == g.t && b.prim < g.prim)),
+            "{what} ray {i} {ray:?}: traversal {g:?} is better than brute force {b:?}"
+        );
+        match why_pruned(tree, ray, b.prim, b.t) {
+            Some((node, enter, exit)) => {
+                if explained < 3 {
+                    println!(
+                        "  {what} ray {i}: traversal {g:?}, brute force {b:?}: node {node} \
+                         pruned by rounding (enter {enter:e}, exit {exit:e})"
+                    );
+                }
+                explained += 1;
+            }
+            None => panic!(
+                "{what} ray {i} {ray:?}: traversal {g:?} != brute force {b:?}, and no node on \
+                 the path to primitive {} is pruned",
+                b.prim
+            ),
+        }
+    }
+    if explained > 3 {
+        println!("  {what}: {explained} rays in all pruned by rounding");
+    }
+    explained
+}
