@@ -1,0 +1,14 @@
+//! `scion-tests`: the layout-free oracle and the differential harness (issue 3, items 6 and
+//! the test plan of docs/design/specialization.md).
+//!
+//! - [`oracle`]: `closest_hit.scion` compiled to the `tree` dialect and interpreted over a
+//!   runtime logical tree, lazily (no layout).
+//! - [`backend`]: the [`backend::Backend`] trait every way of tracing rays implements
+//!   (reference traversal, brute force, the interpreter; the JIT per layout later), so that a
+//!   new backend is one more row of the differential table.
+//! - [`cases`]: the scenes (real and generated hard cases), trees and ray sets the rows use,
+//!   and [`cases::compare`], the bit-for-bit comparison with its one documented exception.
+
+pub mod backend;
+pub mod cases;
+pub mod oracle;
