@@ -5,7 +5,7 @@
 //! - [`bvh`]: the logical tree (the flat C-ABI form every generated constructor reads), its
 //!   validation, and the binned-SAH and median builders.
 //! - [`query`]: primary, secondary and axis-parallel ray generators; binary ray/hit files.
-//! - [`reference`]: the layout-free closest-hit reference, brute force and tree traversal,
+//! - [`mod@reference`]: the layout-free closest-hit reference, brute force and tree traversal,
 //!   with exactly the prelude's `f32` arithmetic.
 //! - [`batch`]: blocks of 64 queries over threads with dynamic scheduling.
 //! - [`timing`]: the paper's method (1 warm-up, 9 runs, trimmed mean of 5).

@@ -13,12 +13,12 @@ use scion_runtime::bvh::{build_median, build_sah_binned, SahOptions};
 use scion_runtime::geom::Ray;
 use scion_runtime::query::{axis_rays, primary_rays, secondary_rays};
 use scion_runtime::reference::{closest_hits_brute, closest_hits_tree};
-use scion_runtime::scene::load_obj;
+use scion_runtime::scene::{load_obj, manifest};
 
 /// How many rays of each kind to check against brute force: about `budget` triangle tests.
 fn ray_count(triangles: usize) -> usize {
     let budget: usize = if common::release() {
-        150_000_000
+        100_000_000
     } else {
         2_000_000
     };
@@ -30,11 +30,7 @@ fn check_real_scene(name: &str) {
     let Some(dir) = common::scenes_dir() else {
         return;
     };
-    let expected = common::REAL_SCENES
-        .iter()
-        .find(|(n, _)| *n == name)
-        .expect("listed scene")
-        .1;
+    let expected = manifest::find(name).expect("listed scene").triangles;
     if expected > 100_000 && !common::release() {
         println!(
             "SKIPPED in debug builds: {name} ({expected} triangles); run cargo test --release"
@@ -122,8 +118,8 @@ macro_rules! real_scene_tests {
         #[test]
         fn every_listed_scene_has_a_test() {
             let tested = [$(stringify!($name)),*];
-            for (name, _) in common::REAL_SCENES {
-                assert!(tested.contains(name), "no test for {name}");
+            for scene in manifest::REAL_SCENES {
+                assert!(tested.contains(&scene.name), "no test for {}", scene.name);
             }
         }
     };

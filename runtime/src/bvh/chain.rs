@@ -59,6 +59,8 @@ mod tests {
             let t = build_caterpillar(&s.triangles, deep);
             t.validate_with_cap(1).unwrap();
             assert_eq!(t.stats().depth, 300);
+            let stack = if deep == DeepSide::Left { 299 } else { 1 };
+            assert_eq!(t.stats().stack_needed, stack);
         }
         let one = build_caterpillar(&gen::one_triangle().triangles, DeepSide::Left);
         one.validate().unwrap();

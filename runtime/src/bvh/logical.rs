@@ -102,6 +102,12 @@ pub struct TreeStats {
     pub primitives: usize,
     /// Largest leaf.
     pub max_leaf: usize,
+    /// Traversal stack a left-first traversal needs: the most left edges on any root-to-node
+    /// path, i.e. the most right children pending at once when a traversal descends into the
+    /// left child and pushes the right one (0 for a single leaf). A fixed stack of this many
+    /// entries never overflows on this tree (a traversal that pushes both children needs one
+    /// more).
+    pub stack_needed: usize,
     /// SAH cost with traversal and intersection costs 1: the sum over interior nodes of
     /// `area / root area` plus the sum over leaves of `count * area / root area`.
     pub sah_cost: f64,
@@ -245,7 +251,9 @@ impl LogicalTree {
         Ok(())
     }
 
-    /// Node counts, depth, largest leaf and SAH cost. Assumes the tree is valid.
+    /// Node counts, depth, largest leaf, stack need and SAH cost. Meant for valid trees; on an
+    /// invalid one it stops after as many visits as there are nodes (so a cycle cannot hang
+    /// it) and skips out-of-range children.
     pub fn stats(&self) -> TreeStats {
         let mut s = TreeStats {
             primitives: self.primitives.len(),
@@ -254,7 +262,10 @@ impl LogicalTree {
         if self.is_empty() {
             return s;
         }
-        let root_area = self.nodes[self.root as usize].aabb().half_area();
+        let Some(root) = self.nodes.get(self.root as usize) else {
+            return s;
+        };
+        let root_area = root.aabb().half_area();
         let rel = |b: Aabb| {
             if root_area > 0.0 {
                 b.half_area() / root_area
@@ -262,11 +273,17 @@ impl LogicalTree {
                 1.0
             }
         };
-        let mut stack = vec![(self.root, 1usize)];
-        while let Some((i, depth)) = stack.pop() {
-            let node = &self.nodes[i as usize];
+        let mut stack = vec![(self.root, 1usize, 0usize)];
+        while let Some((i, depth, lefts)) = stack.pop() {
+            let Some(node) = self.nodes.get(i as usize) else {
+                continue;
+            };
+            if s.nodes == self.nodes.len() {
+                break;
+            }
             s.nodes += 1;
             s.depth = s.depth.max(depth);
+            s.stack_needed = s.stack_needed.max(lefts);
             if node.is_leaf() {
                 s.leaves += 1;
                 s.max_leaf = s.max_leaf.max(node.prim_count as usize);
@@ -274,8 +291,8 @@ impl LogicalTree {
             } else {
                 s.interior += 1;
                 s.sah_cost += rel(node.aabb());
-                stack.push((node.child[1], depth + 1));
-                stack.push((node.child[0], depth + 1));
+                stack.push((node.child[1], depth + 1, lefts));
+                stack.push((node.child[0], depth + 1, lefts + 1));
             }
         }
         s
@@ -393,5 +410,11 @@ mod tests {
         let mut t = LogicalTree::empty();
         t.root = 0;
         assert!(t.validate().is_err());
+        assert_eq!(t.stats().nodes, 0);
+
+        // stats() terminates on a cycle.
+        let mut t = two_leaves();
+        t.nodes[0].child[1] = 0;
+        assert!(t.stats().nodes <= 3);
     }
 }

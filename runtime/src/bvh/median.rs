@@ -5,18 +5,24 @@
 //! of the node's box, ordering by (centroid coordinate, id) so the split is unique; recursion
 //! stops at single primitives. The tree is balanced: depth `ceil(log2 n) + 1`.
 
-use super::{Decision, LogicalTree, TopDown};
-use crate::geom::Triangle;
+use super::{build_top_down, median_split, Decide, Decision, Item, LogicalTree};
+use crate::geom::{Aabb, Triangle};
+
+struct Median;
+
+impl Decide for Median {
+    fn decide(&self, items: &mut [Item], bounds: Aabb, _: Aabb) -> Decision {
+        if items.len() == 1 {
+            Decision::Leaf
+        } else {
+            Decision::Split(median_split(items, bounds.longest_axis()))
+        }
+    }
+}
 
 /// Builds the median-split tree over `tris` (one primitive per leaf).
 pub fn build_median(tris: &[Triangle]) -> LogicalTree {
-    TopDown::new(tris).build(|td, begin, end, bounds, _| {
-        if end - begin == 1 {
-            Decision::Leaf
-        } else {
-            Decision::Split(td.median_split(begin, end, bounds.longest_axis()))
-        }
-    })
+    build_top_down(tris, &Median)
 }
 
 #[cfg(test)]

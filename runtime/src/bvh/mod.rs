@@ -1,10 +1,13 @@
 //! Logical BVHs and their builders: triangles -> [`LogicalTree`] (architecture §5).
 //!
 //! [`logical`] holds the tree form every generated constructor reads; [`sah_binned`] and
-//! [`median`] build it; [`chain`] builds a maximally deep tree for stack-limit tests. Both builders are sequential and deterministic (the same input gives
-//! the same tree, bit for bit, on every run and machine) and emit nodes in depth-first
-//! pre-order with an explicit work stack, so even very deep trees never overflow the call
-//! stack.
+//! [`median`] build it; [`chain`] builds a maximally deep tree for stack-limit tests.
+//!
+//! The top-down builders are deterministic: the same input gives the same tree, bit for bit,
+//! whatever the number of threads. Large ranges (at least [`PARALLEL_MIN`] primitives) build
+//! their two subtrees with `rayon::join` and concatenate them in pre-order; smaller ranges run
+//! sequentially with an explicit work stack, so even very deep trees never overflow the call
+//! stack. Nodes come out in depth-first pre-order: root 0, left child = parent + 1.
 
 pub mod chain;
 pub mod logical;
@@ -20,6 +23,9 @@ pub use sah_binned::{build_sah_binned, SahOptions};
 
 use crate::geom::{Aabb, Triangle, Vec3};
 
+/// Ranges with at least this many primitives build their subtrees in parallel.
+pub const PARALLEL_MIN: usize = 16 * 1024;
+
 /// What a builder decides for one range of primitives.
 pub(crate) enum Decision {
     /// Make a leaf of the whole range.
@@ -28,97 +34,139 @@ pub(crate) enum Decision {
     Split(usize),
 }
 
-/// Shared machinery of the top-down builders: per-primitive boxes and centroids, the index
-/// permutation, and pre-order node emission.
-pub(crate) struct TopDown<'a> {
-    pub tris: &'a [Triangle],
-    pub boxes: Vec<Aabb>,
-    pub centroids: Vec<Vec3>,
-    /// A permutation of `0..tris.len()`; each node owns a contiguous range of it.
-    pub order: Vec<u32>,
+/// One primitive as the top-down builders move it around: its box, its centroid, its
+/// original id (for unique median orders) and its index in the input.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Item {
+    pub bounds: Aabb,
+    pub centroid: Vec3,
+    pub id: u32,
+    pub index: u32,
 }
 
-impl<'a> TopDown<'a> {
-    pub fn new(tris: &'a [Triangle]) -> TopDown<'a> {
-        let boxes: Vec<Aabb> = tris.iter().map(Triangle::bounds).collect();
-        let centroids = boxes.iter().map(|b| b.center()).collect();
-        TopDown {
-            tris,
-            boxes,
-            centroids,
-            order: (0..tris.len() as u32).collect(),
-        }
+/// Box of the primitives and box of their centroids.
+fn range_bounds(items: &[Item]) -> (Aabb, Aabb) {
+    let mut b = Aabb::EMPTY;
+    let mut c = Aabb::EMPTY;
+    for it in items {
+        b = b.union(it.bounds);
+        c = c.grow(it.centroid);
     }
+    (b, c)
+}
 
-    /// Box of the primitives and box of their centroids over `order[begin..end]`.
-    pub fn range_bounds(&self, begin: usize, end: usize) -> (Aabb, Aabb) {
-        let mut b = Aabb::EMPTY;
-        let mut c = Aabb::EMPTY;
-        for &i in &self.order[begin..end] {
-            b = b.union(self.boxes[i as usize]);
-            c = c.grow(self.centroids[i as usize]);
-        }
-        (b, c)
+/// Splits `items` at its median along `axis`, ordering by (centroid, id) so that the result
+/// is unique. Returns the left count.
+pub(crate) fn median_split(items: &mut [Item], axis: usize) -> usize {
+    let mid = items.len() / 2;
+    items.select_nth_unstable_by(mid, |a, b| {
+        a.centroid
+            .axis(axis)
+            .total_cmp(&b.centroid.axis(axis))
+            .then(a.id.cmp(&b.id))
+    });
+    mid
+}
+
+/// A builder's rule: given a range of items (to partition in place), its box and its
+/// centroid box, make a leaf or split after `k` items (`0 < k < len`).
+pub(crate) trait Decide: Sync {
+    fn decide(&self, items: &mut [Item], bounds: Aabb, cbounds: Aabb) -> Decision;
+}
+
+/// Builds the tree over `tris` with the rule `rule` (see the module documentation).
+pub(crate) fn build_top_down(tris: &[Triangle], rule: &impl Decide) -> LogicalTree {
+    if tris.is_empty() {
+        return LogicalTree::empty();
     }
-
-    /// Splits `order[begin..end]` at its median along `axis`, ordering by (centroid, id) so
-    /// that the result is unique. Returns the left count.
-    pub fn median_split(&mut self, begin: usize, end: usize, axis: usize) -> usize {
-        let mid = (end - begin) / 2;
-        let (cen, tris) = (&self.centroids, self.tris);
-        self.order[begin..end].select_nth_unstable_by(mid, |&a, &b| {
-            cen[a as usize][axis]
-                .total_cmp(&cen[b as usize][axis])
-                .then(tris[a as usize].id.cmp(&tris[b as usize].id))
-        });
-        mid
-    }
-
-    /// Builds the tree top-down: `decide(self, begin, end, bounds, centroid_bounds)` either
-    /// makes a leaf or partitions the range in place and returns the left count (in
-    /// `1..count`). Nodes are emitted in pre-order (root 0, left child = parent + 1).
-    pub fn build(
-        mut self,
-        mut decide: impl FnMut(&mut TopDown<'a>, usize, usize, Aabb, Aabb) -> Decision,
-    ) -> LogicalTree {
-        let n = self.tris.len();
-        if n == 0 {
-            return LogicalTree::empty();
-        }
-        // (begin, end, parent, side)
-        let mut stack: Vec<(usize, usize, u32, usize)> = vec![(0, n, NO_NODE, 0)];
-        let mut nodes: Vec<LogicalNode> = Vec::new();
-        while let Some((begin, end, parent, side)) = stack.pop() {
-            let me = nodes.len() as u32;
-            if parent != NO_NODE {
-                nodes[parent as usize].child[side] = me;
+    let mut items: Vec<Item> = tris
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let bounds = t.bounds();
+            Item {
+                bounds,
+                centroid: bounds.center(),
+                id: t.id,
+                index: i as u32,
             }
-            let (bounds, cbounds) = self.range_bounds(begin, end);
-            match decide(&mut self, begin, end, bounds, cbounds) {
-                Decision::Leaf => {
-                    nodes.push(LogicalNode::leaf(
-                        bounds,
-                        begin as u32,
-                        (end - begin) as u32,
-                    ));
+        })
+        .collect();
+    let nodes = build_range(&mut items, 0, rule);
+    let primitives = items.iter().map(|it| tris[it.index as usize]).collect();
+    LogicalTree {
+        nodes,
+        root: 0,
+        primitives,
+    }
+}
+
+fn checked_split(left: usize, n: usize) -> usize {
+    assert!(
+        left > 0 && left < n,
+        "builder split {left} of {n} primitives"
+    );
+    left
+}
+
+/// The pre-order nodes of the subtree over `items`, whose first item is primitive `base` of
+/// the final order; child indices are relative to the returned vector.
+fn build_range(items: &mut [Item], base: usize, rule: &impl Decide) -> Vec<LogicalNode> {
+    let n = items.len();
+    if n < PARALLEL_MIN {
+        return build_sequential(items, base, rule);
+    }
+    let (bounds, cbounds) = range_bounds(items);
+    match rule.decide(items, bounds, cbounds) {
+        Decision::Leaf => vec![LogicalNode::leaf(bounds, base as u32, n as u32)],
+        Decision::Split(left) => {
+            let left = checked_split(left, n);
+            let (l_items, r_items) = items.split_at_mut(left);
+            let (l, r) = rayon::join(
+                || build_range(l_items, base, rule),
+                || build_range(r_items, base + left, rule),
+            );
+            let mut nodes = Vec::with_capacity(1 + l.len() + r.len());
+            nodes.push(LogicalNode::interior(bounds, 1, (1 + l.len()) as u32));
+            let shift = |mut node: LogicalNode, by: usize| {
+                if !node.is_leaf() {
+                    node.child = node.child.map(|c| c + by as u32);
                 }
-                Decision::Split(left) => {
-                    assert!(
-                        left > 0 && left < end - begin,
-                        "builder split {left} of {} primitives",
-                        end - begin
-                    );
-                    nodes.push(LogicalNode::interior(bounds, NO_NODE, NO_NODE));
-                    stack.push((begin + left, end, me, 1));
-                    stack.push((begin, begin + left, me, 0));
-                }
-            }
-        }
-        let primitives = self.order.iter().map(|&i| self.tris[i as usize]).collect();
-        LogicalTree {
-            nodes,
-            root: 0,
-            primitives,
+                node
+            };
+            nodes.extend(l.iter().map(|&x| shift(x, 1)));
+            let by = 1 + l.len();
+            nodes.extend(r.iter().map(|&x| shift(x, by)));
+            nodes
         }
     }
+}
+
+/// [`build_range`] on one thread with an explicit stack (same pre-order).
+fn build_sequential(items: &mut [Item], base: usize, rule: &impl Decide) -> Vec<LogicalNode> {
+    // (begin, end, parent, side), relative to `items`.
+    let mut stack: Vec<(usize, usize, u32, usize)> = vec![(0, items.len(), NO_NODE, 0)];
+    let mut nodes: Vec<LogicalNode> = Vec::new();
+    while let Some((begin, end, parent, side)) = stack.pop() {
+        let me = nodes.len() as u32;
+        if parent != NO_NODE {
+            nodes[parent as usize].child[side] = me;
+        }
+        let range = &mut items[begin..end];
+        let (bounds, cbounds) = range_bounds(range);
+        match rule.decide(range, bounds, cbounds) {
+            Decision::Leaf => nodes.push(LogicalNode::leaf(
+                bounds,
+                (base + begin) as u32,
+                (end - begin) as u32,
+            )),
+            Decision::Split(left) => {
+                let left = checked_split(left, end - begin);
+                nodes.push(LogicalNode::interior(bounds, NO_NODE, NO_NODE));
+                stack.push((begin + left, end, me, 1));
+                stack.push((begin, begin + left, me, 0));
+            }
+        }
+    }
+    nodes
 }

@@ -11,9 +11,9 @@
 //! centroid box is too thin for the binning arithmetic), the node splits at the median of the
 //! longest centroid axis instead, ordered by (centroid, id); so leaves never exceed `max_leaf`.
 //!
-//! Sequential and deterministic.
+//! Deterministic: the same tree whatever the number of threads (see [`super`]).
 
-use super::{Decision, LogicalTree, TopDown, DEFAULT_MAX_LEAF};
+use super::{build_top_down, median_split, Decide, Decision, Item, LogicalTree, DEFAULT_MAX_LEAF};
 use crate::geom::{Aabb, Triangle};
 
 /// Parameters of the binned SAH builder.
@@ -24,7 +24,7 @@ pub struct SahOptions {
     /// Ranges of at most this many primitives always become leaves (default 1; values above
     /// `max_leaf` count as `max_leaf`).
     pub min_leaf: usize,
-    /// Number of bins per axis (default 32; values below 2 count as 2).
+    /// Number of bins per axis (default 32; clamped to `2..=MAX_BINS`).
     pub bins: usize,
     /// Cost of visiting an interior node, relative to `intersection_cost` (default 1).
     pub traversal_cost: f64,
@@ -54,35 +54,61 @@ struct Plane {
     bin: usize,
 }
 
+/// Most bins per axis (the per-node scratch lives on the stack).
+pub const MAX_BINS: usize = 64;
+
+/// The binned-SAH rule with its options resolved.
+struct Sah {
+    max_leaf: usize,
+    min_leaf: usize,
+    bins: usize,
+    ct: f64,
+    ci: f64,
+}
+
 /// Builds a binned-SAH tree over `tris` (see the module documentation).
 pub fn build_sah_binned(tris: &[Triangle], options: &SahOptions) -> LogicalTree {
     let max_leaf = options.max_leaf.max(1);
-    let min_leaf = options.min_leaf.min(max_leaf);
-    let bins = options.bins.max(2);
-    let (ct, ci) = (options.traversal_cost, options.intersection_cost);
-    let mut counts = vec![0usize; bins];
-    let mut boxes = vec![Aabb::EMPTY; bins];
-    let mut right_area = vec![0f64; bins];
+    let rule = Sah {
+        max_leaf,
+        min_leaf: options.min_leaf.min(max_leaf),
+        bins: options.bins.clamp(2, MAX_BINS),
+        ct: options.traversal_cost,
+        ci: options.intersection_cost,
+    };
+    build_top_down(tris, &rule)
+}
 
-    TopDown::new(tris).build(|td, begin, end, bounds, cbounds| {
-        let n = end - begin;
-        if n <= min_leaf {
+impl Decide for Sah {
+    fn decide(&self, items: &mut [Item], bounds: Aabb, cbounds: Aabb) -> Decision {
+        let (bins, ct, ci) = (self.bins, self.ct, self.ci);
+        let n = items.len();
+        if n <= self.min_leaf {
             return Decision::Leaf;
         }
         let area = bounds.half_area();
         let leaf_cost = ci * n as f64 * area;
-        let mut best: Option<Plane> = None;
-        for axis in 0..3 {
-            let Some((lo, scale)) = binning(cbounds, axis, bins) else {
-                continue;
-            };
-            counts.fill(0);
-            boxes.fill(Aabb::EMPTY);
-            for &i in &td.order[begin..end] {
-                let k = bin_of(td.centroids[i as usize][axis], lo, scale, bins);
-                counts[k] += 1;
-                boxes[k] = boxes[k].union(td.boxes[i as usize]);
+        let binnings = [0, 1, 2].map(|axis| binning(cbounds, axis, bins));
+        // Per axis: bins of counts and boxes.
+        let mut counts = [[0usize; MAX_BINS]; 3];
+        let mut boxes = [[Aabb::EMPTY; MAX_BINS]; 3];
+        // One pass over the primitives bins all three axes.
+        for it in items.iter() {
+            for (axis, b) in binnings.iter().enumerate() {
+                if let Some((lo, scale)) = *b {
+                    let k = bin_of(it.centroid.axis(axis), lo, scale, bins);
+                    counts[axis][k] += 1;
+                    boxes[axis][k] = boxes[axis][k].union(it.bounds);
+                }
             }
+        }
+        let mut best: Option<Plane> = None;
+        let mut right_area = [0f64; MAX_BINS];
+        for axis in 0..3 {
+            if binnings[axis].is_none() {
+                continue;
+            }
+            let (counts, boxes) = (&counts[axis], &boxes[axis]);
             // right_area[k]: area of bins k..bins.
             let mut acc = Aabb::EMPTY;
             for k in (1..bins).rev() {
@@ -116,19 +142,17 @@ pub fn build_sah_binned(tris: &[Triangle], options: &SahOptions) -> LogicalTree 
             }
         }
         match best {
-            Some(p) if n > max_leaf || p.cost < leaf_cost => {
-                let (lo, scale) = binning(cbounds, p.axis, bins).expect("axis was binned");
-                let range = &mut td.order[begin..end];
-                let centroids = &td.centroids;
+            Some(p) if n > self.max_leaf || p.cost < leaf_cost => {
+                let (lo, scale) = binnings[p.axis].expect("axis was binned");
                 let goes_left =
-                    |i: u32| bin_of(centroids[i as usize][p.axis], lo, scale, bins) <= p.bin;
-                Decision::Split(partition(range, goes_left))
+                    |it: &Item| bin_of(it.centroid.axis(p.axis), lo, scale, bins) <= p.bin;
+                Decision::Split(partition(items, goes_left))
             }
             Some(_) => Decision::Leaf,
-            None if n <= max_leaf => Decision::Leaf,
-            None => Decision::Split(td.median_split(begin, end, cbounds.longest_axis())),
+            None if n <= self.max_leaf => Decision::Leaf,
+            None => Decision::Split(median_split(items, cbounds.longest_axis())),
         }
-    })
+    }
 }
 
 /// The binning of `axis`: the centroid box's low end and `bins / extent`, or `None` when the
@@ -145,11 +169,11 @@ fn bin_of(c: f32, lo: f64, scale: f64, bins: usize) -> usize {
 }
 
 /// Moves the elements for which `left` holds to the front; returns how many there are.
-fn partition(v: &mut [u32], left: impl Fn(u32) -> bool) -> usize {
+fn partition(v: &mut [Item], left: impl Fn(&Item) -> bool) -> usize {
     let mut i = 0;
     let mut j = v.len();
     while i < j {
-        if left(v[i]) {
+        if left(&v[i]) {
             i += 1;
         } else {
             j -= 1;
@@ -193,6 +217,27 @@ mod tests {
     }
 
     #[test]
+    fn same_tree_on_any_number_of_threads() {
+        let soup = gen::random_soup(3 * crate::bvh::PARALLEL_MIN as u32, 0.01, 8);
+        let on = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                (
+                    build_sah_binned(&soup.triangles, &SahOptions::default()),
+                    crate::bvh::build_median(&soup.triangles),
+                )
+            })
+        };
+        let one = on(1);
+        one.0.validate().unwrap();
+        one.1.validate_with_cap(1).unwrap();
+        assert_eq!(one, on(3));
+    }
+
+    #[test]
     fn deep_chain_is_deep_and_build_is_deterministic() {
         let chain = gen::deep_chain(1000, 0.5);
         let a = build_sah_binned(&chain.triangles, &SahOptions::default());
@@ -200,5 +245,6 @@ mod tests {
         assert_eq!(a, b);
         a.validate().unwrap();
         assert!(a.stats().depth > 64, "depth {}", a.stats().depth);
+        assert!(a.stats().stack_needed >= 64, "{:?}", a.stats());
     }
 }

@@ -44,6 +44,47 @@ impl TraversalStats {
     }
 }
 
+/// A LIFO of node indices: 64 entries inline (no allocation for ordinary trees), then a heap
+/// spill for deeper ones, so the reference has no depth limit.
+struct NodeStack {
+    inline: [u32; 64],
+    len: usize,
+    spill: Vec<u32>,
+}
+
+impl NodeStack {
+    fn new() -> NodeStack {
+        NodeStack {
+            inline: [0; 64],
+            len: 0,
+            spill: Vec::new(),
+        }
+    }
+
+    #[inline]
+    fn push(&mut self, node: u32) {
+        if self.len < self.inline.len() {
+            self.inline[self.len] = node;
+            self.len += 1;
+        } else {
+            self.spill.push(node);
+        }
+    }
+
+    #[inline]
+    fn pop(&mut self) -> Option<u32> {
+        // Spilled entries were pushed last, so they come off first.
+        if let Some(node) = self.spill.pop() {
+            return Some(node);
+        }
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        Some(self.inline[self.len])
+    }
+}
+
 /// The algorithm's update of `best` by one triangle.
 #[inline]
 fn consider(ray: &Ray, tri: &Triangle, best: &mut (f32, u32)) {
@@ -74,7 +115,7 @@ pub fn closest_hit_tree_stats(tree: &LogicalTree, ray: &Ray, stats: &mut Travers
         return Hit::from_best(best.0, best.1);
     }
     // An explicit stack replays the recursion's order: pop = enter, push right then left.
-    let mut stack: Vec<u32> = Vec::with_capacity(64);
+    let mut stack = NodeStack::new();
     stack.push(tree.root);
     while let Some(i) = stack.pop() {
         let node = &tree.nodes[i as usize];

@@ -11,7 +11,7 @@
 //! the scene keeps file order. An empty scene (no faces) is valid.
 //!
 //! Errors are [`SceneError`]s naming the file and, where it applies, the 1-based line. `tobj`
-//! reports what went wrong but not where; [`locate`] finds the first line that shows the
+//! reports what went wrong but not where; `locate` finds the first line that shows the
 //! reported problem by re-checking lines with the same rules. Coordinates that are NaN or
 //! infinite (including values like `1e39` that overflow `f32`) are rejected: `tobj` accepts
 //! them, so every `v` line is checked here, whether or not a face uses it.
@@ -100,14 +100,17 @@ fn check_vertices(path: &Path, text: &str) -> Result<(), SceneError> {
             continue;
         }
         vertex += 1;
-        let rest: Vec<&str> = words.collect();
         // tobj accepted the file, so the first three values parse.
         let mut xyz = [0f32; 3];
-        for (c, w) in xyz.iter_mut().zip(&rest) {
-            *c = w.parse::<f32>().unwrap_or(f32::NAN);
+        for c in &mut xyz {
+            *c = words
+                .next()
+                .and_then(|w| w.parse().ok())
+                .unwrap_or(f32::NAN);
         }
-        if rest.len() == 4 {
-            let w: f32 = rest[3].parse().unwrap_or(f32::NAN);
+        // Exactly one more value is `w`, which divides (three more are a color).
+        if let (Some(w), None) = (words.next(), words.next()) {
+            let w: f32 = w.parse().unwrap_or(f32::NAN);
             for c in &mut xyz {
                 *c /= w;
             }

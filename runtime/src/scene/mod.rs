@@ -1,5 +1,6 @@
 //! Scenes: a named list of triangles in file order, loaded from OBJ ([`load`]), transformed
-//! and instanced ([`transform`]), or generated as hard test cases ([`gen`]).
+//! and instanced ([`transform`]), or generated as hard test cases ([`gen`]); [`manifest`] lists
+//! the real scenes and finds their folder.
 //!
 //! Input: OBJ files or parameters; output: [`Scene`], whose triangle `i` has `id == i` unless
 //! a transformation composed several scenes (then ids are renumbered, see
@@ -7,6 +8,7 @@
 
 pub mod gen;
 pub mod load;
+pub mod manifest;
 pub mod transform;
 
 use std::fmt;

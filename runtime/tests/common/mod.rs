@@ -8,37 +8,17 @@ use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Hit, Ray};
 use scion_runtime::reference::why_pruned;
 
-/// The real scenes of `shared/scenes` (README there), beside the repository root, or the
-/// folder named by `SCION_SCENES`. `None` (with a printed line) when missing.
+/// The real scenes' folder (`scene::manifest::scenes_dir`), or `None` with a printed line.
 pub fn scenes_dir() -> Option<PathBuf> {
-    let dir = match std::env::var_os("SCION_SCENES") {
-        Some(d) => PathBuf::from(d),
-        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes"),
-    };
-    if dir.join("teapot.obj").is_file() {
-        Some(dir)
-    } else {
+    let dir = scion_runtime::scene::manifest::scenes_dir();
+    if dir.is_none() {
         println!(
-            "SKIPPED: no real scenes at {} (set SCION_SCENES to the shared/scenes folder)",
-            dir.display()
+            "SKIPPED: no real scenes found (set SCION_SCENES to the shared/scenes folder, or \
+             keep shared/scenes beside the repository)"
         );
-        None
     }
+    dir
 }
-
-/// The real scenes with their triangle counts (shared/scenes/README.md), smallest first.
-pub const REAL_SCENES: &[(&str, usize)] = &[
-    ("teapot", 992),
-    ("pine", 1_650),
-    ("suzanne", 15_488),
-    ("balloon", 35_698),
-    ("fzk_haus", 35_906),
-    ("sponza_dabrovic", 66_454),
-    ("bunny", 69_630),
-    ("engine", 110_336),
-    ("cruiser_cg57", 180_063),
-    ("dragon", 871_306),
-];
 
 /// True when this is an optimized build (the large-scene tests run only then).
 pub fn release() -> bool {
