@@ -8,31 +8,8 @@ use scion_runtime::geom::{Hit, Ray, Vec3};
 use scion_runtime::query::{axis_rays, primary_rays, secondary_rays};
 use scion_runtime::reference::why_pruned;
 use scion_runtime::scene::{load_obj, Scene};
-use std::path::PathBuf;
 
-/// The real scenes with their triangle counts (shared/scenes/README.md), smallest first.
-pub const REAL_SCENES: &[(&str, usize)] = &[
-    ("teapot", 992),
-    ("pine", 1_650),
-    ("suzanne", 15_488),
-    ("balloon", 35_698),
-    ("fzk_haus", 35_906),
-    ("sponza_dabrovic", 66_454),
-    ("bunny", 69_630),
-    ("engine", 110_336),
-    ("cruiser_cg57", 180_063),
-    ("dragon", 871_306),
-];
-
-/// The folder of the real scenes: `SCION_SCENES`, else `shared/scenes` beside the repository.
-/// `None` when it holds no `teapot.obj`.
-pub fn scenes_dir() -> Option<PathBuf> {
-    let dir = match std::env::var_os("SCION_SCENES") {
-        Some(d) => PathBuf::from(d),
-        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes"),
-    };
-    dir.join("teapot.obj").is_file().then_some(dir)
-}
+pub use scion_runtime::scene::manifest::{scenes_dir, REAL_SCENES};
 
 /// Loads the real scene `name` (`teapot`, ...) from [`scenes_dir`].
 pub fn real_scene(name: &str) -> Result<Scene, String> {

@@ -75,7 +75,8 @@ fn rows() -> Vec<Row> {
         println!("SKIPPED: real scenes (no shared/scenes; set SCION_SCENES)");
         return rows;
     }
-    for &(name, tris) in REAL_SCENES {
+    for info in REAL_SCENES {
+        let (name, tris) = (info.name, info.triangles);
         if tris > 100_000 && !release() {
             println!("SKIPPED in debug builds: {name} ({tris} triangles)");
             continue;

@@ -1,0 +1,250 @@
+//! `scion trace`: scene -> logical tree -> rays -> hits, with the numbers the paper reports
+//! (§9: build and pack time, trace time by the trimmed mean of 9 runs, Mrays/s, bytes of the
+//! structure and per node).
+//!
+//! The layout-free backends (reference, interp, brute) trace the logical tree itself: their
+//! structure is the tree's node array plus its reordered triangles, and there is nothing to
+//! pack. `--backend jit` follows the runtime contract of docs/design/specialization.md §3
+//! (`@L.sizes`, one allocation per buffer, `@L.build`, the batch entry over blocks of 64); the
+//! specializer and the JIT are not in this build yet, so it answers with an error saying so.
+
+use crate::{BackendArg, BuilderArg, CliError, RaysArg, TraceArgs};
+use scion_runtime::bvh::{build_median, build_sah_binned, LogicalNode, LogicalTree, SahOptions};
+use scion_runtime::geom::{Hit, Ray, Triangle};
+use scion_runtime::query::{axis_rays, primary_rays, read_rays, secondary_rays, write_hits};
+use scion_runtime::scene::{load_obj, Scene};
+use scion_runtime::timing::{measure_with, Timing, TimingPlan};
+use scion_tests::backend::{Backend, BackendKind};
+use std::time::{Duration, Instant};
+
+/// The layouts of library/layouts, by the name `--layout` takes.
+pub const LAYOUTS: &[(&str, &str)] = &[
+    ("pbrt", "library/layouts/pbrt.scion"),
+    ("ptr", "library/layouts/ptr.scion"),
+    ("pbrt-align16", "library/layouts/pbrt_align16.scion"),
+    ("pbrt-soaos", "library/layouts/pbrt_soaos.scion"),
+    ("pbrt-q16", "library/layouts/pbrt_q16.scion"),
+];
+
+/// Runs `scion trace`.
+pub fn run(args: &TraceArgs) -> Result<(), CliError> {
+    // Decide the backend before the (possibly long) load, so that a backend that cannot run
+    // fails at once.
+    let kind = match args.backend {
+        BackendArg::Reference => BackendKind::Reference,
+        BackendArg::Brute => BackendKind::Brute,
+        BackendArg::Interp => BackendKind::Interp(1),
+        BackendArg::Jit => return Err(jit_unavailable(&args.layout)),
+    };
+    let backend = kind.instantiate(args.threads).map_err(CliError::new)?;
+
+    progress(&format!("loading {}", args.scene.display()));
+    let t = Instant::now();
+    let scene = load_obj(&args.scene).map_err(|e| {
+        CliError::new(format!("cannot load the scene: {e}"))
+            .note("scenes are Wavefront OBJ files (docs/formats.md)")
+    })?;
+    let load_time = t.elapsed();
+
+    progress(&format!(
+        "building the logical tree of {} triangles",
+        scene.len()
+    ));
+    let t = Instant::now();
+    let tree = build(&scene, args);
+    let build_time = t.elapsed();
+    let cap = match args.builder {
+        BuilderArg::Sah => args.leaf_size as usize,
+        BuilderArg::Median => 1,
+    };
+    tree.validate_with_cap(cap)
+        .map_err(|e| CliError::new(format!("the builder made an invalid tree: {e}")))?;
+
+    let rays = rays(&scene, args)?;
+    let threads = match args.threads {
+        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        t => t,
+    };
+    progress(&format!(
+        "tracing {} rays with {} on {threads} thread{}",
+        rays.len(),
+        backend.name(),
+        if threads == 1 { "" } else { "s" }
+    ));
+    let (hits, timing) = trace(backend.as_ref(), &scene.triangles, &tree, &rays, args.runs)?;
+
+    let stats = tree.stats();
+    let node_bytes = tree.nodes.len() * std::mem::size_of::<LogicalNode>();
+    let prim_bytes = tree.primitives.len() * std::mem::size_of::<Triangle>();
+    let bytes = node_bytes + prim_bytes;
+    let hit_count = hits.iter().filter(|h| h.is_hit()).count();
+    let builder = match args.builder {
+        BuilderArg::Sah => format!("binned SAH, leaves <= {}", args.leaf_size),
+        BuilderArg::Median => "median, one triangle per leaf".to_string(),
+    };
+    let source = match &args.rays_file {
+        Some(p) => format!("from {}", p.display()),
+        None => format!("{:?} (seed {})", args.rays, args.seed).to_lowercase(),
+    };
+    println!("scene        {}", args.scene.display());
+    println!("triangles    {}", scene.len());
+    println!(
+        "nodes        {} ({} interior, {} leaves, depth {}, SAH cost {:.2})",
+        stats.nodes, stats.interior, stats.leaves, stats.depth, stats.sah_cost
+    );
+    println!("builder      {builder}");
+    println!("load time    {}", secs(load_time));
+    println!("build time   {}", secs(build_time));
+    println!("pack time    0 s (layout-free backend: it reads the logical tree)");
+    println!(
+        "layout       none (logical tree: {node_bytes} B of nodes + {prim_bytes} B of triangles)"
+    );
+    println!(
+        "structure    {bytes} bytes, {:.1} bytes/node",
+        bytes as f64 / stats.nodes.max(1) as f64
+    );
+    println!("rays         {} {source}", rays.len());
+    println!("backend      {} on {threads} threads", backend.name());
+    println!(
+        "trace time   {} ({})",
+        secs(timing.mean),
+        plan_text(args.runs)
+    );
+    println!(
+        "throughput   {:.3} Mrays/s ({:.1} ns/ray)",
+        timing.queries_per_second(rays.len()) / 1e6,
+        timing.ns_per_query(rays.len())
+    );
+    println!("hits         {hit_count} of {} rays", rays.len());
+    if let Some(path) = &args.output {
+        write_hits(path, &hits)
+            .map_err(|e| CliError::new(format!("cannot write the hits: {e}")))?;
+        println!("output       {} ({} bytes)", path.display(), hits.len() * 8);
+    }
+    Ok(())
+}
+
+/// The error of `--backend jit` until the specializer and the JIT are merged: it checks the
+/// layout name first, so a typo is reported as such.
+fn jit_unavailable(layout: &str) -> CliError {
+    let known = LAYOUTS.iter().any(|(n, _)| *n == layout) || layout.ends_with(".scion");
+    if !known {
+        let names: Vec<&str> = LAYOUTS.iter().map(|(n, _)| *n).collect();
+        return CliError::new(format!("unknown layout `{layout}`"))
+            .note(format!("known layouts: {}", names.join(", ")))
+            .note("or give the path of a .scion file that defines the layout");
+    }
+    CliError::new(format!(
+        "--backend jit is not available in this build (layout `{layout}`): layout \
+         specialization and the Cranelift JIT are not merged yet"
+    ))
+    .note("use --backend reference (the Rust reference) or --backend interp (the tree interpreter)")
+}
+
+fn build(scene: &Scene, args: &TraceArgs) -> LogicalTree {
+    match args.builder {
+        BuilderArg::Sah => build_sah_binned(
+            &scene.triangles,
+            &SahOptions {
+                max_leaf: args.leaf_size as usize,
+                ..SahOptions::default()
+            },
+        ),
+        BuilderArg::Median => build_median(&scene.triangles),
+    }
+}
+
+fn rays(scene: &Scene, args: &TraceArgs) -> Result<Vec<Ray>, CliError> {
+    if let Some(path) = &args.rays_file {
+        progress(&format!("reading rays from {}", path.display()));
+        return read_rays(path).map_err(|e| CliError::new(format!("cannot read the rays: {e}")));
+    }
+    let b = scene.bounds();
+    if scene.is_empty() {
+        return Err(CliError::new(format!(
+            "{}: the scene has no triangles, so there is no box to aim generated rays at",
+            args.scene.display()
+        ))
+        .note("give rays with --rays-file"));
+    }
+    let n = args.n;
+    Ok(match args.rays {
+        RaysArg::Primary => {
+            // The smallest image of about n pixels: w = ceil(sqrt n) columns, enough rows,
+            // then the first n pixels in raster order.
+            let w = (n as f64).sqrt().ceil().max(1.0) as usize;
+            let h = n.div_ceil(w).max(1);
+            let (w, h) = (to_u32(w, "--n")?, to_u32(h, "--n")?);
+            let mut r = primary_rays(b, w, h, args.seed);
+            r.truncate(n);
+            r
+        }
+        RaysArg::Secondary => secondary_rays(b, n, args.seed),
+        RaysArg::Axis => axis_rays(b, n, args.seed),
+    })
+}
+
+fn to_u32(v: usize, what: &str) -> Result<u32, CliError> {
+    u32::try_from(v).map_err(|_| CliError::new(format!("{what}: {v} is too large")))
+}
+
+/// Traces once for the hits, then times by the plan of `runs` (the first trace is the
+/// warm-up; with `runs == 1` it is also the one timed run).
+fn trace(
+    backend: &dyn Backend,
+    tris: &[Triangle],
+    tree: &LogicalTree,
+    rays: &[Ray],
+    runs: u32,
+) -> Result<(Vec<Hit>, Timing), CliError> {
+    let t = Instant::now();
+    let hits = backend
+        .trace(tris, tree, rays)
+        .map_err(|e| CliError::new(format!("{} failed: {e}", backend.name())))?;
+    let first = t.elapsed();
+    if runs == 1 {
+        return Ok((
+            hits,
+            Timing {
+                raw: vec![first],
+                mean: first,
+            },
+        ));
+    }
+    let drop = ((runs - 1) / 4) as usize;
+    let plan = TimingPlan {
+        warmup: 0,
+        runs: runs as usize,
+        drop_low: drop,
+        drop_high: drop,
+    };
+    let mut failed = None;
+    let timing = measure_with(&plan, || {
+        if let Err(e) = backend.trace(tris, tree, rays) {
+            failed = Some(e);
+        }
+    });
+    match failed {
+        Some(e) => Err(CliError::new(format!("{} failed: {e}", backend.name()))),
+        None => Ok((hits, timing)),
+    }
+}
+
+fn plan_text(runs: u32) -> String {
+    if runs == 1 {
+        return "1 run, no warm-up".into();
+    }
+    let drop = (runs - 1) / 4;
+    format!(
+        "mean of {} of {runs} runs after 1 warm-up, dropping the {drop} fastest and {drop} slowest",
+        runs - 2 * drop
+    )
+}
+
+fn secs(d: Duration) -> String {
+    format!("{:.6} s", d.as_secs_f64())
+}
+
+fn progress(what: &str) {
+    eprintln!("scion: {what}...");
+}
