@@ -41,8 +41,11 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     progress(&format!("loading {}", args.scene.display()));
     let t = Instant::now();
     let scene = load_obj(&args.scene).map_err(|e| {
-        CliError::new(format!("cannot load the scene: {e}"))
-            .note("scenes are Wavefront OBJ files (docs/formats.md)")
+        let err = CliError::new(format!("cannot load the scene: {e}"));
+        match e.line() {
+            Some(_) => err.note("scenes are Wavefront OBJ files (docs/formats.md)"),
+            None => err,
+        }
     })?;
     let load_time = t.elapsed();
 
