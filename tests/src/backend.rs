@@ -23,6 +23,12 @@ pub trait Backend: Sync {
         tree: &LogicalTree,
         rays: &[Ray],
     ) -> Result<Vec<Hit>, String>;
+    /// The deepest tree the backend traverses without a stack overflow, when bounded
+    /// (generated code keeps a fixed-size stack); on deeper trees an error saying
+    /// "stack overflow" is a correct answer.
+    fn stack_limit(&self) -> Option<usize> {
+        None
+    }
 }
 
 /// The backends the harness knows.

@@ -8,7 +8,11 @@
 //!   new backend is one more row of the differential table.
 //! - [`cases`]: the scenes (real and generated hard cases), trees and ray sets the rows use,
 //!   and [`cases::compare`], the bit-for-bit comparison with its one documented exception.
+//! - [`contract`]: the host side of the runtime contract (`@L.sizes`, aligned buffers,
+//!   `@L.build`, batch entries over blocks of 64, statuses with the failing ray's index) for
+//!   code specialized to a layout.
 
 pub mod backend;
 pub mod cases;
+pub mod contract;
 pub mod oracle;
