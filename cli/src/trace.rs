@@ -114,8 +114,8 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         plan_text(args.runs)
     );
     println!(
-        "throughput   {:.3} Mrays/s ({:.1} ns/ray)",
-        timing.queries_per_second(rays.len()) / 1e6,
+        "throughput   {} Mrays/s ({:.1} ns/ray)",
+        significant(timing.queries_per_second(rays.len()) / 1e6),
         timing.ns_per_query(rays.len())
     );
     println!("hits         {hit_count} of {} rays", rays.len());
@@ -242,6 +242,16 @@ fn plan_text(runs: u32) -> String {
         "mean of {} of {runs} runs after 1 warm-up, dropping the {drop} fastest and {drop} slowest",
         runs - 2 * drop
     )
+}
+
+/// `x` with four significant digits (throughputs span 0.001 to 1000 Mrays/s).
+fn significant(x: f64) -> String {
+    let digits = if x > 0.0 && x.is_finite() {
+        (3 - x.log10().floor() as i32).clamp(0, 9) as usize
+    } else {
+        3
+    };
+    format!("{x:.digits$}")
 }
 
 fn secs(d: Duration) -> String {
