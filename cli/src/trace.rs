@@ -5,16 +5,20 @@
 //! The layout-free backends (reference, interp, brute) trace the logical tree itself: their
 //! structure is the tree's node array plus its reordered triangles, and there is nothing to
 //! pack. `--backend jit` follows the runtime contract of docs/design/specialization.md §3
-//! (`@L.sizes`, one allocation per buffer, `@L.build`, the batch entry over blocks of 64); the
-//! specializer and the JIT are not in this build yet, so it answers with an error saying so.
+//! through `scion_tests::contract` (`@L.sizes`, one aligned allocation per buffer, `@L.build`
+//! timed as the pack time, the batch entry over blocks of 64, a nonzero status reported with
+//! the failing ray); the specializer and the JIT are not in this build yet, so [`jit_code`]
+//! answers with an error saying so.
 
 use crate::{BackendArg, BuilderArg, CliError, RaysArg, TraceArgs};
+use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::{build_median, build_sah_binned, LogicalNode, LogicalTree, SahOptions};
 use scion_runtime::geom::{Hit, Ray, Triangle};
 use scion_runtime::query::{axis_rays, primary_rays, read_rays, secondary_rays, write_hits};
 use scion_runtime::scene::{load_obj, Scene};
 use scion_runtime::timing::{measure_with, Timing, TimingPlan};
 use scion_tests::backend::{Backend, BackendKind};
+use scion_tests::contract::{LayoutCode, Packed};
 use std::time::{Duration, Instant};
 
 /// The layouts of library/layouts, by the name `--layout` takes.
@@ -30,13 +34,15 @@ pub const LAYOUTS: &[(&str, &str)] = &[
 pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     // Decide the backend before the (possibly long) load, so that a backend that cannot run
     // fails at once.
-    let kind = match args.backend {
-        BackendArg::Reference => BackendKind::Reference,
-        BackendArg::Brute => BackendKind::Brute,
-        BackendArg::Interp => BackendKind::Interp(1),
-        BackendArg::Jit => return Err(jit_unavailable(&args.layout)),
+    let engine = match args.backend {
+        BackendArg::Reference => Engine::Free(instantiate(BackendKind::Reference, args)?),
+        BackendArg::Brute => Engine::Free(instantiate(BackendKind::Brute, args)?),
+        BackendArg::Interp => Engine::Free(instantiate(BackendKind::Interp(1), args)?),
+        BackendArg::Jit => Engine::Layout {
+            code: jit_code(&args.layout)?,
+            driver: BatchDriver::new(args.threads).map_err(CliError::new)?,
+        },
     };
-    let backend = kind.instantiate(args.threads).map_err(CliError::new)?;
 
     progress(&format!("loading {}", args.scene.display()));
     let t = Instant::now();
@@ -71,15 +77,55 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     progress(&format!(
         "tracing {} rays with {} on {threads} thread{}",
         rays.len(),
-        backend.name(),
+        engine.name(),
         if threads == 1 { "" } else { "s" }
     ));
-    let (hits, timing) = trace(backend.as_ref(), &scene.triangles, &tree, &rays, args.runs)?;
+    let (hits, timing, packed) = match &engine {
+        Engine::Free(b) => {
+            let (hits, timing) = timed(args.runs, || {
+                b.trace(&scene.triangles, &tree, &rays)
+                    .map_err(|e| CliError::new(format!("{} failed: {e}", b.name())))
+            })?;
+            (hits, timing, None)
+        }
+        Engine::Layout { code, driver } => {
+            progress(&format!("packing the tree into layout `{}`", code.layout()));
+            let packed = Packed::new(code.as_ref(), &tree).map_err(CliError::new)?;
+            let (hits, timing) = timed(args.runs, || {
+                packed.trace(code.as_ref(), &rays, driver).map_err(|f| {
+                    CliError::new(format!("layout `{}`: {f}", code.layout())).note(
+                        "trees deeper than the generated traversal's stack cannot be traced \
+                         with this layout; try --builder sah with a larger --leaf-size",
+                    )
+                })
+            })?;
+            (hits, timing, Some(packed))
+        }
+    };
 
     let stats = tree.stats();
     let node_bytes = tree.nodes.len() * std::mem::size_of::<LogicalNode>();
     let prim_bytes = tree.primitives.len() * std::mem::size_of::<Triangle>();
-    let bytes = node_bytes + prim_bytes;
+    let (pack_line, layout_line, bytes) = match &packed {
+        None => (
+            "0 s (layout-free backend: it reads the logical tree)".to_string(),
+            format!("none (logical tree: {node_bytes} B of nodes + {prim_bytes} B of triangles)"),
+            node_bytes + prim_bytes,
+        ),
+        Some(p) => {
+            let parts: Vec<String> = p
+                .specs
+                .iter()
+                .zip(p.buffers())
+                .map(|(spec, b)| format!("{} {} B (align {})", spec.name, b.len(), spec.align))
+                .collect();
+            (
+                secs(p.pack_time),
+                format!("{}: {}", args.layout, parts.join(", ")),
+                p.bytes(),
+            )
+        }
+    };
     let hit_count = hits.iter().filter(|h| h.is_hit()).count();
     let builder = match args.builder {
         BuilderArg::Sah => format!("binned SAH, leaves <= {}", args.leaf_size),
@@ -98,16 +144,14 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     println!("builder      {builder}");
     println!("load time    {}", secs(load_time));
     println!("build time   {}", secs(build_time));
-    println!("pack time    0 s (layout-free backend: it reads the logical tree)");
-    println!(
-        "layout       none (logical tree: {node_bytes} B of nodes + {prim_bytes} B of triangles)"
-    );
+    println!("pack time    {pack_line}");
+    println!("layout       {layout_line}");
     println!(
         "structure    {bytes} bytes, {:.1} bytes/node",
         bytes as f64 / stats.nodes.max(1) as f64
     );
     println!("rays         {} {source}", rays.len());
-    println!("backend      {} on {threads} threads", backend.name());
+    println!("backend      {} on {threads} threads", engine.name());
     println!(
         "trace time   {} ({})",
         secs(timing.mean),
@@ -127,21 +171,47 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-/// The error of `--backend jit` until the specializer and the JIT are merged: it checks the
-/// layout name first, so a typo is reported as such.
-fn jit_unavailable(layout: &str) -> CliError {
+/// How `scion trace` traces: a layout-free backend, or code specialized to a layout driven
+/// through the runtime contract.
+enum Engine {
+    Free(Box<dyn Backend>),
+    Layout {
+        code: Box<dyn LayoutCode>,
+        driver: BatchDriver,
+    },
+}
+
+impl Engine {
+    fn name(&self) -> String {
+        match self {
+            Engine::Free(b) => b.name(),
+            Engine::Layout { code, .. } => format!("jit ({})", code.layout()),
+        }
+    }
+}
+
+fn instantiate(kind: BackendKind, args: &TraceArgs) -> Result<Box<dyn Backend>, CliError> {
+    kind.instantiate(args.threads).map_err(CliError::new)
+}
+
+/// The closest-hit code specialized to `layout` and compiled by the JIT. The layout name is
+/// checked first, so a typo is reported as such; layout specialization and the Cranelift JIT
+/// are not part of this build yet, which is an error (never a stand-in result).
+fn jit_code(layout: &str) -> Result<Box<dyn LayoutCode>, CliError> {
     let known = LAYOUTS.iter().any(|(n, _)| *n == layout) || layout.ends_with(".scion");
     if !known {
         let names: Vec<&str> = LAYOUTS.iter().map(|(n, _)| *n).collect();
-        return CliError::new(format!("unknown layout `{layout}`"))
+        return Err(CliError::new(format!("unknown layout `{layout}`"))
             .note(format!("known layouts: {}", names.join(", ")))
-            .note("or give the path of a .scion file that defines the layout");
+            .note("or give the path of a .scion file that defines the layout"));
     }
-    CliError::new(format!(
+    Err(CliError::new(format!(
         "--backend jit is not available in this build (layout `{layout}`): layout \
          specialization and the Cranelift JIT are not merged yet"
     ))
-    .note("use --backend reference (the Rust reference) or --backend interp (the tree interpreter)")
+    .note(
+        "use --backend reference (the Rust reference) or --backend interp (the tree interpreter)",
+    ))
 }
 
 fn build(scene: &Scene, args: &TraceArgs) -> LogicalTree {
@@ -193,17 +263,12 @@ fn to_u32(v: usize, what: &str) -> Result<u32, CliError> {
 
 /// Traces once for the hits, then times by the plan of `runs` (the first trace is the
 /// warm-up; with `runs == 1` it is also the one timed run).
-fn trace(
-    backend: &dyn Backend,
-    tris: &[Triangle],
-    tree: &LogicalTree,
-    rays: &[Ray],
+fn timed(
     runs: u32,
+    mut trace: impl FnMut() -> Result<Vec<Hit>, CliError>,
 ) -> Result<(Vec<Hit>, Timing), CliError> {
     let t = Instant::now();
-    let hits = backend
-        .trace(tris, tree, rays)
-        .map_err(|e| CliError::new(format!("{} failed: {e}", backend.name())))?;
+    let hits = trace()?;
     let first = t.elapsed();
     if runs == 1 {
         return Ok((
@@ -223,12 +288,12 @@ fn trace(
     };
     let mut failed = None;
     let timing = measure_with(&plan, || {
-        if let Err(e) = backend.trace(tris, tree, rays) {
+        if let Err(e) = trace() {
             failed = Some(e);
         }
     });
     match failed {
-        Some(e) => Err(CliError::new(format!("{} failed: {e}", backend.name()))),
+        Some(e) => Err(e),
         None => Ok((hits, timing)),
     }
 }

@@ -12,7 +12,7 @@
 
 use crate::backend::Backend;
 use scion_runtime::batch::BatchDriver;
-use scion_runtime::bvh::LogicalTree;
+use scion_runtime::bvh::{LogicalNode, LogicalTree};
 use scion_runtime::geom::{Hit, Ray, Triangle};
 use std::fmt;
 use std::sync::Mutex;
@@ -51,6 +51,37 @@ pub trait LayoutCode: Sync {
     /// The deepest tree the traversal handles without [`STATUS_STACK_OVERFLOW`], when bounded.
     fn stack_limit(&self) -> Option<usize> {
         None
+    }
+}
+
+/// The header `%tree` points to in `@L.sizes(%tree, %sizes)` and `@L.build(%tree, %B)`
+/// (design note §3.1): the logical tree's arrays in C form. Building one is safe; whoever
+/// calls native code with its address keeps the tree alive for the call.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct LogicalTreeView {
+    /// `tree.nodes` (44-byte `LogicalNode`s).
+    pub nodes: *const LogicalNode,
+    /// Number of nodes.
+    pub node_count: u32,
+    /// Index of the root, `u32::MAX` for the empty tree.
+    pub root: u32,
+    /// `tree.primitives` (40-byte `Triangle`s).
+    pub prims: *const Triangle,
+    /// Number of primitives.
+    pub prim_count: u32,
+}
+
+impl LogicalTreeView {
+    /// The view of `tree`; `None` when a count does not fit `u32`.
+    pub fn new(tree: &LogicalTree) -> Option<LogicalTreeView> {
+        Some(LogicalTreeView {
+            nodes: tree.nodes.as_ptr(),
+            node_count: u32::try_from(tree.nodes.len()).ok()?,
+            root: tree.root,
+            prims: tree.primitives.as_ptr(),
+            prim_count: u32::try_from(tree.primitives.len()).ok()?,
+        })
     }
 }
 

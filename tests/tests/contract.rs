@@ -105,3 +105,28 @@ fn build_statuses_and_the_empty_tree() {
         .unwrap();
     assert!(!hits[0].is_hit());
 }
+
+/// The tree header matches the offsets of design note §3.1 on 64-bit targets.
+#[test]
+#[cfg(target_pointer_width = "64")]
+fn logical_tree_view_abi() {
+    use scion_runtime::bvh::LogicalNode;
+    use scion_runtime::geom::Triangle;
+    use scion_tests::contract::LogicalTreeView;
+    use std::mem::{offset_of, size_of};
+    assert_eq!(size_of::<LogicalTreeView>(), 32);
+    assert_eq!(offset_of!(LogicalTreeView, nodes), 0);
+    assert_eq!(offset_of!(LogicalTreeView, node_count), 8);
+    assert_eq!(offset_of!(LogicalTreeView, root), 12);
+    assert_eq!(offset_of!(LogicalTreeView, prims), 16);
+    assert_eq!(offset_of!(LogicalTreeView, prim_count), 24);
+    assert_eq!(size_of::<LogicalNode>(), 44);
+    assert_eq!(offset_of!(LogicalNode, child), 28);
+    assert_eq!(offset_of!(LogicalNode, prim_offset), 36);
+    assert_eq!(size_of::<Triangle>(), 40);
+    let scene = gen::one_triangle();
+    let tree = build_sah_binned(&scene.triangles, &SahOptions::default());
+    let v = LogicalTreeView::new(&tree).unwrap();
+    assert_eq!((v.node_count, v.root, v.prim_count), (1, 0, 1));
+    assert_eq!(v.nodes, tree.nodes.as_ptr());
+}
