@@ -186,23 +186,19 @@ impl FuncCx<'_> {
                 Ok(b.unary(kind, v))
             }
             ExprKind::Binary { op, lhs, rhs } => self.binary(b, e, *op, lhs, rhs),
-            ExprKind::Cast { expr, .. } => {
+            ExprKind::Cast { expr, .. } | ExprKind::BitCast { expr, .. } => {
                 let v = self.expr(b, expr)?;
                 let t = self.expr_ty(b, e)?;
                 if b.value_type(v) == t {
                     return Ok(v);
                 }
+                let kind = if matches!(e.kind, ExprKind::Cast { .. }) {
+                    Op::Cast
+                } else {
+                    Op::Bitcast
+                };
                 b.set_span(Some(e.span));
-                Ok(b.build1(Op::Cast, &[v], t))
-            }
-            ExprKind::BitCast { expr, .. } => {
-                let v = self.expr(b, expr)?;
-                let t = self.expr_ty(b, e)?;
-                if b.value_type(v) == t {
-                    return Ok(v);
-                }
-                b.set_span(Some(e.span));
-                Ok(b.build1(Op::Bitcast, &[v], t))
+                Ok(b.build1(kind, &[v], t))
             }
             ExprKind::This | ExprKind::Parent(_) | ExprKind::Build(_) => {
                 Err(self.bug("a layout or build expression inside a function"))

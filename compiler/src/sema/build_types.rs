@@ -26,11 +26,8 @@ use scion_ir::diag::Span;
 impl Checker<'_> {
     /// Types build item `item`.
     pub(super) fn check_build(&mut self, item: usize, decl: &BuildDecl) {
+        // A build without a layout is `check_build`'s E0401.
         let Some(LayoutId(li)) = self.out.layout_named(&decl.name.name) else {
-            self.error(SemaError::BuildUnknownLayout {
-                name: decl.name.name.clone(),
-                span: decl.name.span,
-            });
             self.out.builds.push(BuildInfo {
                 item,
                 layout: None,
@@ -87,19 +84,11 @@ impl Checker<'_> {
         let mut seen: FxHashMap<usize, Span> = FxHashMap::default();
         for (entry, bv) in decl.variants.iter().enumerate() {
             let Some(v) = def.variant_index(&bv.name.name) else {
-                self.error(SemaError::BuildVariantNotInAdt {
-                    name: bv.name.name.clone(),
-                    adt: def.name.clone(),
-                    span: bv.name.span,
-                });
                 continue;
             };
-            if let Some(prev) = seen.insert(v, bv.name.span) {
-                self.error(SemaError::DuplicateBuildVariant {
-                    name: bv.name.name.clone(),
-                    span: bv.name.span,
-                    previous: prev,
-                });
+            // An unknown or twice-built variant is `check_build`'s error (E0403, E0404).
+            if seen.insert(v, bv.name.span).is_some() {
+                continue;
             }
             let logical = def.variant_fields(v);
             let param_names: Vec<String> = bv.params.iter().map(|p| p.name.name.clone()).collect();
@@ -117,16 +106,23 @@ impl Checker<'_> {
                     span: bv.name.span,
                 });
             }
+            // Array lengths may name any logical field, whatever the parameters are called.
+            let mut len_names = param_names.clone();
+            len_names.extend(logical.iter().map(|f| f.name.clone()));
             for (p, f) in bv.params.iter().zip(logical.iter()) {
                 if p.name.name != f.name {
-                    self.error(SemaError::BuildParamName {
-                        expected: f.name.clone(),
-                        found: p.name.name.clone(),
-                        span: p.name.span,
-                    });
+                    // A name that is no field of the variant is `check_build`'s E0415; a field
+                    // out of its place is reported here.
+                    if logical.iter().any(|g| g.name == p.name.name) {
+                        self.error(SemaError::BuildParamName {
+                            expected: f.name.clone(),
+                            found: p.name.name.clone(),
+                            span: p.name.span,
+                        });
+                    }
                     continue;
                 }
-                let t = self.lower_type(&p.ty, &LenScope::Names(&param_names));
+                let t = self.lower_type(&p.ty, &LenScope::Names(&len_names));
                 if t != f.ty && !t.has_error() {
                     let (expected, found) = (
                         f.ty.display(&self.adts).to_string(),
@@ -240,53 +236,34 @@ impl Checker<'_> {
 
     /// `build x` / `build x = e` as a statement.
     pub(super) fn check_build_stmt(&mut self, s: &Stmt, field: &Ident, value: Option<&Expr>) {
-        let variant_name = match &self.ctx {
-            Ctx::Build {
-                variant: Some(v),
-                layout,
-                ..
-            } => self
-                .out
-                .layouts
-                .get(*layout)
-                .and_then(|l| l.adt)
-                .and_then(|a| self.adts.get(a))
-                .and_then(|d| d.variants().get(*v as usize))
-                .map(|v| v.name.clone())
-                .unwrap_or_default(),
-            Ctx::Build { variant: None, .. } => "root".to_string(),
-            _ => {
-                self.error(SemaError::WrongContext {
-                    what: "a `build` statement",
-                    span: s.span,
-                    allowed: "in builds",
-                });
-                if let Some(v) = value {
-                    self.infer_expr(v);
-                }
-                return;
+        if !matches!(self.ctx, Ctx::Build { .. }) {
+            self.error(SemaError::WrongContext {
+                what: "a `build` statement",
+                span: s.span,
+                allowed: "in builds",
+            });
+            if let Some(v) = value {
+                self.infer_expr(v);
             }
-        };
+            return;
+        }
         let member = self.build_member(&field.name);
         let logical = self.build_field(&field.name);
         let member_ty = member.and_then(|m| {
             self.current_layout()
                 .map(|l| l.members[m.0 as usize].ty.clone())
         });
-        match value {
-            Some(e) => {
-                let t = self.infer_expr(e);
-                let Some(mt) = member_ty else {
-                    self.error(SemaError::BuildUnknownTarget {
-                        name: field.name.clone(),
-                        variant: variant_name,
-                        span: field.span,
-                    });
-                    return;
-                };
+        // `build x` without a value copies logical field `x`: a target that is neither a logical
+        // nor a stored field is `check_build`'s E0406 / E0417, and a stored field of another type
+        // than the logical field `check_layout`'s E0327 (on every variant's route).
+        if let Some(e) = value {
+            let t = self.infer_expr(e);
+            // An unknown target is `check_build`'s E0406.
+            if let Some(mt) = member_ty {
                 if let (ExprKind::Int(v), Some(p)) = (&e.kind, mt.as_int()) {
                     if p.int_literal_max().is_some_and(|max| *v > max) {
                         let ty = self.show(&mt);
+                        self.literal_reported.push(e.id);
                         self.error(SemaError::BuildLiteralFit {
                             field: field.name.clone(),
                             value: *v,
@@ -305,46 +282,6 @@ impl Checker<'_> {
                     });
                 }
             }
-            None => match &logical {
-                None => {
-                    let err = if member.is_some() {
-                        SemaError::BuildCopyUnknown {
-                            name: field.name.clone(),
-                            variant: variant_name,
-                            span: field.span,
-                        }
-                    } else {
-                        SemaError::BuildUnknownTarget {
-                            name: field.name.clone(),
-                            variant: variant_name,
-                            span: field.span,
-                        }
-                    };
-                    self.error(err);
-                }
-                Some((_, lt, rec)) => {
-                    let phys = self.physical_in_build(lt);
-                    match member_ty {
-                        Some(mt) => {
-                            if self.zonk(&mt) != phys && !mt.has_error() && !phys.has_error() {
-                                let (logical, stored) = (self.show(&phys), self.show(&mt));
-                                self.error(SemaError::BuildCopyType {
-                                    field: field.name.clone(),
-                                    logical,
-                                    stored,
-                                    span: field.span,
-                                });
-                            }
-                        }
-                        None if *rec => {}
-                        None => self.error(SemaError::BuildUnknownTarget {
-                            name: field.name.clone(),
-                            variant: variant_name,
-                            span: field.span,
-                        }),
-                    }
-                }
-            },
         }
         let (field_ix, child) = match logical {
             Some((i, _, rec)) => (Some(i), rec),
@@ -381,13 +318,8 @@ impl Checker<'_> {
                 self.out.resolutions.insert(e.id, Resolution::BuildChild(i));
                 self.physical_in_build(&t)
             }
-            _ => {
-                self.error(SemaError::BuildNotRecursive {
-                    name: name.name.clone(),
-                    span: name.span,
-                });
-                Ty::Error
-            }
+            // Not a child: `check_build`'s E0410.
+            _ => Ty::Error,
         }
     }
 
@@ -407,21 +339,7 @@ impl Checker<'_> {
             });
             return Ty::Prim(Prim::U32);
         }
-        // The start index is an integer of the type the context asks for, `u32` otherwise.
-        let ok = match &args[0].kind {
-            ExprKind::Name(n) => matches!(self.build_field(&n.name), Some((_, Ty::Slice(_), _))),
-            _ => false,
-        };
-        if !ok {
-            let name = match &args[0].kind {
-                ExprKind::Name(n) => n.name.clone(),
-                _ => "this expression".to_string(),
-            };
-            self.error(SemaError::AppendArg {
-                name,
-                span: args[0].span,
-            });
-        }
+        // Whether `x` is a dependent-length logical field is `check_build`'s E0412.
         let n = self.shallow(&tys[1]);
         if !(n.as_int().is_some() || n == Ty::Error || self.var_kind(&n).is_some()) {
             let ty = self.show(&n);
@@ -435,6 +353,7 @@ impl Checker<'_> {
             let v = self.fresh(VarKind::Int);
             self.unify(&n, &v).ok();
         }
+        // The start index is an integer of the type the context asks for, `u32` otherwise.
         let start = self.fresh(VarKind::Int);
         self.append_results.push(start.clone());
         start

@@ -3,7 +3,10 @@
 //! Input: a [`SemaError`] built by `resolve`, `infer`, `layout_types` or `build_types` (types
 //! already rendered to text). Output: a [`Diagnostic`] with a stable code, a primary span with a
 //! label, and notes. Codes: `E02xx` names and types of the traversal language, `E0350`-`E0369`
-//! typing of layouts, `E0450`-`E0499` typing of builds (paper §3, §5, §6).
+//! typing of layouts, `E0450`-`E0499` typing of builds (paper §3, §5, §6). Structural mistakes
+//! in layouts and builds (unknown variants, groups or targets, duplicate members, ...) are
+//! reported by `check_layout` (`E0301`-`E0349`) and `check_build` (`E0401`-`E0449`) instead, so
+//! each mistake is reported once; the codes this module gave up are not reused.
 
 use scion_ir::diag::{Diagnostic, Span};
 
@@ -162,18 +165,11 @@ pub enum SemaError {
     RecursiveRecord { name: String, span: Span },
     /// E0238
     IndexRange { index: u128, len: u64, span: Span },
-    /// E0350
-    LayoutAdtUnknown { layout: String, span: Span },
-    /// E0351
-    LayoutAdtAmbiguous {
-        layout: String,
-        candidates: Vec<String>,
-        span: Span,
-    },
-    /// E0352
-    SplitUnknownVariant {
-        name: String,
-        adt: String,
+    /// E0239
+    BitRange {
+        lo: u128,
+        hi: u128,
+        ty: String,
         span: Span,
     },
     /// E0353
@@ -182,8 +178,6 @@ pub enum SemaError {
     GroupSizeNotInt { ty: String, span: Span },
     /// E0355
     GroupByNotIndex { ty: String, span: Span },
-    /// E0356
-    UnknownIndirectGroup { name: String, span: Span },
     /// E0357
     PhysicalType {
         field: String,
@@ -192,26 +186,10 @@ pub enum SemaError {
         found: String,
         span: Span,
     },
-    /// E0358
-    UnknownParentField { name: String, span: Span },
     /// E0359
     FromKeyNotInt { ty: String, span: Span },
-    /// E0360
-    DuplicateMember {
-        name: String,
-        span: Span,
-        previous: Span,
-    },
     /// E0361
     LayoutArrayLen { name: String, span: Span },
-    /// E0450
-    BuildUnknownLayout { name: String, span: Span },
-    /// E0451
-    BuildVariantNotInAdt {
-        name: String,
-        adt: String,
-        span: Span,
-    },
     /// E0452
     BuildParamCount {
         variant: String,
@@ -233,12 +211,6 @@ pub enum SemaError {
         found: String,
         span: Span,
     },
-    /// E0455
-    BuildUnknownTarget {
-        name: String,
-        variant: String,
-        span: Span,
-    },
     /// E0456
     BuildValueType {
         field: String,
@@ -253,33 +225,10 @@ pub enum SemaError {
         ty: String,
         span: Span,
     },
-    /// E0458
-    BuildCopyType {
-        field: String,
-        logical: String,
-        stored: String,
-        span: Span,
-    },
-    /// E0459
-    BuildNotRecursive { name: String, span: Span },
-    /// E0460
-    AppendArg { name: String, span: Span },
     /// E0461
     BuildReturnType {
         expected: String,
         found: String,
-        span: Span,
-    },
-    /// E0462
-    DuplicateBuildVariant {
-        name: String,
-        span: Span,
-        previous: Span,
-    },
-    /// E0463
-    BuildCopyUnknown {
-        name: String,
-        variant: String,
         span: Span,
     },
 }
@@ -335,32 +284,19 @@ impl SemaError {
             ReturnValueInUnit { .. } => "E0236",
             RecursiveRecord { .. } => "E0237",
             IndexRange { .. } => "E0238",
-            LayoutAdtUnknown { .. } => "E0350",
-            LayoutAdtAmbiguous { .. } => "E0351",
-            SplitUnknownVariant { .. } => "E0352",
+            BitRange { .. } => "E0239",
             DiscriminantNotInt { .. } => "E0353",
             GroupSizeNotInt { .. } => "E0354",
             GroupByNotIndex { .. } => "E0355",
-            UnknownIndirectGroup { .. } => "E0356",
             PhysicalType { .. } => "E0357",
-            UnknownParentField { .. } => "E0358",
             FromKeyNotInt { .. } => "E0359",
-            DuplicateMember { .. } => "E0360",
             LayoutArrayLen { .. } => "E0361",
-            BuildUnknownLayout { .. } => "E0450",
-            BuildVariantNotInAdt { .. } => "E0451",
             BuildParamCount { .. } => "E0452",
             BuildParamName { .. } => "E0453",
             BuildParamType { .. } => "E0454",
-            BuildUnknownTarget { .. } => "E0455",
             BuildValueType { .. } => "E0456",
             BuildLiteralFit { .. } => "E0457",
-            BuildCopyType { .. } => "E0458",
-            BuildNotRecursive { .. } => "E0459",
-            AppendArg { .. } => "E0460",
             BuildReturnType { .. } => "E0461",
-            DuplicateBuildVariant { .. } => "E0462",
-            BuildCopyUnknown { .. } => "E0463",
         }
     }
 
@@ -470,38 +406,22 @@ impl SemaError {
                 .with_note("only sum types may be recursive; store the value through a sum type or a slice"),
             IndexRange { index, len, span } => e(format!("index {index} is out of range for {len} elements"))
                 .with_primary(*span, "out of range"),
-            LayoutAdtUnknown { layout, span } => e(format!("cannot tell which type layout `{layout}` stores"))
-                .with_primary(*span, "no sum type has the variants this layout and its build name")
-                .with_note("a layout realizes the sum type whose variants its `split` arms and its build name"),
-            LayoutAdtAmbiguous { layout, candidates, span } => e(format!("layout `{layout}` could store any of {}", list(candidates)))
-                .with_primary(*span, "ambiguous logical type")
-                .with_note("give the build's variants their parameter lists so the types differ"),
-            SplitUnknownVariant { name, adt, span } => e(format!("`{name}` is not a variant of `{adt}`"))
-                .with_primary(*span, "unknown variant in split arm"),
+            BitRange { lo, hi, ty, span } => e(format!("bit range [{lo}:{hi}] does not fit `{ty}`"))
+                .with_primary(*span, "bits outside the value")
+                .with_note(format!("`e[a:b]` takes bits a..b-1 of an integer: it needs a < b <= {}", ty_bits(ty))),
             DiscriminantNotInt { ty, span } => e(format!("split discriminant has type `{ty}`, not an integer"))
                 .with_primary(*span, "expected an integer"),
             GroupSizeNotInt { ty, span } => e(format!("group size has type `{ty}`, not an integer"))
                 .with_primary(*span, "expected an integer"),
             GroupByNotIndex { ty, span } => e(format!("group index has type `{ty}`"))
                 .with_primary(*span, "expected an integer or `ptr`"),
-            UnknownIndirectGroup { name, span } => e(format!("`{name}` is not an indirect group of this layout"))
-                .with_primary(*span, "unknown indirect group"),
             PhysicalType { field, logical, expected, found, span } => e(format!("layout field `{field}` has type `{found}` but must have type `{expected}`"))
                 .with_primary(*span, format!("expected `{expected}`"))
                 .with_note(format!("physical types preserve logical types: logical field `{field}` has type `{logical}`")),
-            UnknownParentField { name, span } => e(format!("`parent.{name}` names no field of the layout"))
-                .with_primary(*span, "unknown field"),
             FromKeyNotInt { ty, span } => e(format!("foreign key has type `{ty}`, not an integer"))
                 .with_primary(*span, "expected an integer"),
-            DuplicateMember { name, span, previous } => e(format!("layout member `{name}` is defined twice in one scope"))
-                .with_primary(*span, "redefined here")
-                .with_secondary(*previous, "first defined here"),
             LayoutArrayLen { name, span } => e(format!("array length `{name}` is not a field of the layout"))
                 .with_primary(*span, "unknown length"),
-            BuildUnknownLayout { name, span } => e(format!("build `{name}` has no layout of the same name"))
-                .with_primary(*span, "no such layout"),
-            BuildVariantNotInAdt { name, adt, span } => e(format!("`{name}` is not a variant of `{adt}`"))
-                .with_primary(*span, "unknown variant in build"),
             BuildParamCount { variant, expected, found, fields, span } => e(format!("build of `{variant}` lists {found} field(s) but the variant has {expected}"))
                 .with_primary(*span, "wrong number of fields")
                 .with_note(format!("fields, shared ones first: {fields}")),
@@ -510,27 +430,13 @@ impl SemaError {
                 .with_note("build parameters name the variant's logical fields in order, shared ones first"),
             BuildParamType { name, expected, found, span } => e(format!("build parameter `{name}` has type `{found}` but the field has type `{expected}`"))
                 .with_primary(*span, format!("expected `{expected}`")),
-            BuildUnknownTarget { name, variant, span } => e(format!("`{name}` is not a stored field that `{variant}` reaches"))
-                .with_primary(*span, "unknown build target"),
             BuildValueType { field, expected, found, span } => e(format!("`build {field} = ...` stores `{found}` into a field of type `{expected}`"))
                 .with_primary(*span, format!("expected `{expected}`"))
                 .with_note("convert explicitly with `as`"),
             BuildLiteralFit { field, value, ty, span } => e(format!("literal {value} does not fit field `{field}` of type `{ty}`"))
                 .with_primary(*span, "out of range"),
-            BuildCopyType { field, logical, stored, span } => e(format!("`build {field}` copies a `{logical}` into a field of type `{stored}`"))
-                .with_primary(*span, "types differ")
-                .with_note(format!("write `build {field} = e` with an explicit conversion")),
-            BuildNotRecursive { name, span } => e(format!("`build {name}` as an expression needs a recursive field"))
-                .with_primary(*span, "not a child of this variant"),
-            AppendArg { name, span } => e(format!("cannot append `{name}`"))
-                .with_primary(*span, "expected a dependent-length array field of the variant"),
             BuildReturnType { expected, found, span } => e(format!("a build returns the node's reference `{expected}`, found `{found}`"))
                 .with_primary(*span, format!("expected `{expected}`")),
-            DuplicateBuildVariant { name, span, previous } => e(format!("variant `{name}` is built twice"))
-                .with_primary(*span, "second build")
-                .with_secondary(*previous, "first build"),
-            BuildCopyUnknown { name, variant, span } => e(format!("`build {name}`: `{name}` is neither a logical field of `{variant}` nor a stored field"))
-                .with_primary(*span, "nothing to copy"),
         }
     }
 }
@@ -552,9 +458,9 @@ mod tests {
                 span: s,
             },
             SemaError::UnreachableArm { span: s },
-            SemaError::BuildCopyUnknown {
-                name: "x".into(),
-                variant: "Leaf".into(),
+            SemaError::BuildReturnType {
+                expected: "u32".into(),
+                found: "f32".into(),
                 span: s,
             },
         ];
@@ -572,4 +478,11 @@ mod tests {
         .to_diagnostic();
         assert!(d.message.contains("`Leaf`"), "{}", d.message);
     }
+}
+
+/// The width of an integer type named `ty` (for the note of E0239).
+fn ty_bits(ty: &str) -> u32 {
+    super::types::Prim::from_name(ty)
+        .map(|p| p.bits())
+        .unwrap_or(0)
 }

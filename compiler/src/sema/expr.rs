@@ -65,9 +65,14 @@ impl Checker<'_> {
                 let l = self.infer_expr(lo);
                 let h = self.infer_expr(hi);
                 let result = self.fresh(VarKind::General);
+                let literal = match (&lo.kind, &hi.kind) {
+                    (ExprKind::Int(a), ExprKind::Int(z)) => Some((*a, *z)),
+                    _ => None,
+                };
                 self.solve_or_defer(Obligation::Slice {
                     base: b,
                     bounds: [(l, lo.span), (h, hi.span)],
+                    literal,
                     result: result.clone(),
                     span: e.span,
                 });
@@ -163,13 +168,8 @@ impl Checker<'_> {
                             .insert(e.id, Resolution::ParentParam(i));
                         self.binding_ty(Binding::LayoutParam(i))
                     }
-                    _ => {
-                        self.error(SemaError::UnknownParentField {
-                            name: name.name.clone(),
-                            span: name.span,
-                        });
-                        Ty::Error
-                    }
+                    // `parent.x` naming nothing is `check_layout`'s E0310.
+                    _ => Ty::Error,
                 }
             }
             ExprKind::Build(name) => self.infer_build_expr(e, name),
@@ -233,10 +233,18 @@ impl Checker<'_> {
                 return result;
             }
         }
-        self.error(SemaError::UnknownName {
-            name: name.to_string(),
-            span: e.span,
-        });
+        // In a layout, a name that resolves on no route is `check_layout`'s E0319; in a build,
+        // a field of another variant is `check_build`'s E0418.
+        let other_variant = matches!(self.ctx, Ctx::Build { .. })
+            && self
+                .current_layout()
+                .is_some_and(|l| l.members.iter().any(|m| m.name == name));
+        if !matches!(self.ctx, Ctx::Layout { .. }) && !other_variant {
+            self.error(SemaError::UnknownName {
+                name: name.to_string(),
+                span: e.span,
+            });
+        }
         Ty::Error
     }
 }

@@ -84,6 +84,8 @@ pub(crate) struct Checker<'a> {
     pub int_literals: Vec<(NodeId, u128, Span)>,
     /// Results of `append(x, n)`: integers that default to `u32` rather than `i32`.
     pub append_results: Vec<Ty>,
+    /// Literals already reported as not fitting (by `build x = n`).
+    pub literal_reported: Vec<NodeId>,
 }
 
 impl<'a> Checker<'a> {
@@ -101,6 +103,7 @@ impl<'a> Checker<'a> {
             ctx: Ctx::Const,
             int_literals: Vec::new(),
             append_results: Vec::new(),
+            literal_reported: Vec::new(),
         }
     }
 

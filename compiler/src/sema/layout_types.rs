@@ -15,11 +15,12 @@ use super::errors::SemaError;
 use super::infer::{Binding, Checker, Ctx};
 use super::ops::{IntCheck, Obligation};
 use super::resolve::LenScope;
-use super::typed::{ArmInfo, LayoutInfo, MemberId, MemberInfo, MemberKindInfo};
+use super::typed::{ArmInfo, LayoutInfo, MemberId, MemberInfo, MemberKindInfo, Resolution};
 use super::types::{AdtId, Ty};
 use super::unify::VarKind;
 use crate::syntax::ast::{
-    GroupAttrKind, Item, LayoutDecl, Member, MemberKind, Program, SplitArmBody,
+    ExprKind, GroupAttrKind, Item, LayoutDecl, Member, MemberKind, Program, SplitArmBody,
+    SplitPatternKind,
 };
 use rustc_hash::FxHashMap;
 use scion_ir::diag::Span;
@@ -104,7 +105,7 @@ impl Checker<'_> {
         if cands.len() > 1 {
             // Types of the members tell the candidates apart (`bounds = DOP14(...)`).
             self.run_pending(false);
-            if let Some(adt) = self.pick_adt_by_types(layout_idx, decl, &cands) {
+            if let Some(adt) = self.pick_adt_by_types(layout_idx, &cands) {
                 self.choose_adt(layout_idx, decl, adt, &walk.ids);
             }
         }
@@ -134,17 +135,8 @@ impl Checker<'_> {
         names: &[String],
         walk: &mut Walk,
     ) {
-        let mut seen: FxHashMap<String, Span> = FxHashMap::default();
+        // Duplicate names in one scope are `check_layout`'s E0302; the later one wins here.
         for m in members {
-            if let Some((n, span)) = member_name(m) {
-                if let Some(prev) = seen.insert(n.to_string(), span) {
-                    self.error(SemaError::DuplicateMember {
-                        name: n.to_string(),
-                        span,
-                        previous: prev,
-                    });
-                }
-            }
             let (name, kind, ty) = match &m.kind {
                 MemberKind::Field { name, ty } => (
                     name,
@@ -278,23 +270,13 @@ impl Checker<'_> {
             let top = cands.iter().map(realized).max().unwrap_or(0);
             cands.retain(|a| realized(a) == top);
         }
-        if cands.is_empty() && !used.is_empty() {
-            self.error(SemaError::LayoutAdtUnknown {
-                layout: decl.name.name.clone(),
-                span: decl.name.span,
-            });
-        }
+        // No candidate, or a tie that member types do not break, is `check_layout`'s E0311.
         cands
     }
 
     /// Among several candidate sum types, the one whose logical field types the layout's typed
-    /// members agree with most; reports an ambiguity when that does not decide.
-    fn pick_adt_by_types(
-        &mut self,
-        layout: usize,
-        decl: &LayoutDecl,
-        cands: &[AdtId],
-    ) -> Option<AdtId> {
+    /// members agree with most (`None` when that does not decide either).
+    fn pick_adt_by_types(&mut self, layout: usize, cands: &[AdtId]) -> Option<AdtId> {
         let ref_ty = self.out.layouts[layout].ref_ty.clone();
         let members: Vec<(String, Ty)> = self.out.layouts[layout]
             .members
@@ -325,19 +307,10 @@ impl Checker<'_> {
             .filter(|(_, s)| **s == best)
             .map(|(a, _)| *a)
             .collect();
-        if top.len() == 1 {
-            return Some(top[0]);
+        match top.as_slice() {
+            [one] => Some(*one),
+            _ => None,
         }
-        let candidates = top
-            .iter()
-            .map(|a| self.adts.adts[a.0 as usize].name.clone())
-            .collect();
-        self.error(SemaError::LayoutAdtAmbiguous {
-            layout: decl.name.name.clone(),
-            candidates,
-            span: decl.name.span,
-        });
-        None
     }
 
     /// Fills in the variant of every split arm and of the members inside arms.
@@ -360,16 +333,9 @@ impl Checker<'_> {
                             SplitArmBody::Members { variant, members } => (variant, Some(members)),
                             SplitArmBody::From { variant, .. } => (variant, None),
                         };
+                        // An arm naming no variant of the type is `check_layout`'s E0311.
                         let def = &self.adts.adts[adt.0 as usize];
                         let v = def.variant_index(&vname.name).map(|v| v as u32);
-                        if v.is_none() {
-                            let adt_name = def.name.clone();
-                            self.error(SemaError::SplitUnknownVariant {
-                                name: vname.name.clone(),
-                                adt: adt_name,
-                                span: vname.span,
-                            });
-                        }
                         if let Some(a) = self.out.layouts[layout].arms.get_mut(*arm_ix) {
                             a.variant = v;
                         }
@@ -461,11 +427,34 @@ impl Checker<'_> {
                 }
                 MemberKind::Split { discriminant, arms } => {
                     let t = self.infer_expr(discriminant);
-                    self.solve_or_defer(Obligation::Int {
-                        ty: t,
-                        check: IntCheck::Discriminant,
-                        span: discriminant.span,
-                    });
+                    // `check_layout` (E0320) already rejects a discriminant whose type it can
+                    // read off the syntax (a stored field, a component, a cast) and one of
+                    // unknown type without a `_` arm; the rest is checked here, once.
+                    let syntactic = match &discriminant.kind {
+                        ExprKind::Cast { .. } => true,
+                        ExprKind::Name(_) => {
+                            matches!(
+                                self.out.resolutions.get(&discriminant.id),
+                                Some(Resolution::LayoutParam(_))
+                            ) || matches!(
+                                self.out.resolutions.get(&discriminant.id),
+                                Some(Resolution::LayoutMember(m))
+                                    if self.out.layouts[layout].members.get(m.0 as usize)
+                                        .is_some_and(|mi| mi.kind == MemberKindInfo::Stored)
+                            )
+                        }
+                        _ => false,
+                    };
+                    let wildcard = arms
+                        .iter()
+                        .any(|a| a.pattern.kind == SplitPatternKind::Wildcard);
+                    if wildcard && !syntactic {
+                        self.solve_or_defer(Obligation::Int {
+                            ty: t,
+                            check: IntCheck::Discriminant,
+                            span: discriminant.span,
+                        });
+                    }
                     for arm in arms {
                         let this_arm = *arm_ix;
                         *arm_ix += 1;
@@ -478,18 +467,11 @@ impl Checker<'_> {
                                     mi.name == group.name
                                         && mi.kind == MemberKindInfo::IndirectGroup
                                 });
-                                match g {
-                                    Some(g) => {
-                                        if let Some(a) =
-                                            self.out.layouts[layout].arms.get_mut(this_arm)
-                                        {
-                                            a.from_group = Some(MemberId(g as u32));
-                                        }
-                                    }
-                                    None => self.error(SemaError::UnknownIndirectGroup {
-                                        name: group.name.clone(),
-                                        span: group.span,
-                                    }),
+                                // Not an indirect group: `check_layout`'s E0309.
+                                if let (Some(g), Some(a)) =
+                                    (g, self.out.layouts[layout].arms.get_mut(this_arm))
+                                {
+                                    a.from_group = Some(MemberId(g as u32));
                                 }
                                 let t = self.infer_expr(k);
                                 self.solve_or_defer(Obligation::Int {
@@ -525,7 +507,7 @@ impl Checker<'_> {
 
     /// The logical field that member `m` of layout `layout` realizes by name, and the physical
     /// type it must therefore have.
-    fn logical_expectation(&self, layout: usize, m: usize) -> Option<(Ty, Ty)> {
+    pub(super) fn logical_expectation(&self, layout: usize, m: usize) -> Option<(Ty, Ty)> {
         let l = self.out.layouts.get(layout)?;
         let adt = l.adt?;
         let def = self.adts.get(adt)?;
@@ -579,23 +561,38 @@ impl Checker<'_> {
         }
     }
 
-    /// Checks "physical types preserve logical types" on the stored fields of every layout
-    /// (derived fields are checked where their value is typed).
+    /// Checks "physical types preserve logical types" on stored fields that hold children
+    /// (derived fields are checked where their value is typed). A stored field that breaks a
+    /// non-recursive logical type, or holds a child in the wrong number of bytes, is reported by
+    /// `check_layout` (E0327); what remains is a child stored in a same-sized wrong type
+    /// (`left: f32` for a `u32` reference).
     pub(super) fn check_physical_types(&mut self) {
         for li in 0..self.out.layouts.len() {
+            let Some(adt) = self.out.layouts[li].adt else {
+                continue;
+            };
             for m in 0..self.out.layouts[li].members.len() {
                 if self.out.layouts[li].members[m].kind != MemberKindInfo::Stored {
                     continue;
                 }
-                let Some((_, expected)) = self.logical_expectation(li, m) else {
+                let Some((logical, expected)) = self.logical_expectation(li, m) else {
                     continue;
                 };
                 let found = self.zonk(&self.out.layouts[li].members[m].ty);
-                if !found.has_error() && !expected.has_error() && found != expected {
+                let child = self.adts.mentions(&logical, adt);
+                if child && same_size(&found, &expected) && found != expected {
                     self.physical_error(li, m, &found);
                 }
             }
         }
+    }
+}
+
+/// True when both types have a known size and it is the same.
+fn same_size(a: &Ty, b: &Ty) -> bool {
+    match (a, b) {
+        (Ty::Array(x, n), Ty::Array(y, m)) => n == m && same_size(x, y),
+        _ => a.bit_size().is_some() && a.bit_size() == b.bit_size(),
     }
 }
 

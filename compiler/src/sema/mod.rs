@@ -55,15 +55,11 @@ pub fn check_program(program: &Program) -> (TypedProgram, Diagnostics) {
     for f in 0..cx.out.funcs.len() {
         cx.check_func(FuncId(f as u32));
     }
+    // A second layout or build of one name is `check_layout`'s E0302 / `check_build`'s E0414;
+    // only the first is typed.
     let mut layouts: FxHashMap<String, Span> = FxHashMap::default();
     for (i, l) in layout_types::layout_items(program) {
-        if let Some(prev) = layouts.insert(l.name.name.clone(), l.name.span) {
-            cx.error(SemaError::Duplicate {
-                what: "layout",
-                name: l.name.name.clone(),
-                span: l.name.span,
-                previous: prev,
-            });
+        if layouts.insert(l.name.name.clone(), l.name.span).is_some() {
             continue;
         }
         cx.check_layout(i, l);
@@ -71,13 +67,7 @@ pub fn check_program(program: &Program) -> (TypedProgram, Diagnostics) {
     let mut builds: FxHashMap<String, Span> = FxHashMap::default();
     for (i, item) in program.items.iter().enumerate() {
         if let Item::Build(b) = item {
-            if let Some(prev) = builds.insert(b.name.name.clone(), b.name.span) {
-                cx.error(SemaError::Duplicate {
-                    what: "build",
-                    name: b.name.name.clone(),
-                    span: b.name.span,
-                    previous: prev,
-                });
+            if builds.insert(b.name.name.clone(), b.name.span).is_some() {
                 continue;
             }
             cx.check_build(i, b);
@@ -109,6 +99,9 @@ impl Checker<'_> {
     /// Integer literals must fit their inferred type.
     fn check_literals(&mut self) {
         for (id, v, span) in std::mem::take(&mut self.int_literals) {
+            if self.literal_reported.contains(&id) {
+                continue;
+            }
             let t = self.zonk(self.out.expr_ty(id));
             if let Some(max) = t.as_int().and_then(|p| p.int_literal_max()) {
                 if v > max {

@@ -49,6 +49,8 @@ pub(super) enum Obligation {
     Slice {
         base: Ty,
         bounds: [(Ty, Span); 2],
+        /// Both bounds when they are literals (checked against an integer's width).
+        literal: Option<(u128, u128)>,
         result: Ty,
         span: Span,
     },
@@ -299,6 +301,7 @@ impl Checker<'_> {
             Obligation::Slice {
                 base,
                 bounds,
+                literal,
                 result,
                 span,
             } => {
@@ -309,7 +312,20 @@ impl Checker<'_> {
                     }
                     Ty::Error => Ty::Error,
                     Ty::Array(e, _) | Ty::Slice(e) => Ty::Slice(e.clone()),
-                    _ if self.class(&b) == Class::Int => b.clone(),
+                    _ if self.class(&b) == Class::Int => {
+                        if let (Ty::Prim(p), Some((lo, hi))) = (&b, literal) {
+                            let width = p.bits() as u128;
+                            if !(lo < hi && *hi <= width) {
+                                self.error(SemaError::BitRange {
+                                    lo: *lo,
+                                    hi: *hi,
+                                    ty: p.name().to_string(),
+                                    span: *span,
+                                });
+                            }
+                        }
+                        b.clone()
+                    }
                     _ => {
                         let ty = self.show(&b);
                         self.error(SemaError::NotSliceable { ty, span: *span });

@@ -1,321 +1,90 @@
-//! Tests of semantic analysis on ASTs built by hand with a small builder (the parser lives on
-//! another branch; once it is merged these become source-text tests).
+//! Tests of semantic analysis: each rule and each error code, positive and negative, on source
+//! text parsed by `syntax`, and the library files.
 
-use super::{check_program, Prim, Resolution, Ty};
-use crate::syntax::ast::*;
-use scion_ir::diag::Span;
+mod builds;
+mod dump;
+mod hand_built;
+mod layouts;
+mod library;
+mod robustness;
+mod traversal;
 
-/// Builds AST nodes with fresh ids and empty spans.
-#[derive(Default)]
-struct B {
-    next: u32,
-}
+use super::{check_program, TypedProgram};
+use crate::syntax::ast::Program;
+use crate::syntax::parse_program;
+use scion_ir::diag::{Diagnostics, SourceMap};
 
-fn ident(s: &str) -> Ident {
-    Ident {
-        name: s.to_string(),
-        span: Span::default(),
-    }
-}
+pub(super) const PRELUDE: &str = include_str!("../../../library/prelude.scion");
 
-/// `u32`, `f32x3`, `Triangle[n]`, `u32[8]`.
-fn ty(s: &str) -> TypeExpr {
-    let kind = match s.split_once('[') {
-        Some((elem, len)) => {
-            let len = len.trim_end_matches(']');
-            let len = match len.parse::<u64>() {
-                Ok(n) => ArrayLen::Const(n, Span::default()),
-                Err(_) => ArrayLen::Name(ident(len)),
-            };
-            TypeExprKind::Array {
-                elem: Box::new(ty(elem)),
-                len,
-            }
-        }
-        None => TypeExprKind::Named(ident(s)),
-    };
-    TypeExpr {
-        kind,
-        span: Span::default(),
-    }
-}
-
-fn field(name: &str, t: &str) -> FieldDecl {
-    FieldDecl {
-        name: ident(name),
-        ty: ty(t),
-        default: None,
-        span: Span::default(),
-    }
-}
-
-impl B {
-    fn id(&mut self) -> NodeId {
-        self.next += 1;
-        NodeId(self.next)
-    }
-    fn e(&mut self, kind: ExprKind) -> Expr {
-        Expr {
-            id: self.id(),
-            kind,
-            span: Span::default(),
-        }
-    }
-    fn s(&mut self, kind: StmtKind) -> Stmt {
-        Stmt {
-            id: self.id(),
-            kind,
-            span: Span::default(),
-        }
-    }
-    fn name(&mut self, n: &str) -> Expr {
-        self.e(ExprKind::Name(ident(n)))
-    }
-    fn int(&mut self, v: u128) -> Expr {
-        self.e(ExprKind::Int(v))
-    }
-    fn float(&mut self, v: f64) -> Expr {
-        self.e(ExprKind::Float(v))
-    }
-    fn call(&mut self, f: &str, args: Vec<Expr>) -> Expr {
-        self.e(ExprKind::Call {
-            callee: ident(f),
-            args,
-        })
-    }
-    fn bin(&mut self, op: BinaryOp, l: Expr, r: Expr) -> Expr {
-        self.e(ExprKind::Binary {
-            op,
-            lhs: Box::new(l),
-            rhs: Box::new(r),
-        })
-    }
-    fn get(&mut self, base: Expr, name: &str) -> Expr {
-        self.e(ExprKind::Field {
-            base: Box::new(base),
-            name: ident(name),
-        })
-    }
-    fn expr(&mut self, e: Expr) -> Stmt {
-        self.s(StmtKind::Expr(e))
-    }
-    fn assign(&mut self, target: Expr, value: Expr) -> Stmt {
-        self.s(StmtKind::Assign { target, value })
-    }
-    fn pat(&mut self, variant: &str, binds: &[&str]) -> Pattern {
-        let fields = binds
-            .iter()
-            .map(|b| Pattern {
-                id: self.id(),
-                kind: if *b == "_" {
-                    PatternKind::Wildcard
-                } else {
-                    PatternKind::Bind {
-                        name: ident(b),
-                        ty: None,
-                    }
-                },
-                span: Span::default(),
-            })
-            .collect();
-        Pattern {
-            id: self.id(),
-            kind: PatternKind::Variant {
-                name: ident(variant),
-                fields,
-            },
-            span: Span::default(),
-        }
-    }
-    fn matches(&mut self, scrutinee: Expr, arms: Vec<(Pattern, Stmt)>) -> Stmt {
-        let arms = arms
-            .into_iter()
-            .map(|(pattern, body)| MatchArm {
-                pattern,
-                body,
-                span: Span::default(),
-            })
-            .collect();
-        self.s(StmtKind::Match { scrutinee, arms })
-    }
-}
-
-fn func(name: &str, params: &[(&str, &str, bool)], ret: Option<&str>, body: Stmt) -> Item {
-    let params = params
-        .iter()
-        .map(|(n, t, m)| Param {
-            name: ident(n),
-            mutable: *m,
-            ty: ty(t),
-            default: None,
-            span: Span::default(),
-        })
-        .collect();
-    Item::Func(FuncDecl {
-        name: ident(name),
-        params,
-        ret: ret.map(ty),
-        body,
-        span: Span::default(),
-    })
-}
-
-fn record(name: &str, fields: &[(&str, &str)]) -> Item {
-    let fields = fields.iter().map(|(n, t)| field(n, t)).collect();
-    Item::Type(TypeDecl {
-        name: ident(name),
-        fields,
-        variants: None,
-        span: Span::default(),
-    })
-}
-
-/// `type BVH(bounds: AABB) = Interior(left: BVH, right: BVH) | Leaf(nprims: u16, data: Tri[nprims]);`
-fn geometry() -> Vec<Item> {
-    let bvh = TypeDecl {
-        name: ident("BVH"),
-        fields: vec![field("bounds", "AABB")],
-        variants: Some(vec![
-            VariantDecl {
-                name: ident("Interior"),
-                fields: vec![field("left", "BVH"), field("right", "BVH")],
-                span: Span::default(),
-            },
-            VariantDecl {
-                name: ident("Leaf"),
-                fields: vec![field("nprims", "u16"), field("data", "Tri[nprims]")],
-                span: Span::default(),
-            },
-        ]),
-        span: Span::default(),
-    };
-    vec![
-        record("AABB", &[("low", "f32x3"), ("high", "f32x3")]),
-        record("Tri", &[("p0", "f32x3"), ("id", "u32")]),
-        Item::Type(bvh),
-    ]
-}
-
-fn check(items: Vec<Item>, b: &B) -> (super::TypedProgram, Vec<String>) {
-    let program = Program {
-        items,
-        node_count: b.next + 1,
-    };
+/// Parses `files` (name, text) in order and checks the program.
+pub(super) fn check_files(
+    files: &[(&str, &str)],
+) -> (Program, TypedProgram, Diagnostics, SourceMap) {
+    let mut sm = SourceMap::new();
+    let ids: Vec<_> = files.iter().map(|(n, t)| sm.add(*n, *t)).collect();
+    let (program, pdiags) = parse_program(&sm, &ids);
+    assert!(
+        !pdiags.has_errors(),
+        "test input does not parse:\n{}",
+        pdiags.render(&sm)
+    );
     let (typed, diags) = check_program(&program);
-    let codes = diags
-        .list
-        .iter()
-        .map(|d| d.code.clone().unwrap_or_default())
-        .collect();
-    (typed, codes)
+    (program, typed, diags, sm)
 }
 
-#[test]
-fn literals_default_and_results_are_inferred() {
-    let mut b = B::default();
-    let one = b.int(1);
-    let body = b.expr(one);
-    let x = b.name("x");
-    let lit = b.int(2);
-    let sum = b.bin(BinaryOp::Add, x, lit);
-    let body2 = b.expr(sum);
-    let items = vec![
-        func("f", &[], None, body),
-        func("g", &[("x", "u16", false)], None, body2),
-    ];
-    let (t, codes) = check(items, &b);
-    assert!(codes.is_empty(), "{codes:?}");
-    assert_eq!(t.funcs[0].ret, Ty::Prim(Prim::I32));
-    assert_eq!(t.funcs[1].ret, Ty::Prim(Prim::U16));
-    assert!(t.expr_types.values().all(|t| !t.has_vars()));
+/// Checks `src` alone.
+pub(super) fn check(src: &str) -> (Program, TypedProgram, Diagnostics, SourceMap) {
+    check_files(&[("test.scion", src)])
 }
 
-#[test]
-fn unknown_name_and_mismatch() {
-    let mut b = B::default();
-    let y = b.name("y");
-    let body = b.expr(y);
-    let fl = b.float(1.0);
-    let body2 = b.expr(fl);
-    let items = vec![
-        func("f", &[], None, body),
-        func("g", &[], Some("u32"), body2),
-    ];
-    let (_, codes) = check(items, &b);
-    assert_eq!(codes, vec!["E0201", "E0206"]);
+/// Checks `src` after the prelude.
+pub(super) fn check_with_prelude(src: &str) -> (Program, TypedProgram, Diagnostics, SourceMap) {
+    check_files(&[("prelude.scion", PRELUDE), ("test.scion", src)])
 }
 
-#[test]
-fn overloads_resolve_by_argument_type() {
-    let mut b = B::default();
-    let mut items = geometry();
-    let t1 = b.e(ExprKind::Bool(true));
-    let body_box = b.expr(t1);
-    let t2 = b.e(ExprKind::Bool(false));
-    let body_tri = b.expr(t2);
-    items.push(func("hit", &[("b", "AABB", false)], Some("bool"), body_box));
-    items.push(func("hit", &[("t", "Tri", false)], Some("bool"), body_tri));
-    let arg = b.name("t");
-    let call = b.call("hit", vec![arg]);
-    let call_id = call.id;
-    let body = b.expr(call);
-    items.push(func("use_tri", &[("t", "Tri", false)], None, body));
-    let one = b.float(1.0);
-    let bad = b.call("hit", vec![one]);
-    let body = b.expr(bad);
-    items.push(func("bad", &[], None, body));
-    let (t, codes) = check(items, &b);
-    assert_eq!(codes, vec!["E0207"]);
-    let Some(Resolution::Func(f)) = t.resolution(call_id) else {
-        panic!()
-    };
-    assert_eq!(t.func(*f).unique_name, "hit.1");
+/// `src` (after the prelude) type-checks without any diagnostic.
+pub(super) fn ok(src: &str) -> TypedProgram {
+    let (_, typed, diags, sm) = check_with_prelude(src);
+    assert!(
+        diags.is_empty(),
+        "unexpected diagnostics:\n{}",
+        diags.render(&sm)
+    );
+    typed
 }
 
-#[test]
-fn match_binds_fields_and_checks_exhaustiveness() {
-    let mut b = B::default();
-    let mut items = geometry();
-    let scrut = b.name("n");
-    let p = b.pat("Leaf", &["bx", "k", "_"]);
-    let k = b.name("k");
-    let arm = b.expr(k);
-    let m = b.matches(scrut, vec![(p, arm)]);
-    items.push(func("count", &[("n", "BVH", false)], Some("u16"), m));
-    let (t, codes) = check(items, &b);
-    assert_eq!(codes, vec!["E0214"]);
-    let k = t.bindings.iter().find(|x| x.name == "k").unwrap();
-    assert_eq!(k.ty, Ty::Prim(Prim::U16));
+/// `src` (after the prelude) reports an error with `code`; returns the rendered diagnostics.
+pub(super) fn err(src: &str, code: &str) -> String {
+    let (_, _, diags, sm) = check_with_prelude(src);
+    let text = diags.render(&sm);
+    assert!(
+        diags.list.iter().any(|d| d.code.as_deref() == Some(code)),
+        "expected {code}, got:\n{text}"
+    );
+    for d in &diags.list {
+        assert!(
+            d.primary_span().is_some(),
+            "diagnostic without a primary span: {d}"
+        );
+    }
+    text
 }
 
-#[test]
-fn only_mut_parameters_are_assigned() {
-    let mut b = B::default();
-    let (t1, v1) = (b.name("a"), b.int(1));
-    let s1 = b.assign(t1, v1);
-    let (t2, v2) = (b.name("c"), b.int(2));
-    let s2 = b.assign(t2, v2);
-    let body = b.s(StmtKind::Block(vec![s1, s2]));
-    let items = vec![func(
-        "f",
-        &[("a", "u32", true), ("c", "u32", false)],
-        None,
-        body,
-    )];
-    let (_, codes) = check(items, &b);
-    assert_eq!(codes, vec!["E0221"]);
-}
-
-#[test]
-fn field_access_and_vector_components() {
-    let mut b = B::default();
-    let mut items = geometry();
-    let base = b.name("bx");
-    let low = b.get(base, "low");
-    let x = b.get(low, "x");
-    let body = b.expr(x);
-    items.push(func("lx", &[("bx", "AABB", false)], None, body));
-    let (t, codes) = check(items, &b);
-    assert!(codes.is_empty(), "{codes:?}");
-    assert_eq!(t.funcs[0].ret, Ty::Prim(Prim::F32));
+/// A structural mistake in a layout or build: `check_layout` / `check_build` report `code`, and
+/// semantic analysis stays silent so that the mistake is reported once.
+pub(super) fn structural(src: &str, code: &str) {
+    let (program, _, diags, sm) = check_with_prelude(src);
+    assert!(
+        diags.is_empty(),
+        "sema should leave this to the structural checks:\n{}",
+        diags.render(&sm)
+    );
+    let mut all = Diagnostics::new();
+    all.extend(crate::layout::check_layout::check_layouts(&program));
+    all.extend(crate::layout::check_build::check_builds(&program));
+    assert!(
+        all.list.iter().any(|d| d.code.as_deref() == Some(code)),
+        "expected {code}, got:\n{}",
+        all.render(&sm)
+    );
 }

@@ -176,8 +176,10 @@ pub fn eval(m: &Module, name: &str, args: &[Val], result: TypeId) -> R {
         "hmax" => fold_lanes(one()?, &|a, b| min_max(a, b, true)),
         "hsum" => fold_lanes(one()?, &add),
         "len" => match (one()?, scalar_type(m, result)) {
-            (Val::Array(a), Type::Int(t)) => Ok(Val::Int(t.wrap(a.len() as i128), *t)),
-            _ => Err("`len` takes an array and gives an integer".into()),
+            (Val::Array(a) | Val::Set(a), Type::Int(t)) => {
+                Ok(Val::Int(t.wrap(a.len() as i128), *t))
+            }
+            _ => Err("`len` takes an array or a set and gives an integer".into()),
         },
         "some" => Ok(Val::Option(Some(Box::new(one()?.clone())))),
         "none" => Ok(Val::Option(None)),

@@ -661,7 +661,7 @@ pub fn intrinsic_signature(m: &Module, name: &str, args: &[TypeId], result: Type
         "len" => sig(
             1,
             args.len() == 1
-                && matches!(t.get(args[0]), Type::Array { .. })
+                && matches!(t.get(args[0]), Type::Array { .. } | Type::Set(_))
                 && t.as_int(result).is_some(),
         ),
         "some" => sig(

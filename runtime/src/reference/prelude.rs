@@ -9,8 +9,8 @@
 //!   LLVM's NVPTX backend otherwise fuse into `fma.rn`).
 //! - `min`/`max` are IEEE 754 minNum/maxNum: when one operand is NaN the other is returned
 //!   (`f32::min`/`f32::max` in Rust, `llvm.minnum`/`llvm.maxnum`, `min.f32`/`max.f32` in PTX).
-//!   A slab with a zero direction lane computes `0 * inf = NaN` when the origin lies on the slab
-//!   plane; minNum/maxNum then drop that lane.
+//!   An axis with an infinite `1/d` (zero or tiny direction lane) is decided by the origin's
+//!   position (`slab_lane`), so no `0 * inf = NaN` arises in the slab test.
 //! - `dot(a, b) = (a.x*b.x + a.y*b.y) + a.z*b.z`, left to right;
 //!   `cross(a, b) = (a.y*b.z - a.z*b.y, a.z*b.x - a.x*b.z, a.x*b.y - a.y*b.x)`.
 //! - Division is IEEE division (`1.0 / d`), never a reciprocal approximation.
@@ -27,13 +27,29 @@ pub const FAR_WIDENING: f32 = 1.000_000_4;
 pub fn slab_interval(ray: &Ray, b: &Aabb) -> (f32, f32) {
     let d = ray.dir;
     let inv = Vec3::new(1.0 / d.x, 1.0 / d.y, 1.0 / d.z);
-    let t0 = (b.low - ray.origin).mul_lanes(inv);
-    let t1 = (b.high - ray.origin).mul_lanes(inv);
-    let near = t0.min(t1);
-    let far = t0.max(t1).mul_lanes(Vec3::splat(FAR_WIDENING));
-    let enter = ray.tmin.max(near.x.max(near.y.max(near.z)));
-    let exit = ray.tmax.min(far.x.min(far.y.min(far.z)));
+    let o = ray.origin;
+    let x = slab_lane(b.low.x, b.high.x, o.x, inv.x);
+    let y = slab_lane(b.low.y, b.high.y, o.y, inv.y);
+    let z = slab_lane(b.low.z, b.high.z, o.z, inv.z);
+    let w = FAR_WIDENING;
+    let enter = ray.tmin.max(x.0.max(y.0.max(z.0)));
+    let exit = ray.tmax.min((x.1 * w).min((y.1 * w).min(z.1 * w)));
     (enter, exit)
+}
+
+/// The prelude's `slab_lane`: one axis's `(entry, exit)`. An axis the ray does not move along
+/// (`1/d` infinite) is decided by the origin's position, boundary planes included.
+#[inline]
+pub fn slab_lane(lo: f32, hi: f32, o: f32, inv: f32) -> (f32, f32) {
+    if inv.abs() == f32::INFINITY {
+        if lo <= o && o <= hi {
+            return (f32::NEG_INFINITY, f32::INFINITY);
+        }
+        return (f32::INFINITY, f32::NEG_INFINITY);
+    }
+    let t0 = (lo - o) * inv;
+    let t1 = (hi - o) * inv;
+    (t0.min(t1), t0.max(t1))
 }
 
 /// The prelude's `intersects(ray, box)`.
@@ -95,20 +111,19 @@ mod tests {
     }
 
     #[test]
-    fn zero_direction_lanes_use_min_num() {
+    fn zero_direction_lanes_and_rays_in_box_faces() {
         let b = Aabb::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 1.0, 1.0));
         // Origin strictly inside the slab 0 <= x <= 1 with dir.x = 0: t0.x = -inf, t1.x = +inf.
         let r = Ray::new(Vec3::new(0.5, 0.5, -1.0), Vec3::new(0.0, 0.0, 1.0));
         assert!(intersects_box(&r, &b));
         assert_eq!(distmin_box(&r, &b), 1.0);
-        // Origin ON the slab plane x = 0 with dir.x = 0: t0.x = 0 * inf = NaN, t1.x = +inf, and
-        // minNum makes near.x = +inf, so the prelude's test MISSES a ray lying in a box face
-        // (PBRT's IntersectP, which skips NaN comparisons, would accept it). The reference
-        // keeps the prelude's answer; see docs/runtime.md.
+        // Origin ON the slab plane x = 0 (or x = 1) with dir.x = 0: the lane is decided by
+        // position, so a ray lying in a box face counts as inside.
         let r = Ray::new(Vec3::new(0.0, 0.5, -1.0), Vec3::new(0.0, 0.0, 1.0));
-        assert!(!intersects_box(&r, &b));
+        assert!(intersects_box(&r, &b));
+        assert_eq!(distmin_box(&r, &b), 1.0);
         let r = Ray::new(Vec3::new(1.0, 0.5, -1.0), Vec3::new(0.0, 0.0, 1.0));
-        assert!(!intersects_box(&r, &b));
+        assert!(intersects_box(&r, &b));
         // Negative zero direction: inv = -inf, still inside the slab.
         let r = Ray::new(Vec3::new(0.5, 0.5, -1.0), Vec3::new(-0.0, -0.0, 1.0));
         assert!(intersects_box(&r, &b));

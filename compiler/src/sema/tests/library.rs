@@ -1,0 +1,73 @@
+//! The library's programs type-check with zero diagnostics: the prelude, then every other
+//! `library/*.scion` and `library/*/*.scion` file (each alone after the prelude, and all of them
+//! together), and the `lit-tests` inputs that are meant to compile.
+
+use super::{check_files, PRELUDE};
+use std::path::{Path, PathBuf};
+
+fn scion_files(dir: &Path, depth: usize, out: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    let mut entries: Vec<PathBuf> = entries.filter_map(|e| e.ok().map(|e| e.path())).collect();
+    entries.sort();
+    for p in entries {
+        if p.is_dir() && depth > 0 {
+            scion_files(&p, depth - 1, out);
+        } else if p.extension().is_some_and(|e| e == "scion") && !p.ends_with("prelude.scion") {
+            out.push(p);
+        }
+    }
+}
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+#[test]
+fn library_files_type_check() {
+    let mut files = Vec::new();
+    scion_files(&root().join("library"), 1, &mut files);
+    assert!(files.len() >= 3, "library files not found: {files:?}");
+    let texts: Vec<(String, String)> = files
+        .iter()
+        .map(|p| {
+            (
+                p.display().to_string(),
+                std::fs::read_to_string(p).expect("readable library file"),
+            )
+        })
+        .collect();
+    let mut all: Vec<(&str, &str)> = vec![("prelude.scion", PRELUDE)];
+    for (name, text) in &texts {
+        let (_, typed, diags, sm) = check_files(&[("prelude.scion", PRELUDE), (name, text)]);
+        assert!(diags.is_empty(), "{name}:\n{}", diags.render(&sm));
+        assert!(
+            typed
+                .expr_types
+                .values()
+                .all(|t| !t.has_vars() && !t.has_error()),
+            "{name}"
+        );
+        all.push((name, text));
+    }
+    let (_, typed, diags, sm) = check_files(&all);
+    assert!(diags.is_empty(), "{}", diags.render(&sm));
+    assert!(typed.layouts.len() >= 2);
+}
+
+#[test]
+fn lit_inputs_that_compile_type_check() {
+    let mut files = Vec::new();
+    scion_files(&root().join("lit-tests"), 1, &mut files);
+    for p in files {
+        let text = std::fs::read_to_string(&p).expect("readable lit test");
+        // Negative tests expect errors (`RUN: not scionc`); the others must type-check.
+        if text.contains("not scionc") || text.contains("not %scionc") {
+            continue;
+        }
+        let name = p.display().to_string();
+        let (_, _, diags, sm) = check_files(&[("prelude.scion", PRELUDE), (&name, &text)]);
+        assert!(!diags.has_errors(), "{name}:\n{}", diags.render(&sm));
+    }
+}

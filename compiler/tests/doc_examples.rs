@@ -1,0 +1,80 @@
+//! The `scion` code blocks of docs/language.md and README.md compile (to the tree dialect)
+//! without diagnostics, so the documentation cannot drift from the compiler.
+//!
+//! A block whose first line is `// no-prelude` compiles without the prelude; one whose first
+//! line is `// continued` is appended to the block before it.
+
+use scion_compiler::driver::cli::Emit;
+use scion_compiler::driver::session::{PRELUDE, PRELUDE_NAME};
+use scion_compiler::frontend::{compile, Frontend, PassOptions};
+use scion_ir::diag::SourceMap;
+use std::path::PathBuf;
+
+fn blocks(markdown: &str) -> Vec<(usize, String)> {
+    let mut out = Vec::new();
+    let mut current: Option<(usize, String)> = None;
+    for (i, line) in markdown.lines().enumerate() {
+        match (&mut current, line.trim_start()) {
+            (None, l) if l.starts_with("```scion") => current = Some((i + 1, String::new())),
+            (Some(_), l) if l.starts_with("```") => out.extend(current.take()),
+            (Some((_, text)), _) => {
+                text.push_str(line);
+                text.push('\n');
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+fn check_file(rel: &str) -> usize {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(rel);
+    let md = std::fs::read_to_string(&path).expect("reading the document");
+    let mut previous = String::new();
+    let mut checked = 0;
+    for (line, block) in blocks(&md) {
+        let text = if block.starts_with("// continued") {
+            format!("{previous}\n{block}")
+        } else {
+            block.clone()
+        };
+        previous = text.clone();
+        let mut sources = SourceMap::new();
+        let prelude = if text.starts_with("// no-prelude") {
+            vec![]
+        } else {
+            vec![sources.add(PRELUDE_NAME, PRELUDE)]
+        };
+        let input = sources.add(format!("{rel}:{line}"), text);
+        let fe = Frontend {
+            sources: &sources,
+            prelude: &prelude,
+            inputs: &[input],
+        };
+        let r = compile(&fe, Emit::Tree, &[], &PassOptions::default());
+        assert!(
+            r.internal_error.is_none(),
+            "{rel}:{line}: {:?}",
+            r.internal_error
+        );
+        assert!(
+            r.diagnostics.is_empty(),
+            "the example at {rel}:{line} does not compile:\n{}",
+            r.diagnostics.render(&sources)
+        );
+        checked += 1;
+    }
+    checked
+}
+
+#[test]
+fn language_reference_examples_compile() {
+    assert!(check_file("docs/language.md") >= 3);
+}
+
+#[test]
+fn readme_examples_compile() {
+    assert!(check_file("README.md") >= 1);
+}
