@@ -67,15 +67,16 @@ pub struct TraceArgs {
     #[arg(long, value_name = "PATH.obj")]
     pub scene: PathBuf,
     /// The layout for `--backend jit` (a name from library/layouts, e.g. pbrt, ptr,
-    /// pbrt-align16, pbrt-soaos, pbrt-q16, or a .scion file). Layout-free backends ignore it.
-    #[arg(long, default_value = "pbrt")]
-    pub layout: String,
+    /// pbrt-align16, pbrt-soaos, pbrt-q16, or a .scion file; default pbrt). Layout-free
+    /// backends trace the logical tree and ignore it.
+    #[arg(long)]
+    pub layout: Option<String>,
     /// Which rays to generate (ignored with --rays-file).
     #[arg(long, value_enum, default_value = "primary")]
     pub rays: RaysArg,
     /// How many rays to generate.
-    #[arg(long, default_value_t = 1 << 16)]
-    pub n: usize,
+    #[arg(long, default_value_t = 1 << 16, value_parser = clap::value_parser!(u64).range(1..=1 << 32))]
+    pub n: u64,
     /// Seed of the ray generator.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,

@@ -34,12 +34,16 @@ pub const LAYOUTS: &[(&str, &str)] = &[
 pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     // Decide the backend before the (possibly long) load, so that a backend that cannot run
     // fails at once.
+    let layout = args.layout.as_deref().unwrap_or("pbrt");
+    if args.layout.is_some() && args.backend != BackendArg::Jit {
+        eprintln!("scion: note: --layout is used by --backend jit only; this backend traces the logical tree");
+    }
     let engine = match args.backend {
         BackendArg::Reference => Engine::Free(instantiate(BackendKind::Reference, args)?),
         BackendArg::Brute => Engine::Free(instantiate(BackendKind::Brute, args)?),
         BackendArg::Interp => Engine::Free(instantiate(BackendKind::Interp(1), args)?),
         BackendArg::Jit => Engine::Layout {
-            code: jit_code(&args.layout)?,
+            code: jit_code(layout)?,
             driver: BatchDriver::new(args.threads).map_err(CliError::new)?,
         },
     };
@@ -121,7 +125,7 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
                 .collect();
             (
                 secs(p.pack_time),
-                format!("{}: {}", args.layout, parts.join(", ")),
+                format!("{layout}: {}", parts.join(", ")),
                 p.bytes(),
             )
         }
@@ -240,7 +244,7 @@ fn rays(scene: &Scene, args: &TraceArgs) -> Result<Vec<Ray>, CliError> {
         ))
         .note("give rays with --rays-file"));
     }
-    let n = args.n;
+    let n = usize::try_from(args.n).map_err(|_| CliError::new("--n: too many rays"))?;
     Ok(match args.rays {
         RaysArg::Primary => {
             // The smallest image of about n pixels: w = ceil(sqrt n) columns, enough rows,

@@ -94,6 +94,8 @@ fn reads_rays_files_and_times_by_the_paper_method() {
         "trace",
         "--scene",
         &scene,
+        "--layout",
+        "ptr",
         "--rays-file",
         &rays_path.display().to_string(),
         "--builder",
@@ -105,6 +107,9 @@ fn reads_rays_files_and_times_by_the_paper_method() {
     let stdout = text(&o.stdout);
     assert!(stdout.contains("mean of 5 of 9 runs"), "{stdout}");
     assert!(stdout.contains("median"), "{stdout}");
+    assert!(stdout.contains("layout       none"), "{stdout}");
+    let e = text(&o.stderr);
+    assert!(e.contains("--layout is used by --backend jit only"), "{e}");
     let hits = read_hits(&out).unwrap();
     assert_eq!(hits.len(), 2);
     assert_eq!(hits[0].t, 1.0);
@@ -145,6 +150,7 @@ fn bad_flags_are_usage_errors() {
         ),
         (vec!["trace", "--scene", &scene, "--n", "-3"], "-3"),
         (vec!["trace", "--scene", &scene, "--runs", "0"], "0"),
+        (vec!["trace", "--scene", &scene, "--n", "0"], "0"),
         (
             vec![
                 "trace",

@@ -104,6 +104,16 @@ impl ClosestHit {
     /// Closest hits of `rays` against `tree` on the calling thread. The calling thread's stack
     /// must hold the tree's depth (see [`ClosestHit::trace_all`], which makes sure it does).
     pub fn trace(&self, tree: &LogicalTree, rays: &[Ray]) -> Result<Vec<Hit>, String> {
+        self.trace_from(tree, rays, 0)
+    }
+
+    /// [`ClosestHit::trace`] with errors naming ray `first + i` for `rays[i]`.
+    fn trace_from(
+        &self,
+        tree: &LogicalTree,
+        rays: &[Ray],
+        first: usize,
+    ) -> Result<Vec<Hit>, String> {
         if tree.is_empty() {
             return Ok(vec![Hit::MISS; rays.len()]);
         }
@@ -115,7 +125,8 @@ impl ClosestHit {
         it.set_adt_provider(Box::new(move |h| nodes.node(h)));
         let root = Val::Extern(u64::from(tree.root));
         let mut hits = Vec::with_capacity(rays.len());
-        for (i, ray) in rays.iter().enumerate() {
+        for (k, ray) in rays.iter().enumerate() {
+            let i = first + k;
             let best = it.alloc(Val::Tuple(vec![
                 Val::F32(ray.tmax),
                 Val::Int(i128::from(u32::MAX), IntTy::U32),
@@ -156,12 +167,7 @@ impl ClosestHit {
                     std::thread::Builder::new()
                         .name(format!("scion-interp-{k}"))
                         .stack_size(stack)
-                        .spawn_scoped(s, move || {
-                            self.trace(tree, part).map_err(|e| {
-                                // Ray numbers are per chunk inside `trace`.
-                                format!("chunk starting at ray {}: {e}", k * chunk)
-                            })
-                        })
+                        .spawn_scoped(s, move || self.trace_from(tree, part, k * chunk))
                         .map_err(|e| format!("cannot start an interpreter thread: {e}"))
                 })
                 .collect();

@@ -259,3 +259,29 @@ fn a_wrong_tie_rule_is_caught() {
     let e = compare("mutated", &tree, &rays, &got, &tree_ref, &brute).unwrap_err();
     assert!(e.contains("reference traversal"), "{e}");
 }
+
+/// An interpreter failure names the ray by its index in the whole batch, whatever thread ran
+/// it.
+#[test]
+fn interpreter_errors_name_the_ray() {
+    use scion_runtime::geom::Vec3;
+    use scion_tests::oracle::{ClosestHit, CLOSEST_HIT};
+    let mutated = CLOSEST_HIT.replace("best = (d, t.id);", "best = (d, t.id / (t.id - t.id));");
+    assert_ne!(mutated, CLOSEST_HIT, "the mutation must apply");
+    let p = ClosestHit::compile_source("div0.scion", &mutated, 0).unwrap();
+    let scene = gen::one_triangle();
+    let tree = TreeKind::Sah15.build(&scene);
+    let c = scene.bounds().center();
+    let away = Ray::new(Vec3::new(1e3, 1e3, 1e3), Vec3::new(1.0, 0.0, 0.0));
+    let mut rays = vec![away; 8];
+    // Rays 5 and 7 hit the triangle from both sides of its plane.
+    let n = {
+        let t = &scene.triangles[0];
+        (t.p1 - t.p0).cross(t.p2 - t.p0)
+    };
+    rays[5] = Ray::new(c + n, n * -1.0);
+    rays[7] = rays[5];
+    let e = p.trace_all(&tree, &rays, 2).unwrap_err();
+    assert!(e.starts_with("ray 5: "), "{e}");
+    assert!(e.contains("division by zero"), "{e}");
+}
