@@ -6,12 +6,14 @@
 //! [`Diagnostics`], compiler bugs an [`InternalError`]; nothing here panics on user input.
 
 use crate::driver::cli::{Emit, Options};
+use crate::layout::model::LayoutModel;
 use crate::layout::{check_build, check_layout};
-use crate::syntax::ast::Program;
+use crate::passes::tree_to_mem::LayoutSpec;
+use crate::syntax::ast::{Item, Program};
 use crate::{irgen, passes, sema, syntax};
 use rustc_hash::FxHashSet;
 use scion_ir::attr::Attr;
-use scion_ir::diag::{Diagnostics, FileId, InternalError, SourceMap};
+use scion_ir::diag::{Diagnostic, Diagnostics, FileId, InternalError, SourceMap};
 use scion_ir::entity::FuncId;
 use scion_ir::op::OpKind;
 use scion_ir::pass::{PassCx, PassError, PassManager};
@@ -39,6 +41,8 @@ pub struct PassOptions {
     pub stop_after: Option<String>,
     /// Record pass times.
     pub time_passes: bool,
+    /// `--layout NAME`: the layout the specialization passes target.
+    pub layout: Option<String>,
 }
 
 impl From<&Options> for PassOptions {
@@ -48,6 +52,7 @@ impl From<&Options> for PassOptions {
             print_before_all: o.print_before_all,
             stop_after: o.stop_after.clone(),
             time_passes: o.time_passes,
+            layout: o.layout.clone(),
         }
     }
 }
@@ -115,7 +120,35 @@ pub fn compile(
             return out;
         }
     };
-    if let Err(e) = run_pipeline(&mut module, pipeline, popts, &mut out) {
+    if emit == Emit::Mem && popts.layout.is_none() {
+        out.diagnostics.push(
+            Diagnostic::error("E0908", "`--emit=mem` needs a layout").with_note(format!(
+                "choose one with `--layout NAME`{}",
+                known_layouts(&program)
+            )),
+        );
+        return out;
+    }
+    let mut cx = PassCx::new();
+    if let Some(name) = &popts.layout {
+        let decl = program.items.iter().find_map(|it| match it {
+            Item::Layout(d) if d.name.name == *name => Some(d),
+            _ => None,
+        });
+        let Some(decl) = decl else {
+            out.diagnostics.push(
+                Diagnostic::error(
+                    "E0908",
+                    format!("`--layout {name}`: no layout of that name"),
+                )
+                .with_note(format!("the inputs declare{}", known_layouts(&program))),
+            );
+            return out;
+        };
+        let model = LayoutModel::from_ast(decl, &program);
+        cx.insert_ext(LayoutSpec::new(model));
+    }
+    if let Err(e) = run_pipeline(&mut module, pipeline, popts, &mut cx, &mut out) {
         match e {
             PassError::Diagnostics(d) => out.diagnostics.extend(d),
             PassError::Internal(i) => out.internal_error = Some(i),
@@ -131,6 +164,7 @@ fn run_pipeline(
     m: &mut Module,
     pipeline: &[String],
     popts: &PassOptions,
+    cx: &mut PassCx,
     out: &mut CompileResult,
 ) -> Result<(), PassError> {
     let registry = passes::registry();
@@ -142,13 +176,29 @@ fn run_pipeline(
     }
     pm.options.stop_after = popts.stop_after.clone();
     pm.options.time_passes = popts.time_passes;
-    let mut cx = PassCx::new();
-    let report = pm.run(m, &mut cx, &mut out.dumps)?;
+    let report = pm.run(m, cx, &mut out.dumps)?;
     out.diagnostics.extend(std::mem::take(&mut cx.diagnostics));
     if popts.time_passes {
         out.dumps.push_str(&report.timing_table());
     }
     Ok(())
+}
+
+/// `: A, B` listing the layouts of `program` (or ` no layout`), for notes.
+fn known_layouts(program: &Program) -> String {
+    let names: Vec<&str> = program
+        .items
+        .iter()
+        .filter_map(|it| match it {
+            Item::Layout(d) => Some(d.name.name.as_str()),
+            _ => None,
+        })
+        .collect();
+    if names.is_empty() {
+        " no layout".to_string()
+    } else {
+        format!(": {}", names.join(", "))
+    }
 }
 
 /// The program restricted to the items written in `inputs` (for `--emit=ast`).

@@ -106,6 +106,7 @@ pub mod builder;
 pub mod diag;
 pub mod entity;
 pub mod interp;
+pub mod mem;
 pub mod module;
 pub mod op;
 pub mod parse;

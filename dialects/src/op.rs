@@ -12,7 +12,7 @@
 
 use crate::attr::{Attr, Attrs};
 use crate::entity::{BlockId, RegionId, ValueId};
-use crate::tree;
+use crate::{mem, tree};
 use smallvec::SmallVec;
 
 /// The dialects, for checks such as "no `tree` op survives this pass".
@@ -20,6 +20,8 @@ use smallvec::SmallVec;
 pub enum Dialect {
     /// The layout-agnostic traversal level.
     Tree,
+    /// Reads and writes of a physical layout's buffers (added to `tree`).
+    Mem,
 }
 
 impl Dialect {
@@ -27,6 +29,7 @@ impl Dialect {
     pub fn name(self) -> &'static str {
         match self {
             Dialect::Tree => "tree",
+            Dialect::Mem => "mem",
         }
     }
 }
@@ -36,6 +39,14 @@ impl Dialect {
 pub enum OpKind {
     /// An op of the `tree` dialect.
     Tree(tree::Op),
+    /// An op of the `mem` dialect.
+    Mem(mem::Op),
+}
+
+impl From<mem::Op> for OpKind {
+    fn from(op: mem::Op) -> OpKind {
+        OpKind::Mem(op)
+    }
 }
 
 impl From<tree::Op> for OpKind {
@@ -49,6 +60,7 @@ impl OpKind {
     pub fn dialect(self) -> Dialect {
         match self {
             OpKind::Tree(_) => Dialect::Tree,
+            OpKind::Mem(_) => Dialect::Mem,
         }
     }
 
@@ -56,6 +68,7 @@ impl OpKind {
     pub fn mnemonic(self) -> &'static str {
         match self {
             OpKind::Tree(op) => op.mnemonic(),
+            OpKind::Mem(op) => op.mnemonic(),
         }
     }
 
@@ -69,6 +82,7 @@ impl OpKind {
         let (dialect, mnemonic) = name.split_once('.')?;
         match dialect {
             "tree" => tree::Op::from_mnemonic(mnemonic).map(OpKind::Tree),
+            "mem" => mem::Op::from_mnemonic(mnemonic).map(OpKind::Mem),
             _ => None,
         }
     }
@@ -77,6 +91,7 @@ impl OpKind {
     pub fn is_terminator(self) -> bool {
         match self {
             OpKind::Tree(op) => op.is_terminator(),
+            OpKind::Mem(_) => false,
         }
     }
 
@@ -84,6 +99,7 @@ impl OpKind {
     pub fn is_pure(self) -> bool {
         match self {
             OpKind::Tree(op) => op.is_pure(),
+            OpKind::Mem(op) => op.is_pure(),
         }
     }
 
@@ -91,8 +107,13 @@ impl OpKind {
     /// only through the block's terminator. Every `tree` region is; `lo` regions will be CFGs.
     pub fn has_structured_regions(self) -> bool {
         match self {
-            OpKind::Tree(_) => true,
+            OpKind::Tree(_) | OpKind::Mem(_) => true,
         }
+    }
+
+    /// True when this is the kind `mem::Op::X` given.
+    pub fn is_mem(self, op: mem::Op) -> bool {
+        self == OpKind::Mem(op)
     }
 
     /// True when this is the kind `tree::Op::X` given.
@@ -149,6 +170,7 @@ impl Operation {
     pub fn tree_op(&self) -> Option<tree::Op> {
         match self.kind {
             OpKind::Tree(op) => Some(op),
+            OpKind::Mem(_) => None,
         }
     }
 }

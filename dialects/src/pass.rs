@@ -147,6 +147,8 @@ pub enum Level {
     Any,
     /// Only `tree` ops.
     Tree,
+    /// `tree` and `mem` ops (after specialization to a layout).
+    Mem,
 }
 
 impl Level {
@@ -155,6 +157,7 @@ impl Level {
         match self {
             Level::Any => true,
             Level::Tree => d == Dialect::Tree,
+            Level::Mem => matches!(d, Dialect::Tree | Dialect::Mem),
         }
     }
 }

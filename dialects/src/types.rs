@@ -167,6 +167,8 @@ pub enum Type {
     Ref(TypeId),
     /// `ptr`: an opaque address.
     Ptr,
+    /// `!mem.view<T>`: a run-time length window of `T`s in a layout's buffer (`mem.view`).
+    View(TypeId),
 }
 
 /// The type arena of one module with its hash-consing map.
@@ -360,6 +362,7 @@ impl fmt::Display for TypeDisplay<'_> {
             Type::Adt(name) => write!(f, "!tree.adt<{}>", crate::attr::quote(name)),
             Type::Ref(e) => write!(f, "!tree.ref<{}>", t.display(*e)),
             Type::Ptr => write!(f, "ptr"),
+            Type::View(e) => write!(f, "!mem.view<{}>", t.display(*e)),
         }
     }
 }

@@ -320,7 +320,11 @@ impl<'m> Verifier<'m> {
                     && matches!(t.get(*elem), Type::Bool | Type::Int(_) | Type::Float(_))
             }
             Type::Tuple(elems) => elems.clone().into_iter().all(|e| self.check_type(e)),
-            Type::Array { elem, .. } | Type::Set(elem) | Type::Option(elem) | Type::Ref(elem) => {
+            Type::Array { elem, .. }
+            | Type::Set(elem)
+            | Type::Option(elem)
+            | Type::Ref(elem)
+            | Type::View(elem) => {
                 let e = *elem;
                 self.check_type(e)
             }
@@ -661,6 +665,7 @@ impl<'m> Verifier<'m> {
         };
         let outcome = match o.kind {
             OpKind::Tree(k) => crate::tree::verify::verify_op(m, op, k, &cx),
+            OpKind::Mem(k) => crate::mem::verify::verify_op(m, op, k, &cx),
         };
         if let Err(msg) = outcome {
             self.error(Some(op), msg);

@@ -93,7 +93,7 @@ Exit status: 0 on success, 1 when the input has errors, 2 on a bad command line,
 internal compiler error (a bug: please report it with the input).
 
 Not built yet (these say so with error E0901 instead of being ignored):
-  --emit=mem|lo|clif|llvm|asm|obj|ptx|header, --layout, --target, --cpu, --run, --stack-size.";
+  --emit=lo|clif|llvm|asm|obj|ptx|header, --target, --cpu, --run, --stack-size.";
 
 /// `scionc`: the Scion compiler.
 ///
@@ -197,10 +197,8 @@ impl Options {
     /// Rejects flags whose stage is not built yet, naming them.
     pub fn check_implemented(&self) -> Result<(), NotImplemented> {
         let emit_plan = match self.emit {
-            Emit::Ast | Emit::Tree | Emit::Check => None,
-            Emit::Mem | Emit::Lo => {
-                Some("destructor and constructor specialization (mem, lo dialects)")
-            }
+            Emit::Ast | Emit::Tree | Emit::Check | Emit::Mem => None,
+            Emit::Lo => Some("the lowering of mem to the lo dialect"),
             Emit::Clif => Some("the Cranelift backend"),
             Emit::Llvm | Emit::Asm | Emit::Obj | Emit::Ptx => Some("the LLVM backend"),
             Emit::Header => Some("the C ABI header generator"),
@@ -209,12 +207,6 @@ impl Options {
             return Err(NotImplemented {
                 flag: format!("--emit={}", self.emit.as_str()),
                 planned,
-            });
-        }
-        if self.layout.is_some() {
-            return Err(NotImplemented {
-                flag: "--layout".into(),
-                planned: "destructor specialization",
             });
         }
         if self.target.is_some() || self.cpu.is_some() {

@@ -1,10 +1,11 @@
 //! Pass pipelines per optimization level: the only place that knows pass order.
 //!
-//! Today every pipeline works on the `tree` dialect:
 //! * `-O0`: nothing (the IR exactly as generated, for reading and for pass tests).
 //! * `-O1` and up: `const-fold` first, so that `dce` sees the operands it made dead.
+//! * `--emit=mem` (with `--layout`): `destructor-specialize` and `constructor-specialize`
+//!   first, then the level's passes.
 
-use super::cli::Options;
+use super::cli::{Emit, Options};
 use crate::passes;
 use scion_ir::diag::Diagnostic;
 
@@ -26,7 +27,15 @@ pub fn select(opts: &Options) -> Result<Vec<String>, Diagnostic> {
             .map(|s| s.trim().to_string())
             .filter(|s| !s.is_empty())
             .collect(),
-        None => for_level(opts.opt_level),
+        None => {
+            let mut names = Vec::new();
+            if opts.emit == Emit::Mem {
+                names.push("destructor-specialize".to_string());
+                names.push("constructor-specialize".to_string());
+            }
+            names.extend(for_level(opts.opt_level));
+            names
+        }
     };
     let reg = passes::registry();
     for n in &names {

@@ -65,6 +65,20 @@ impl FuncCx<'_> {
                         Ok(v)
                     }
                 }
+                Some(Resolution::LayoutMember(_)) if self.build.is_some() => {
+                    let t = self.expr_ty(b, e)?;
+                    let op = b.insert(
+                        scion_ir::OpSpec::new(Op::BuildLoad)
+                            .results(&[t])
+                            .attr("field", scion_ir::attr::Attr::str(id.name.clone())),
+                    );
+                    Ok(b.result(op, 0))
+                }
+                Some(Resolution::BuildField(i)) if self.build.is_some() => self
+                    .params
+                    .get(*i as usize)
+                    .copied()
+                    .ok_or_else(|| self.bug(format!("build field `{}` out of range", id.name))),
                 other => Err(self.bug(format!("name `{}` resolved to {other:?}", id.name))),
             },
             ExprKind::Int(n) => {
@@ -200,6 +214,7 @@ impl FuncCx<'_> {
                 b.set_span(Some(e.span));
                 Ok(b.build1(kind, &[v], t))
             }
+            ExprKind::This | ExprKind::Build(_) if self.build.is_some() => self.build_expr(b, e),
             ExprKind::This | ExprKind::Parent(_) | ExprKind::Build(_) => {
                 Err(self.bug("a layout or build expression inside a function"))
             }
@@ -325,6 +340,9 @@ impl FuncCx<'_> {
                 };
                 let op = b.call(&info.unique_name, &vals, &results);
                 Ok(b.m.ops[op].results.first().copied())
+            }
+            Some(Resolution::Builtin(Builtin::Append)) if self.build.is_some() => {
+                self.append(b, e, args, t).map(Some)
             }
             Some(Resolution::Builtin(Builtin::Insert)) => {
                 // insert(s, x) on a `mut set[T]` parameter: load, add, store back.

@@ -4,7 +4,8 @@
 //! with no errors. Output: a [`Module`] holding every declared ADT (records and sums, in the
 //! module's type table) and one `tree.func` per function (overloads under their unique names).
 //! This module is the only one that sees both the typed AST and the IR (architecture invariant
-//! 2). Layouts and builds are not lowered here: they are read by the specialization passes.
+//! 2). Layout declarations are read by the specialization passes; each `build` becomes one
+//! function per variant (and one for `build root`), see `irgen/builds.rs`.
 //!
 //! Lowering rules (docs/ir.md has the op reference):
 //! * `mut` parameters are `!tree.ref<T>` arguments; reading one is `tree.load`, assigning is
@@ -15,6 +16,7 @@
 //!   of each `if` branch and of each `match` arm is yielded as the op's result and returned once
 //!   at the end; branches that end in `return` leave the function themselves.
 
+mod builds;
 mod exprs;
 mod stmts;
 mod types;
@@ -69,9 +71,11 @@ pub fn generate(program: &Program, typed: &TypedProgram) -> Result<Module, Inter
             func: fid,
             params: args,
             locals: FxHashMap::default(),
+            build: None,
         };
         cx.lower_body(&mut b, &decl.body, &results)?;
     }
+    builds::generate_builds(&mut m, &mut tys, program, typed)?;
     Ok(m)
 }
 
@@ -85,6 +89,8 @@ struct FuncCx<'a> {
     params: Vec<ValueId>,
     /// Values of `let`, `foreach` and pattern bindings.
     locals: FxHashMap<crate::sema::BindingId, ValueId>,
+    /// Set while lowering a build function (then `func` is not a function of `typed`).
+    build: Option<builds::BuildCx>,
 }
 
 impl FuncCx<'_> {
@@ -93,6 +99,9 @@ impl FuncCx<'_> {
     }
 
     fn bug(&self, what: impl Into<String>) -> InternalError {
+        if let Some(bc) = &self.build {
+            return InternalError::new(format!("irgen, in `{}`: {}", bc.name, what.into()));
+        }
         InternalError::new(format!(
             "irgen, in function `{}`: {}",
             self.typed.func(self.func).name,

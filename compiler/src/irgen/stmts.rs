@@ -56,6 +56,10 @@ impl FuncCx<'_> {
                 self.expr_effect(b, e)?;
                 Ok(Flow::Next)
             }
+            StmtKind::Assign { target, value } if self.build.is_some() => {
+                self.build_assign(b, s, target, value)?;
+                Ok(Flow::Next)
+            }
             StmtKind::Assign { target, value } => {
                 let v = self.expr(b, value)?;
                 self.assign(b, target, v)?;
@@ -122,6 +126,10 @@ impl FuncCx<'_> {
                 }
                 b.set_span(Some(s.span));
                 b.insert(OpSpec::new(Op::Foreach).operands(&[arr]).region(region));
+                Ok(Flow::Next)
+            }
+            StmtKind::Build { field, value } if self.build.is_some() => {
+                self.build_stmt(b, s, field, value.as_ref())?;
                 Ok(Flow::Next)
             }
             StmtKind::Build { .. } => Err(self.bug("a `build` statement inside a function")),
@@ -337,7 +345,7 @@ impl FuncCx<'_> {
     }
 
     /// Stores `v` into an assignment target: a `mut` parameter or a tuple component of one.
-    fn assign(
+    pub(super) fn assign(
         &mut self,
         b: &mut Builder<'_>,
         target: &Expr,

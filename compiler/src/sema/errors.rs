@@ -441,6 +441,13 @@ impl SemaError {
     }
 }
 
+/// The width of an integer type named `ty` (for the note of E0239).
+fn ty_bits(ty: &str) -> u32 {
+    super::types::Prim::from_name(ty)
+        .map(|p| p.bits())
+        .unwrap_or(0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -478,11 +485,4 @@ mod tests {
         .to_diagnostic();
         assert!(d.message.contains("`Leaf`"), "{}", d.message);
     }
-}
-
-/// The width of an integer type named `ty` (for the note of E0239).
-fn ty_bits(ty: &str) -> u32 {
-    super::types::Prim::from_name(ty)
-        .map(|p| p.bits())
-        .unwrap_or(0)
 }

@@ -1,5 +1,5 @@
-//! A reference interpreter for the `tree` level: runs a function of a verified module on
-//! argument values and returns its results. Input: a [`Module`] and [`Val`]s; output: [`Val`]s
+//! A reference interpreter for the `tree` level, and for the `mem` ops over a byte memory
+//! ([`mem`]): runs a function of a verified module on argument values and returns its results. Input: a [`Module`] and [`Val`]s; output: [`Val`]s
 //! or an [`InterpError`].
 //!
 //! It is the oracle for the layout-free meaning of a program (paper §3: the traversal as
@@ -20,6 +20,7 @@
 //! the interpreter cannot run (which the verifier would have rejected).
 
 pub mod intrinsics;
+pub mod mem;
 mod tree;
 
 use crate::entity::{FuncId, OpId, ValueId};
@@ -211,6 +212,8 @@ pub type AdtProvider<'p> = Box<dyn FnMut(u64) -> Result<Rc<AdtVal>, String> + 'p
 pub struct Interp<'m> {
     m: &'m Module,
     heap: Vec<Val>,
+    /// The byte memory of `mem` ops (see [`mem`]).
+    memory: Vec<u8>,
     externs: FxHashMap<String, ExternFn>,
     provider: Option<AdtProvider<'m>>,
     steps: u64,
@@ -239,6 +242,7 @@ impl<'m> Interp<'m> {
         Interp {
             m,
             heap: Vec::new(),
+            memory: Vec::new(),
             externs: FxHashMap::default(),
             provider: None,
             steps: 0,

@@ -46,7 +46,21 @@ impl Interp<'_> {
     /// ops are computed in [`Interp::exec_data`], which never recurses.
     pub(crate) fn exec(&mut self, op: OpId, env: &mut Env) -> Result<Option<Flow>, InterpError> {
         let o = &self.m.ops[op];
-        let OpKind::Tree(kind) = o.kind;
+        let kind = match o.kind {
+            OpKind::Tree(kind) => kind,
+            OpKind::Mem(kind) => {
+                let args: Vec<Val> = o
+                    .operands
+                    .iter()
+                    .map(|&v| self.get(env, v, op))
+                    .collect::<Result<_, _>>()?;
+                let results = self.exec_mem(op, kind, args)?;
+                for (&r, v) in self.m.ops[op].results.iter().zip(results) {
+                    env.insert(r, v);
+                }
+                return Ok(None);
+            }
+        };
         let args: Vec<Val> = o
             .operands
             .iter()
@@ -188,6 +202,16 @@ impl Interp<'_> {
         let results: Vec<Val> = match kind {
             Op::Yield => return Ok(Step::Leave(Flow::Yield(args))),
             Op::Return => return Ok(Step::Leave(Flow::Return(args))),
+            Op::This
+            | Op::BuildStore
+            | Op::BuildStoreBits
+            | Op::BuildChild
+            | Op::BuildLoad
+            | Op::Append => {
+                return Err(bad(
+                    "build ops run only after constructor specialization, not in the interpreter",
+                ))
+            }
             Op::Const => {
                 let ty = self.result_type(op)?;
                 let a = o.attr("value").ok_or_else(|| bad("no value"))?;

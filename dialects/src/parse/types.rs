@@ -105,6 +105,12 @@ impl Parser<'_> {
                 self.expect_punct('>')?;
                 Type::Ref(e)
             }
+            Tok::Bang(name) if name == "mem.view" => {
+                self.expect_punct('<')?;
+                let e = self.ty()?;
+                self.expect_punct('>')?;
+                Type::View(e)
+            }
             other => {
                 return Err(self.error(
                     "E0956",

@@ -133,7 +133,9 @@ pub enum Folded {
 /// What `op` folds to given the constants known so far, if anything.
 pub fn fold_op(m: &Module, op: OpId, consts: &FxHashMap<ValueId, Attr>) -> Option<Folded> {
     let o = &m.ops[op];
-    let OpKind::Tree(kind) = o.kind;
+    let OpKind::Tree(kind) = o.kind else {
+        return None;
+    };
     if o.results.len() != 1 {
         return None;
     }

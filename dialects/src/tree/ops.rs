@@ -98,11 +98,30 @@ pub enum Op {
     Yield,
     /// `tree.return` `(values...) -> ()`: returns from the enclosing function, from any depth.
     Return,
+    /// `tree.this` `() -> R`: the reference of the node a build function is placing (its index,
+    /// or its address for pointer-referenced groups). Build functions only.
+    This,
+    /// `tree.build_store {field}` `(T) -> ()`: stores the value into stored field `field` of
+    /// the node being placed. Build functions only.
+    BuildStore,
+    /// `tree.build_store_bits {lo, hi}` `(integer) -> ()`: `this[lo:hi] = value`, bits of the
+    /// node's reference; the constructor reports a value that does not fit.
+    BuildStoreBits,
+    /// `tree.build_child {field}` `(u32) -> (R)`: builds the subtree whose logical node index is
+    /// the operand (the recursive field `field`) and yields its reference.
+    BuildChild,
+    /// `tree.build_load {field}` `() -> T`: reads layout member `field` (a global, or a stored
+    /// field of the node being placed) inside a build function.
+    BuildLoad,
+    /// `tree.append {field}` `(array<? x T>, integer) -> (integer)`: copies the first `n`
+    /// elements of the logical array into the global array behind `field` at the running
+    /// cursor and yields the start index.
+    Append,
 }
 
 impl Op {
     /// Every op, in declaration order.
-    pub const ALL: [Op; 39] = [
+    pub const ALL: [Op; 45] = [
         Op::Const,
         Op::Add,
         Op::Sub,
@@ -142,6 +161,12 @@ impl Op {
         Op::Store,
         Op::Yield,
         Op::Return,
+        Op::This,
+        Op::BuildStore,
+        Op::BuildStoreBits,
+        Op::BuildChild,
+        Op::BuildLoad,
+        Op::Append,
     ];
 
     /// The name without the dialect prefix (`add`).
@@ -186,6 +211,12 @@ impl Op {
             Op::Store => "store",
             Op::Yield => "yield",
             Op::Return => "return",
+            Op::This => "this",
+            Op::BuildStore => "build_store",
+            Op::BuildStoreBits => "build_store_bits",
+            Op::BuildChild => "build_child",
+            Op::BuildLoad => "build_load",
+            Op::Append => "append",
         }
     }
 
@@ -205,7 +236,19 @@ impl Op {
     pub fn is_pure(self) -> bool {
         !matches!(
             self,
-            Op::Call | Op::Store | Op::Yield | Op::Return | Op::Match | Op::If | Op::Foreach
+            Op::Call
+                | Op::Store
+                | Op::Yield
+                | Op::Return
+                | Op::Match
+                | Op::If
+                | Op::Foreach
+                | Op::This
+                | Op::BuildStore
+                | Op::BuildStoreBits
+                | Op::BuildChild
+                | Op::BuildLoad
+                | Op::Append
         )
     }
 
@@ -286,5 +329,31 @@ mod tests {
             assert_eq!(Op::from_mnemonic(op.mnemonic()), Some(op));
         }
         assert_eq!(Op::from_mnemonic("nope"), None);
+    }
+
+    #[test]
+    fn build_ops_round_trip_and_verify() {
+        let text = r#"tree.type @Triangle(p0: vector<3xf32>, p1: vector<3xf32>, p2: vector<3xf32>, id: u32)
+
+func @L.build.Leaf(%0: u16, %1: array<? x !tree.adt<"Triangle">>, %2: u32) -> (u32) {
+  %3 = "tree.this"() : () -> u32
+  "tree.build_store"(%0) {field = "nprims"} : (u16) -> ()
+  %4 = "tree.append"(%1, %0) {field = "data"} : (array<? x !tree.adt<"Triangle">>, u16) -> u32
+  "tree.build_store"(%4) {field = "p_o"} : (u32) -> ()
+  %5 = "tree.build_child"(%2) {field = "left"} : (u32) -> u32
+  %6 = "tree.build_load"() {field = "wlo"} : () -> vector<3xf32>
+  "tree.build_store_bits"(%5) {hi = 32, lo = 28} : (u32) -> ()
+  "tree.return"(%3) : (u32) -> ()
+}
+"#;
+        let m = crate::parse_module(text, crate::diag::FileId(0)).expect("parses");
+        crate::verify(&m).expect("verifies");
+        assert_eq!(crate::print_module(&m), text);
+        let bad = text.replace("{hi = 32, lo = 28}", "{hi = 28, lo = 28}");
+        let m = crate::parse_module(&bad, crate::diag::FileId(0)).expect("parses");
+        assert!(crate::verify(&m).is_err());
+        let bad = text.replace(r#"{field = "nprims"} "#, "");
+        let m = crate::parse_module(&bad, crate::diag::FileId(0)).expect("parses");
+        assert!(crate::verify(&m).is_err());
     }
 }

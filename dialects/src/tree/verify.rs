@@ -276,8 +276,13 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
         Op::Foreach => {
             counts(&ot, &rt, 1, 0)?;
             let elem = match t.get(ot[0]) {
-                Type::Array { elem, .. } | Type::Set(elem) => elem,
-                _ => return Err(format!("foreach over {}, not an array or set", show(ot[0]))),
+                Type::Array { elem, .. } | Type::Set(elem) | Type::View(elem) => elem,
+                _ => {
+                    return Err(format!(
+                        "foreach over {}, not an array, set or view",
+                        show(ot[0])
+                    ))
+                }
             };
             if o.regions.len() != 1 {
                 return Err("`tree.foreach` needs one body region".into());
@@ -303,7 +308,7 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
         Op::Index => {
             counts(&ot, &rt, 2, 1)?;
             let elem = match t.get(ot[0]) {
-                Type::Array { elem, .. } | Type::Vector { elem, .. } => *elem,
+                Type::Array { elem, .. } | Type::Vector { elem, .. } | Type::View(elem) => *elem,
                 _ => return Err(format!("index into {}", show(ot[0]))),
             };
             require(t.as_int(ot[1]).is_some(), || {
@@ -396,6 +401,47 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
                 format!("store of {} into {}", show(ot[1]), show(ot[0]))
             })
         }
+        Op::This => counts(&ot, &rt, 0, 1),
+        Op::BuildStore => {
+            counts(&ot, &rt, 1, 0)?;
+            field_attr(o)
+        }
+        Op::BuildStoreBits => {
+            counts(&ot, &rt, 1, 0)?;
+            require(t.as_int(ot[0]).is_some(), || {
+                format!("`this[lo:hi] = v` of {}", show(ot[0]))
+            })?;
+            match (o.int_attr("lo"), o.int_attr("hi")) {
+                (Some(lo), Some(hi)) if 0 <= lo && lo < hi && hi <= 64 => Ok(()),
+                _ => Err("`tree.build_store_bits` needs bits `lo < hi <= 64`".into()),
+            }
+        }
+        Op::BuildChild => {
+            counts(&ot, &rt, 1, 1)?;
+            require(t.as_int(ot[0]).is_some(), || {
+                format!("child index of type {}", show(ot[0]))
+            })?;
+            field_attr(o)
+        }
+        Op::BuildLoad => {
+            counts(&ot, &rt, 0, 1)?;
+            field_attr(o)
+        }
+        Op::Append => {
+            counts(&ot, &rt, 2, 1)?;
+            let ok = matches!(t.get(ot[0]), Type::Array { .. } | Type::View(_))
+                && t.as_int(ot[1]).is_some()
+                && t.as_int(rt[0]).is_some();
+            require(ok, || {
+                format!(
+                    "append takes (array, integer) -> integer, not ({}, {}) -> {}",
+                    show(ot[0]),
+                    show(ot[1]),
+                    show(rt[0])
+                )
+            })?;
+            field_attr(o)
+        }
         Op::Yield => {
             counts(&ot, &rt, ot.len(), 0)?;
             if cx.in_func_body {
@@ -410,6 +456,13 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
                 "returned types do not match the function's results".into()
             })
         }
+    }
+}
+
+fn field_attr(o: &Operation) -> VResult {
+    match o.attr("field") {
+        Some(Attr::Str(_)) => Ok(()),
+        _ => Err("build ops need a string `field`".into()),
     }
 }
 
@@ -661,7 +714,10 @@ pub fn intrinsic_signature(m: &Module, name: &str, args: &[TypeId], result: Type
         "len" => sig(
             1,
             args.len() == 1
-                && matches!(t.get(args[0]), Type::Array { .. } | Type::Set(_))
+                && matches!(
+                    t.get(args[0]),
+                    Type::Array { .. } | Type::Set(_) | Type::View(_)
+                )
                 && t.as_int(result).is_some(),
         ),
         "some" => sig(

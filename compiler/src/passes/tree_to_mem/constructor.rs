@@ -1,0 +1,685 @@
+//! `constructor-specialize` (paper §7.2): the packer of a layout, from its `build`.
+//!
+//! Input: the build functions irgen made for the chosen layout (`@L.build.<Variant>`,
+//! `@L.build.root`, attribute `build_of = "L"`) and the [`LayoutSpec`]. Output:
+//! * the build functions rewritten to `mem`: extra first parameters `(%tree: ptr, %B: ptr,
+//!   %counter: !tree.ref<u32>, %cursor: !tree.ref<u32>, %status: !tree.ref<i32>)`; `tree.this`
+//!   becomes the node's placement index (the counter, taken on entry for `order=pre`, after the
+//!   last child is built for `order=post`), or its address `mem.addr` for pointer references;
+//!   `tree.build_store` a `mem.store` at the field's resolved path; `tree.build_child` a call of
+//!   `@L.node`; `tree.append` a copy loop into the global array at the running cursor;
+//! * `@L.node(%tree, %B, %i: u32, %counter, %cursor, %status) -> (R)`: reads logical node `%i`
+//!   and calls the build function of its variant;
+//! * `@L.sizes(%tree: ptr, %sizes: ptr)`: the byte size of every buffer (`u64` each, plan order);
+//! * `@L.build(%tree: ptr, %B: ptr) -> (i32)`: writes the globals that size arrays, runs
+//!   `build root`, builds the tree from its root and returns the status (0 = ok).
+//!
+//! `%tree` points to the C-ABI view of the logical tree (`docs/design/specialization.md` §3):
+//! `LogicalTreeView { nodes: ptr @0, node_count: u32 @8, root: u32 @12, prims: ptr @16,
+//! prim_count: u32 @24 }` (32 bytes); `LogicalNode` is 44 bytes (`kind` @0, `bounds` @4,
+//! `child[2]` @28, `prim_offset` @36, `prim_count` @40), primitives are 40-byte `Triangle`s.
+//! `this[a:b] = e` updates the returned reference and sets `%status` to 1 when the value does
+//! not fit. Build functions of other layouts are removed. The logical tree is a binary BVH; an
+//! ADT of another shape is reported (E0380).
+
+use super::reader::Reader;
+use super::{spec_of, unsupported, LayoutSpec};
+use crate::layout::model::GroupKind;
+use crate::layout::plan::BufferKind;
+use scion_ir::attr::Attr;
+use scion_ir::diag::{Diagnostic, Diagnostics};
+use scion_ir::module::ValueDef;
+use scion_ir::rewrite::{erase_op, replace_all_uses};
+use scion_ir::tree::{CmpPred, Op};
+use scion_ir::types::Type;
+use scion_ir::walk::{func_ops, Order};
+use scion_ir::{
+    mem, Builder, FuncId, InsertPoint, Module, OpKind, OpSpec, Pass, PassCx, PassError, TypeId,
+    ValueId,
+};
+
+/// Byte offsets of the logical tree's C structs.
+pub(super) mod abi {
+    pub const VIEW_NODES: u64 = 0;
+    pub const VIEW_NODE_COUNT: u64 = 8;
+    pub const VIEW_ROOT: u64 = 12;
+    pub const VIEW_PRIMS: u64 = 16;
+    pub const VIEW_PRIM_COUNT: u64 = 24;
+    pub const NODE_STRIDE: u64 = 44;
+    pub const NODE_KIND: u64 = 0;
+    pub const NODE_BOUNDS: u64 = 4;
+    pub const NODE_CHILD: u64 = 28;
+    pub const NODE_PRIM_OFFSET: u64 = 36;
+    pub const NODE_PRIM_COUNT: u64 = 40;
+    pub const PRIM_STRIDE: u64 = 40;
+}
+
+/// The pass object.
+#[derive(Default)]
+pub struct ConstructorSpecialize;
+
+impl Pass for ConstructorSpecialize {
+    fn name(&self) -> &'static str {
+        "constructor-specialize"
+    }
+
+    fn summary(&self) -> &'static str {
+        "generate @L.sizes and @L.build, the packer of the layout, from its build (needs --layout)"
+    }
+
+    fn run(&mut self, m: &mut Module, cx: &mut PassCx) -> Result<bool, PassError> {
+        let spec = spec_of(cx, self.name())?;
+        specialize(m, spec).map_err(PassError::Diagnostics)
+    }
+}
+
+/// The values every rewritten build function receives first.
+#[derive(Clone, Copy)]
+struct Ctx {
+    tree: ValueId,
+    b: ValueId,
+    counter: ValueId,
+    cursor: ValueId,
+    status: ValueId,
+}
+
+/// Generates the packer of `spec`'s layout. Returns whether anything changed.
+pub fn specialize(m: &mut Module, spec: &LayoutSpec) -> Result<bool, Diagnostics> {
+    let lname = spec.model.name.name.clone();
+    let mut ours = Vec::new();
+    let mut changed = false;
+    for f in m.func_order.clone() {
+        match m.funcs[f].attrs.get("build_of").and_then(Attr::as_str) {
+            Some(l) if l == lname => ours.push(f),
+            Some(_) => {
+                m.remove_func(f);
+                changed = true;
+            }
+            None => {}
+        }
+    }
+    if ours.is_empty() {
+        return Ok(changed);
+    }
+    let mut diags = Diagnostics::default();
+    for &f in &ours {
+        if let Some(why) = m.funcs[f].attrs.get("unsupported").and_then(Attr::as_str) {
+            let msg = format!(
+                "the build of `{lname}` for `{}` uses what build functions cannot express: {why}",
+                attr(m, f, "variant")
+            );
+            diags.push(unsupported(m.func_spans.get(f).copied(), msg));
+        }
+    }
+    if diags.has_errors() {
+        return Err(diags);
+    }
+    if let Err(d) = generate(m, spec, &ours) {
+        diags.push(d);
+        return Err(diags);
+    }
+    Ok(true)
+}
+
+fn attr(m: &Module, f: FuncId, key: &str) -> String {
+    m.funcs[f]
+        .attrs
+        .get(key)
+        .and_then(Attr::as_str)
+        .unwrap_or_default()
+        .to_string()
+}
+
+fn generate(m: &mut Module, spec: &LayoutSpec, ours: &[FuncId]) -> Result<(), Diagnostic> {
+    let lname = spec.model.name.name.clone();
+    let span = Some(spec.model.span);
+    let adt_name = spec
+        .model
+        .adt
+        .as_ref()
+        .map(|a| a.name.clone())
+        .ok_or_else(|| unsupported(span, "a layout whose tree type is unknown"))?;
+    let adt = m
+        .adt(&adt_name)
+        .cloned()
+        .ok_or_else(|| unsupported(span, "the tree type is not declared"))?;
+    let tree_ty = m.types.adt(&adt_name);
+    // Interior: the variant with recursive fields; Leaf: the other.
+    let recursive =
+        |v: &scion_ir::module::Variant| v.fields.iter().filter(|f| f.ty == tree_ty).count();
+    let (interior, leaf) = match adt.variants.as_slice() {
+        [a, b] if recursive(a) == 2 && recursive(b) == 0 => (a.name.clone(), b.name.clone()),
+        [a, b] if recursive(b) == 2 && recursive(a) == 0 => (b.name.clone(), a.name.clone()),
+        _ => {
+            return Err(unsupported(
+                span,
+                format!(
+                    "constructor specialization packs binary BVHs (`{adt_name}` has another shape)"
+                ),
+            ))
+        }
+    };
+    let find = |v: &str| ours.iter().copied().find(|&f| attr(m, f, "variant") == v);
+    let (Some(fi), Some(fl)) = (find(&interior), find(&leaf)) else {
+        return Err(unsupported(
+            span,
+            format!("the build of `{lname}` has no function for `{interior}` or `{leaf}` (a construct irgen cannot lower)"),
+        ));
+    };
+    let root_fn = find("root");
+    let logical_of = |v: &str| -> Vec<TypeId> {
+        adt.fields_of(Some(v))
+            .unwrap_or_default()
+            .iter()
+            .map(|f| f.ty)
+            .collect()
+    };
+    let (li, ll) = (logical_of(&interior), logical_of(&leaf));
+    let shared: Vec<TypeId> = adt.shared.iter().map(|f| f.ty).collect();
+    let post = attr(m, fi, "order") == "post";
+    let ref_ty = m.funcs[fi]
+        .results
+        .first()
+        .copied()
+        .ok_or_else(|| unsupported(span, "a variant build without a result"))?;
+    let ptr = m.ty(Type::Ptr);
+    let u32t = m.types.u32();
+    let i32t = m.types.i32();
+    let ru32 = m.types.reference(u32t);
+    let ri32 = m.types.reference(i32t);
+    let extra = [ptr, ptr, ru32, ru32, ri32];
+    // Declare @L.node first so that build functions can call it.
+    let node_name = format!("{lname}.node");
+    let node_params = [ptr, ptr, u32t, ru32, ru32, ri32];
+    let (node_fn, node_entry) = m.add_func(&node_name, &node_params, &[ref_ty]);
+    m.func_spans.insert(node_fn, spec.model.span);
+    for &f in ours {
+        let variant = attr(m, f, "variant");
+        rewrite_build(m, spec, f, &variant, &extra, &node_name, ref_ty, post)?;
+    }
+    // @L.node: dispatch on the logical node's kind.
+    {
+        let args = m.blocks[node_entry].args.to_vec();
+        let (tree, i) = (args[0], args[2]);
+        let pass = [args[0], args[1], args[3], args[4], args[5]];
+        let mut bd = Builder::at_end(m, node_entry);
+        let nodes = load(&mut bd, tree, None, abi::VIEW_NODES, 0, ptr);
+        let kind = load(
+            &mut bd,
+            nodes,
+            Some(i),
+            abi::NODE_KIND,
+            abi::NODE_STRIDE,
+            u32t,
+        );
+        let zero = bd.const_int(u32t, 0);
+        let is_interior = bd.cmp(CmpPred::Eq, kind, zero);
+        let fi_name = bd.m.funcs[fi].name.clone();
+        let fl_name = bd.m.funcs[fl].name.clone();
+        let fi_params = bd.m.funcs[fi].params.clone();
+        let fl_params = bd.m.funcs[fl].params.clone();
+        let prims = load(&mut bd, tree, None, abi::VIEW_PRIMS, 0, ptr);
+        let failed = std::cell::RefCell::new(None);
+        let arm = |bd: &mut Builder<'_>, name: &str, params: &[TypeId], logical: &[TypeId]| {
+            match logical_fields(bd, params, logical, nodes, prims, i, tree_ty) {
+                Ok(vals) => {
+                    let all: Vec<ValueId> = pass.iter().copied().chain(vals).collect();
+                    let c = bd.call(name, &all, &[ref_ty]);
+                    let r = bd.result(c, 0);
+                    bd.yield_(&[r]);
+                }
+                Err(e) => {
+                    *failed.borrow_mut() = Some(e);
+                    let r = bd.const_int(u32t, 0);
+                    bd.yield_(&[r]);
+                }
+            }
+        };
+        let if_op = bd.if_(
+            is_interior,
+            &[ref_ty],
+            |bd| arm(bd, &fi_name, &fi_params[5..], &li),
+            |bd| arm(bd, &fl_name, &fl_params[5..], &ll),
+        );
+        if let Some(e) = failed.into_inner() {
+            return Err(unsupported(span, e));
+        }
+        let r = bd.result(if_op, 0);
+        bd.ret(&[r]);
+    }
+    super::entries::sizes_fn(m, spec, &lname)?;
+    super::entries::build_fn(
+        m, spec, &lname, &node_name, root_fn, ref_ty, &shared, tree_ty,
+    )?;
+    Ok(())
+}
+
+pub(super) fn load(
+    bd: &mut Builder<'_>,
+    base: ValueId,
+    index: Option<ValueId>,
+    offset: u64,
+    stride: u64,
+    t: TypeId,
+) -> ValueId {
+    let mut spec = OpSpec::new(mem::Op::Load)
+        .results(&[t])
+        .attr("offset", Attr::Int(offset as i128));
+    spec = match index {
+        Some(i) => spec
+            .operands(&[base, i])
+            .attr("stride", Attr::Int(stride as i128)),
+        None => spec.operands(&[base]),
+    };
+    let op = bd.insert(spec);
+    bd.result(op, 0)
+}
+
+pub(super) fn store(bd: &mut Builder<'_>, base: ValueId, offset: u64, v: ValueId) {
+    bd.insert(
+        OpSpec::new(mem::Op::Store)
+            .operands(&[base, v])
+            .attr("offset", Attr::Int(offset as i128)),
+    );
+}
+
+/// The logical fields of node `i` for a build function's parameter types (after `%tree`..).
+pub(super) fn logical_fields(
+    bd: &mut Builder<'_>,
+    params: &[TypeId],
+    logical: &[TypeId],
+    nodes: ValueId,
+    prims: ValueId,
+    i: ValueId,
+    tree_ty: TypeId,
+) -> Result<Vec<ValueId>, String> {
+    let u32t = bd.m.types.u32();
+    let mut out = Vec::new();
+    let mut child = 0;
+    for (&p, &l) in params.iter().zip(logical) {
+        let ty = bd.m.types.get(p).clone();
+        let v = match ty {
+            Type::Adt(name) if name == "AABB" => load(bd, nodes, Some(i), abi::NODE_BOUNDS, abi::NODE_STRIDE, p),
+            _ if l == tree_ty && p == u32t && child < 2 => {
+                // A recursive field (logical child index).
+                let v = load(bd, nodes, Some(i), abi::NODE_CHILD + 4 * child, abi::NODE_STRIDE, u32t);
+                child += 1;
+                v
+            }
+            Type::Int(_) => {
+                let n = load(bd, nodes, Some(i), abi::NODE_PRIM_COUNT, abi::NODE_STRIDE, u32t);
+                if p == u32t {
+                    n
+                } else {
+                    bd.cast(n, p)
+                }
+            }
+            Type::View(elem) if matches!(bd.m.types.get(elem), Type::Adt(n) if n == "Triangle") => {
+                let start = load(bd, nodes, Some(i), abi::NODE_PRIM_OFFSET, abi::NODE_STRIDE, u32t);
+                let len = load(bd, nodes, Some(i), abi::NODE_PRIM_COUNT, abi::NODE_STRIDE, u32t);
+                let op = bd.insert(
+                    OpSpec::new(mem::Op::View)
+                        .operands(&[prims, start, len])
+                        .results(&[p])
+                        .attr("stride", Attr::Int(abi::PRIM_STRIDE as i128)),
+                );
+                bd.result(op, 0)
+            }
+            _ => return Err(format!("a logical field of type {} (the logical tree has AABB bounds, two children, and triangles)", bd.m.types.display(p))),
+        };
+        out.push(v);
+    }
+    Ok(out)
+}
+
+/// Rewrites one build function in place (see the module docs).
+#[allow(clippy::too_many_arguments)]
+fn rewrite_build(
+    m: &mut Module,
+    spec: &LayoutSpec,
+    f: FuncId,
+    variant: &str,
+    extra: &[TypeId],
+    node_name: &str,
+    ref_ty: TypeId,
+    post: bool,
+) -> Result<(), Diagnostic> {
+    let span = m.func_spans.get(f).copied();
+    let entry = m.entry_block(f).expect("build functions have bodies");
+    // Extra parameters first; array parameters become views of the logical primitives.
+    let mut new_args = Vec::new();
+    for &t in extra {
+        new_args.push(m.add_block_arg(entry, t));
+    }
+    let n = extra.len();
+    let args = &mut m.blocks[entry].args;
+    args.rotate_right(n);
+    let args = args.clone();
+    for (k, &a) in args.iter().enumerate() {
+        m.values[a].def = ValueDef::BlockArg(entry, k as u32);
+        if let Type::Array { elem, len: None } = m.types.get(m.values[a].ty).clone() {
+            m.values[a].ty = m.ty(Type::View(elem));
+        }
+    }
+    m.funcs[f].params = args.iter().map(|&a| m.values[a].ty).collect();
+    let cx = Ctx {
+        tree: args[0],
+        b: args[1],
+        counter: args[2],
+        cursor: args[3],
+        status: args[4],
+    };
+    let is_root = variant == "root";
+    let variant = if is_root {
+        spec.model
+            .adt
+            .as_ref()
+            .and_then(|a| a.variants.first())
+            .map(|v| v.name.name.clone())
+            .unwrap_or_default()
+    } else {
+        variant.to_string()
+    };
+    let ops = func_ops(m, f, Order::Pre);
+    // Where `this` is taken: on entry (pre-order), or after the last top-level op that builds
+    // a child (post-order).
+    let body_ops = m.blocks[entry].ops.clone();
+    let mut at = InsertPoint::Before(body_ops[0]);
+    if post {
+        for &o in &body_ops {
+            let mut builds = false;
+            if m.ops[o].kind == OpKind::Tree(Op::BuildChild) {
+                builds = true;
+            }
+            for &r in &m.ops[o].regions {
+                scion_ir::walk::walk_region(m, r, Order::Pre, &mut |x| {
+                    if m.ops[x].kind == OpKind::Tree(Op::BuildChild) {
+                        builds = true;
+                    }
+                });
+            }
+            if builds {
+                at = InsertPoint::After(o);
+            }
+        }
+        // Stores written before the children are built need `this`, known only after them:
+        // they move (in order) to just after the last child build.
+        if let InsertPoint::After(anchor) = at {
+            let pos = body_ops.iter().position(|&o| o == anchor).unwrap_or(0);
+            let mut early = Vec::new();
+            for &o in &body_ops[..pos] {
+                let needs_this = |k: OpKind| {
+                    matches!(
+                        k,
+                        OpKind::Tree(Op::BuildStore | Op::BuildStoreBits | Op::This)
+                    )
+                };
+                if needs_this(m.ops[o].kind) {
+                    early.push(o);
+                    continue;
+                }
+                let mut nested = false;
+                for &r in &m.ops[o].regions {
+                    scion_ir::walk::walk_region(m, r, Order::Pre, &mut |x| {
+                        nested |= needs_this(m.ops[x].kind);
+                    });
+                }
+                if nested {
+                    return Err(unsupported(
+                        m.span(o).or(span),
+                        "in an `order=post` build, a store inside a branch before the last child is built",
+                    ));
+                }
+            }
+            if early
+                .iter()
+                .any(|&o| m.ops[o].kind == OpKind::Tree(Op::This))
+            {
+                return Err(unsupported(
+                    span,
+                    "in an `order=post` build, `this` used before the children are built",
+                ));
+            }
+            for &o in early.iter().rev() {
+                erase_op(m, o);
+                let mut bd = Builder::new(m);
+                bd.set_insertion_point(InsertPoint::After(anchor));
+                bd.place(o);
+            }
+        }
+    }
+    let this = if is_root {
+        None
+    } else {
+        Some(take_this(m, spec, cx, at, ref_ty)?)
+    };
+    // With `this[a:b] = e` the reference is a cell starting as the placement value: `tree.this`
+    // reads it, the bit stores update it. Stores into the node still use the placement value.
+    let has_bits = ops
+        .iter()
+        .any(|&o| m.ops[o].kind == OpKind::Tree(Op::BuildStoreBits));
+    let cell = match (this, has_bits) {
+        (Some(t), true) => {
+            if m.types.as_int(ref_ty).is_none() {
+                return Err(unsupported(
+                    span,
+                    "`this[a:b] = e` with a reference that is not an integer",
+                ));
+            }
+            let def = m.def_op(t).expect("`this` is computed by an op");
+            let mut bd = Builder::new(m);
+            bd.set_insertion_point(InsertPoint::After(def));
+            Some(bd.var(t))
+        }
+        _ => None,
+    };
+    for op in ops {
+        let kind = m.ops[op].kind;
+        let field = m.ops[op].str_attr("field").unwrap_or_default().to_string();
+        match kind {
+            OpKind::Tree(Op::This) => {
+                let Some(t) = this else {
+                    return Err(unsupported(span, "`this` in `build root`"));
+                };
+                let r = m.ops[op].results[0];
+                let t = match cell {
+                    Some(c) => {
+                        let mut bd = Builder::new(m);
+                        bd.set_insertion_point(InsertPoint::Before(op));
+                        bd.load(c).expect("a cell")
+                    }
+                    None => t,
+                };
+                replace_all_uses(m, r, t);
+                erase_op(m, op);
+            }
+            OpKind::Tree(Op::BuildStoreBits) => {
+                let Some(c) = cell else {
+                    return Err(unsupported(
+                        m.span(op).or(span),
+                        "`this[a:b] = e` in `build root`",
+                    ));
+                };
+                let lo = m.ops[op].int_attr("lo").unwrap_or(0);
+                let hi = m.ops[op].int_attr("hi").unwrap_or(0);
+                let v = m.ops[op].operands[0];
+                store_bits(m, op, c, cx.status, v, lo, hi, ref_ty);
+                erase_op(m, op);
+            }
+            OpKind::Tree(Op::BuildStore) => {
+                let v = m.ops[op].operands[0];
+                let comps = this.into_iter().collect();
+                let mut rd = Reader::new(spec, cx.b, comps, InsertPoint::Before(op));
+                rd.store_field(m, &variant, &field, v)?;
+                erase_op(m, op);
+            }
+            OpKind::Tree(Op::BuildLoad) => {
+                let comps = this.into_iter().collect();
+                let mut rd = Reader::new(spec, cx.b, comps, InsertPoint::Before(op));
+                let v = rd.field(m, &variant, &field)?;
+                let old = m.ops[op].results[0];
+                if m.values[old].ty != m.values[v].ty {
+                    return Err(unsupported(
+                        m.span(op).or(span),
+                        format!("`{field}` read in a build with a type other than its stored one"),
+                    ));
+                }
+                replace_all_uses(m, old, v);
+                erase_op(m, op);
+            }
+            OpKind::Tree(Op::BuildChild) => {
+                let idx = m.ops[op].operands[0];
+                let mut bd = Builder::new(m);
+                bd.set_insertion_point(InsertPoint::Before(op));
+                let c = bd.call(
+                    node_name,
+                    &[cx.tree, cx.b, idx, cx.counter, cx.cursor, cx.status],
+                    &[ref_ty],
+                );
+                let r = bd.result(c, 0);
+                let old = m.ops[op].results[0];
+                replace_all_uses(m, old, r);
+                erase_op(m, op);
+            }
+            OpKind::Tree(Op::Append) => {
+                let (data, count) = (m.ops[op].operands[0], m.ops[op].operands[1]);
+                let rt = m.values[m.ops[op].results[0]].ty;
+                let comps = this.into_iter().collect();
+                let mut rd = Reader::new(spec, cx.b, comps, InsertPoint::Before(op));
+                let (gbuf, stride, elem) = rd.array_of_field(m, &variant, &field)?;
+                let u32t = m.types.u32();
+                let mut bd = Builder::new(m);
+                bd.set_insertion_point(InsertPoint::Before(op));
+                let start = bd.load(cx.cursor).expect("cursor is a cell");
+                let n = if bd.value_type(count) == u32t {
+                    count
+                } else {
+                    bd.cast(count, u32t)
+                };
+                let next = bd.binary(Op::Add, start, n);
+                bd.store(cx.cursor, next);
+                let body = bd.region(&[elem, u32t], |bd, a| {
+                    let at = bd.binary(Op::Add, start, a[1]);
+                    bd.insert(
+                        OpSpec::new(mem::Op::Store)
+                            .operands(&[gbuf, at, a[0]])
+                            .attr("offset", Attr::Int(0))
+                            .attr("stride", Attr::Int(stride as i128)),
+                    );
+                    bd.yield_(&[]);
+                });
+                bd.insert(OpSpec::new(Op::Foreach).operands(&[data]).region(body));
+                let r = if rt == u32t {
+                    start
+                } else {
+                    bd.cast(start, rt)
+                };
+                let old = m.ops[op].results[0];
+                replace_all_uses(m, old, r);
+                erase_op(m, op);
+            }
+            _ => {}
+        }
+    }
+    m.funcs[f]
+        .attrs
+        .set("build_of", Attr::str(spec.model.name.name.clone()));
+    Ok(())
+}
+
+/// `this[lo:hi] = v` on the reference cell `c`: the bits are replaced by `v`'s low bits, and
+/// `%status` becomes 1 when `v` does not fit in `hi - lo` bits.
+#[allow(clippy::too_many_arguments)]
+fn store_bits(
+    m: &mut Module,
+    at: scion_ir::OpId,
+    c: ValueId,
+    status: ValueId,
+    v: ValueId,
+    lo: i128,
+    hi: i128,
+    ref_ty: TypeId,
+) {
+    let i32t = m.types.i32();
+    let bits = m.types.as_int(ref_ty).map_or(64, |t| t.bits() as i128);
+    let all = if bits >= 127 { -1 } else { (1i128 << bits) - 1 };
+    let width = hi - lo;
+    let mut bd = Builder::new(m);
+    bd.set_insertion_point(InsertPoint::Before(at));
+    let v = if bd.value_type(v) == ref_ty {
+        v
+    } else {
+        bd.cast(v, ref_ty)
+    };
+    let low_mask = if width >= bits {
+        all
+    } else {
+        (1i128 << width) - 1
+    };
+    let low = bd.const_int(ref_ty, low_mask);
+    let kept = bd.binary(Op::And, v, low);
+    let fits = bd.cmp(CmpPred::Eq, kept, v);
+    let old_status = bd.load(status).expect("status is a cell");
+    let one = bd.const_int(i32t, 1);
+    let new_status = bd.select(fits, old_status, one);
+    bd.store(status, new_status);
+    let old = bd.load(c).expect("a cell");
+    let mask = bd.const_int(ref_ty, ((low_mask << lo) & all) ^ all);
+    let cleared = bd.binary(Op::And, old, mask);
+    let shift = bd.const_int(ref_ty, lo);
+    let placed = bd.binary(Op::Shl, kept, shift);
+    let new = bd.binary(Op::Or, cleared, placed);
+    bd.store(c, new);
+}
+
+/// Takes the next placement index at `at`: `this` is the index, or the node's address for a
+/// pointer-referenced group.
+fn take_this(
+    m: &mut Module,
+    spec: &LayoutSpec,
+    cx: Ctx,
+    at: InsertPoint,
+    ref_ty: TypeId,
+) -> Result<ValueId, Diagnostic> {
+    let u32t = m.types.u32();
+    let mut bd = Builder::new(m);
+    bd.set_insertion_point(at);
+    let c = bd.load(cx.counter).expect("counter is a cell");
+    let one = bd.const_int(u32t, 1);
+    let next = bd.binary(Op::Add, c, one);
+    bd.store(cx.counter, next);
+    if ref_ty == u32t {
+        return Ok(c);
+    }
+    if matches!(m.types.get(ref_ty), Type::Ptr) {
+        let model = &spec.model;
+        let Some(g) = model
+            .groups
+            .iter()
+            .position(|g| g.kind == GroupKind::Pointer)
+        else {
+            return Err(unsupported(
+                Some(model.span),
+                "a pointer reference without a group indexed by it",
+            ));
+        };
+        let kind = BufferKind::GroupArray { group: g, array: 0 };
+        let mut rd = Reader::new(spec, cx.b, vec![], at);
+        let (base, stride) = rd.buffer_base(m, &kind)?;
+        let mut bd = Builder::new(m);
+        bd.set_insertion_point(at);
+        let ptr = bd.m.ty(Type::Ptr);
+        let op = bd.insert(
+            OpSpec::new(mem::Op::Addr)
+                .operands(&[base, c])
+                .results(&[ptr])
+                .attr("offset", Attr::Int(0))
+                .attr("stride", Attr::Int(stride as i128)),
+        );
+        return Ok(bd.result(op, 0));
+    }
+    Err(unsupported(
+        Some(spec.model.span),
+        "a reference type other than `u32` or `ptr` in a build",
+    ))
+}

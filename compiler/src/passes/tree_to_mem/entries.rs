@@ -1,0 +1,157 @@
+//! The entry points constructor specialization generates besides the build functions:
+//! `@L.sizes(%tree, %sizes)` (the byte size of every buffer) and `@L.build(%tree, %B) -> (i32)`
+//! (globals, `build root`, then the tree from its root). See `constructor.rs` for the whole
+//! contract and `docs/design/specialization.md` §3.1 for the C ABI.
+
+use super::constructor::{abi, load, logical_fields, store};
+use super::reader::Reader;
+use super::{unsupported, LayoutSpec};
+use crate::layout::plan::Count;
+use scion_ir::diag::Diagnostic;
+use scion_ir::rewrite::erase_op;
+use scion_ir::tree::{CmpPred, Op};
+use scion_ir::types::{IntTy, Type};
+use scion_ir::{Builder, FuncId, InsertPoint, Module, TypeId, ValueId};
+
+/// `@L.sizes(%tree, %sizes)`.
+pub(super) fn sizes_fn(m: &mut Module, spec: &LayoutSpec, lname: &str) -> Result<(), Diagnostic> {
+    let ptr = m.ty(Type::Ptr);
+    let u32t = m.types.u32();
+    let u64t = m.types.int(IntTy::U64);
+    let (f, entry) = m.add_func(&format!("{lname}.sizes"), &[ptr, ptr], &[]);
+    m.func_spans.insert(f, spec.model.span);
+    let args = m.blocks[entry].args.to_vec();
+    let mut bd = Builder::at_end(m, entry);
+    let nc = load(&mut bd, args[0], None, abi::VIEW_NODE_COUNT, 0, u32t);
+    let pc = load(&mut bd, args[0], None, abi::VIEW_PRIM_COUNT, 0, u32t);
+    for (i, buf) in spec.plan.buffers.iter().enumerate() {
+        let count = match &buf.count {
+            Count::One => bd.const_int(u32t, 1),
+            Count::Nodes { per_element: 1, .. } => nc,
+            Count::Nodes { per_element, .. } => {
+                let k = bd.const_int(u32t, *per_element as i128 - 1);
+                let d = bd.const_int(u32t, *per_element as i128);
+                let s = bd.binary(Op::Add, nc, k);
+                bd.binary(Op::Div, s, d)
+            }
+            Count::VariantNodes { .. } => nc,
+            Count::LogicalLength { .. } => pc,
+            Count::Global(g) => {
+                return Err(unsupported(
+                    Some(spec.model.span),
+                    format!(
+                        "buffer `{}` sized by global `{g}`, which the logical tree does not give",
+                        buf.name
+                    ),
+                ))
+            }
+        };
+        let c = bd.cast(count, u64t);
+        let stride = bd.const_int(u64t, buf.stride as i128);
+        let bytes = bd.binary(Op::Mul, c, stride);
+        store(&mut bd, args[1], 8 * i as u64, bytes);
+    }
+    bd.ret(&[]);
+    Ok(())
+}
+
+/// `@L.build(%tree, %B) -> (i32)`.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn build_fn(
+    m: &mut Module,
+    spec: &LayoutSpec,
+    lname: &str,
+    node_name: &str,
+    root_fn: Option<FuncId>,
+    ref_ty: TypeId,
+    shared: &[TypeId],
+    tree_ty: TypeId,
+) -> Result<(), Diagnostic> {
+    let ptr = m.ty(Type::Ptr);
+    let u32t = m.types.u32();
+    let i32t = m.types.i32();
+    let (f, entry) = m.add_func(&format!("{lname}.build"), &[ptr, ptr], &[i32t]);
+    m.func_spans.insert(f, spec.model.span);
+    let args = m.blocks[entry].args.to_vec();
+    let (tree, b) = (args[0], args[1]);
+    let mut bd = Builder::at_end(m, entry);
+    let zero = bd.const_int(u32t, 0);
+    let counter = bd.var(zero);
+    let cursor = bd.var(zero);
+    let szero = bd.const_int(i32t, 0);
+    let status = bd.var(szero);
+    let nc = load(&mut bd, tree, None, abi::VIEW_NODE_COUNT, 0, u32t);
+    let root = load(&mut bd, tree, None, abi::VIEW_ROOT, 0, u32t);
+    let pc = load(&mut bd, tree, None, abi::VIEW_PRIM_COUNT, 0, u32t);
+    // The globals that size arrays: node and primitive counts.
+    let first = bd.ret(&[szero]);
+    let mut rd = Reader::new(spec, b, vec![], InsertPoint::Before(first));
+    let variant = spec
+        .model
+        .adt
+        .as_ref()
+        .and_then(|a| a.variants.first())
+        .map(|v| v.name.name.clone())
+        .unwrap_or_default();
+    for buf in &spec.plan.buffers {
+        let (global, v) = match &buf.count {
+            Count::Nodes {
+                size_global: Some(g),
+                ..
+            } => (g, nc),
+            Count::LogicalLength { len_global, .. } => (len_global, pc),
+            _ => continue,
+        };
+        rd.store_field(m, &variant, global, v)?;
+    }
+    erase_op(m, first);
+    let mut bd = Builder::at_end(m, entry);
+    let pass = [tree, b, counter, cursor, status];
+    // An empty tree (`root = NO_NODE`) only gets its globals.
+    let no_node = bd.const_int(u32t, u32::MAX as i128);
+    let nonempty = bd.cmp(CmpPred::Ne, root, no_node);
+    let root_call = match root_fn {
+        Some(rf) => {
+            let name = bd.m.funcs[rf].name.clone();
+            let params = bd.m.funcs[rf].params[5..].to_vec();
+            Some((name, params))
+        }
+        None => None,
+    };
+    let failed = std::cell::RefCell::new(None);
+    bd.if_(
+        nonempty,
+        &[],
+        |bd| {
+            if let Some((name, params)) = &root_call {
+                let nodes = load(bd, tree, None, abi::VIEW_NODES, 0, ptr);
+                let prims = load(bd, tree, None, abi::VIEW_PRIMS, 0, ptr);
+                match logical_fields(bd, params, shared, nodes, prims, root, tree_ty) {
+                    Ok(vals) => {
+                        let all: Vec<ValueId> = pass.iter().copied().chain(vals).collect();
+                        bd.call(name, &all, &[]);
+                    }
+                    Err(e) => *failed.borrow_mut() = Some(e),
+                }
+            }
+            bd.call(
+                node_name,
+                &[tree, b, root, counter, cursor, status],
+                &[ref_ty],
+            );
+            bd.yield_(&[]);
+        },
+        |bd| {
+            bd.yield_(&[]);
+        },
+    );
+    if let Some(e) = failed.into_inner() {
+        return Err(unsupported(
+            Some(spec.model.span),
+            format!("`build root` reads {e}"),
+        ));
+    }
+    let s = bd.load(status).expect("status is a cell");
+    bd.ret(&[s]);
+    Ok(())
+}

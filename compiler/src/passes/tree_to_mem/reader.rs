@@ -1,0 +1,796 @@
+//! Reading one node of a layout: the values of its fields (loads at resolved paths, derived
+//! expressions, views of global arrays) and its variant tests (split predicates).
+//!
+//! A [`Reader`] serves one *destruction* (one `match` on a reference, or one field read). It
+//! keeps a stack of [`Layer`]s: layer 0 sits just before the destructing op (buffer bases,
+//! discriminants and shared fields go there), each further layer at the start of one arm. A name
+//! is computed at most once per layer chain: every value is cached in the layer it was emitted
+//! in and found again from any inner layer. The variant tests are in `predicates.rs`.
+
+use super::{ir_type, unsupported, LayoutSpec};
+use crate::layout::model::Storage;
+use crate::layout::plan::BufferKind;
+use crate::layout::resolve::{Dep, FieldPath, Index, ResolveError, Resolver, Step};
+use crate::syntax::ast::{BinaryOp, Expr, ExprKind, UnaryOp};
+use rustc_hash::FxHashMap;
+use scion_ir::attr::Attr;
+use scion_ir::diag::Diagnostic;
+use scion_ir::tree::{CmpPred, Op};
+use scion_ir::types::Type;
+use scion_ir::{mem, Builder, InsertPoint, Module, OpSpec, TypeId, ValueId};
+
+type R<T> = Result<T, Diagnostic>;
+
+/// One place values are emitted, with the values already emitted there.
+pub(super) struct Layer {
+    /// Where new ops go.
+    pub point: InsertPoint,
+    names: FxHashMap<String, ValueId>,
+}
+
+impl Layer {
+    /// An empty layer inserting at `point`.
+    pub fn new(point: InsertPoint) -> Layer {
+        Layer {
+            point,
+            names: FxHashMap::default(),
+        }
+    }
+}
+
+/// Reads fields of the node a reference denotes.
+pub(super) struct Reader<'a> {
+    pub(super) spec: &'a LayoutSpec,
+    resolver: Resolver<'a>,
+    /// The layout instance `%B`.
+    b: ValueId,
+    /// The reference's components, in declaration order.
+    components: Vec<ValueId>,
+    /// Innermost last.
+    pub layers: Vec<Layer>,
+}
+
+impl<'a> Reader<'a> {
+    /// A reader of the node `components` denotes, emitting its first values at `outer`.
+    pub fn new(
+        spec: &'a LayoutSpec,
+        b: ValueId,
+        components: Vec<ValueId>,
+        outer: InsertPoint,
+    ) -> Reader<'a> {
+        Reader {
+            spec,
+            resolver: Resolver::new(&spec.model),
+            b,
+            components,
+            layers: vec![Layer::new(outer)],
+        }
+    }
+
+    pub(super) fn lookup(&self, key: &str) -> Option<ValueId> {
+        self.layers
+            .iter()
+            .rev()
+            .find_map(|l| l.names.get(key).copied())
+    }
+
+    pub(super) fn remember(&mut self, key: String, v: ValueId, outer: bool) {
+        let layer = if outer {
+            self.layers.first_mut()
+        } else {
+            self.layers.last_mut()
+        };
+        if let Some(l) = layer {
+            l.names.insert(key, v);
+        }
+    }
+
+    pub(super) fn builder<'m>(&self, m: &'m mut Module, outer: bool) -> Builder<'m> {
+        let layer = if outer {
+            &self.layers[0]
+        } else {
+            &self.layers[self.layers.len() - 1]
+        };
+        let mut b = Builder::new(m);
+        b.set_insertion_point(layer.point);
+        b
+    }
+
+    /// The base address of buffer `kind` (emitted once, in layer 0).
+    fn buffer(&mut self, m: &mut Module, kind: &BufferKind) -> R<(ValueId, u64)> {
+        let Some(index) = self.spec.buffer_index(kind) else {
+            return Err(unsupported(
+                Some(self.spec.model.span),
+                format!(
+                    "layout `{}` has no buffer for {kind:?}",
+                    self.spec.model.name.name
+                ),
+            ));
+        };
+        let buf = &self.spec.plan.buffers[index];
+        let stride = buf.stride;
+        let key = format!("#buffer{index}");
+        if let Some(v) = self.lookup(&key) {
+            return Ok((v, stride));
+        }
+        let name = buf.name.clone();
+        let mut bd = self.builder(m, true);
+        let p = bd.m.types.intern(Type::Ptr);
+        let op = bd.insert(
+            OpSpec::new(mem::Op::Buffer)
+                .operands(&[self.b])
+                .results(&[p])
+                .attr("index", Attr::Int(index as i128))
+                .attr("name", Attr::str(name)),
+        );
+        let v = bd.result(op, 0);
+        self.remember(key, v, true);
+        Ok((v, stride))
+    }
+
+    /// The value of logical field `name` of `variant` (a load, a derived value or a view).
+    pub fn field(&mut self, m: &mut Module, variant: &str, name: &str) -> R<ValueId> {
+        if let Some(v) = self.lookup(name) {
+            return Ok(v);
+        }
+        let path = self
+            .resolver
+            .resolve(variant, name)
+            .map_err(|e| resolve_error(self.spec, &e))?;
+        let v = self.path_value(m, variant, name, &path)?;
+        self.remember(name.to_string(), v, false);
+        Ok(v)
+    }
+
+    fn path_value(
+        &mut self,
+        m: &mut Module,
+        variant: &str,
+        name: &str,
+        path: &FieldPath,
+    ) -> R<ValueId> {
+        let model = &self.spec.model;
+        match path {
+            FieldPath::Stored {
+                member,
+                steps,
+                storage,
+                ty,
+                ..
+            } => {
+                let span = Some(model.members[*member].span);
+                let Some(t) = ir_type(m, ty) else {
+                    return Err(unsupported(
+                        span,
+                        format!("field `{name}` has a type the reader cannot load"),
+                    ));
+                };
+                let (base, index, offset, stride) =
+                    self.address(m, variant, steps, *storage, span)?;
+                Ok(self.load(m, base, index, offset, stride, t))
+            }
+            FieldPath::Derived {
+                member,
+                value,
+                deps,
+                ..
+            } => {
+                for (id, dep) in deps {
+                    let msg = match dep {
+                        Dep::Parent(_) => {
+                            "`parent.` values are not supported by destructor specialization"
+                        }
+                        Dep::Unknown(_) => {
+                            "a name of this derived field is on no route of the variant"
+                        }
+                        Dep::Ambiguous(_) => {
+                            "a name of this derived field has several declarations"
+                        }
+                        _ => continue,
+                    };
+                    return Err(unsupported(Some(id.span), msg)
+                        .with_note(format!("in derived field `{name}` of variant `{variant}`")));
+                }
+                let _ = member;
+                self.expr(m, variant, value, None)
+            }
+            FieldPath::Alternatives(cases) => {
+                // The variant is realized by several arms that place the field differently:
+                // read every placement (plain loads and pure expressions) and select by the
+                // arms' tests, which are disjoint.
+                let mut acc: Option<ValueId> = None;
+                for (guards, path) in cases.iter().rev() {
+                    if matches!(path, FieldPath::Alternatives(_)) {
+                        return Err(unsupported(
+                            None,
+                            format!("field `{name}` of `{variant}`: nested alternatives"),
+                        ));
+                    }
+                    let v = self.path_value(m, variant, name, path)?;
+                    acc = Some(match acc {
+                        None => v,
+                        Some(other) => {
+                            let mut test: Option<ValueId> = None;
+                            for &(s, k) in guards {
+                                let t = self.arm_test(m, s, k)?;
+                                test = Some(match test {
+                                    None => t,
+                                    Some(a) => self.builder(m, true).binary(Op::And, a, t),
+                                });
+                            }
+                            match test {
+                                Some(t) => {
+                                    if m.values[v].ty != m.values[other].ty {
+                                        return Err(unsupported(
+                                            None,
+                                            format!("field `{name}` of `{variant}` has different types in different arms"),
+                                        ));
+                                    }
+                                    self.builder(m, false).select(t, v, other)
+                                }
+                                None => v,
+                            }
+                        }
+                    });
+                }
+                acc.ok_or_else(|| {
+                    unsupported(
+                        None,
+                        format!("field `{name}` of `{variant}` has no placement"),
+                    )
+                })
+            }
+        }
+    }
+
+    fn load(
+        &mut self,
+        m: &mut Module,
+        base: ValueId,
+        index: Option<ValueId>,
+        offset: u64,
+        stride: u64,
+        t: TypeId,
+    ) -> ValueId {
+        let mut bd = self.builder(m, false);
+        let mut spec = OpSpec::new(mem::Op::Load)
+            .results(&[t])
+            .attr("offset", Attr::Int(offset as i128));
+        match index {
+            Some(i) => {
+                spec = spec
+                    .operands(&[base, i])
+                    .attr("stride", Attr::Int(stride as i128));
+            }
+            None => spec = spec.operands(&[base]),
+        }
+        let op = bd.insert(spec);
+        bd.result(op, 0)
+    }
+
+    /// Base, optional index, offset and stride of a stored field.
+    fn address(
+        &mut self,
+        m: &mut Module,
+        variant: &str,
+        steps: &[Step],
+        storage: Storage,
+        span: Option<scion_ir::diag::Span>,
+    ) -> R<(ValueId, Option<ValueId>, u64, u64)> {
+        match storage {
+            Storage::Globals { offset } => {
+                let (base, _) = self.buffer(m, &BufferKind::Globals)?;
+                Ok((base, None, offset, 0))
+            }
+            Storage::Element {
+                group,
+                array,
+                offset,
+            } => {
+                let model = &self.spec.model;
+                let n = steps.len();
+                let Some(last) = steps.last().filter(|s| s.group == group) else {
+                    return Err(unsupported(
+                        span,
+                        "a field path that does not end in its group",
+                    ));
+                };
+                match &last.index {
+                    Index::Value(e) | Index::Key(e) => {
+                        let idx = self.expr(m, variant, e, None)?;
+                        let (base, stride) =
+                            self.buffer(m, &BufferKind::GroupArray { group, array })?;
+                        Ok((base, Some(idx), offset, stride))
+                    }
+                    Index::Pointer(e) => {
+                        if array != 0 {
+                            return Err(unsupported(
+                                span,
+                                "`---` arrays of a pointer-indexed group",
+                            ));
+                        }
+                        let p = self.expr(m, variant, e, None)?;
+                        Ok((p, None, offset, 0))
+                    }
+                    Index::Tile { count } => {
+                        let g = &model.groups[group];
+                        let (Some((outer, outer_array, tile_off)), true) = (g.parent, n >= 2)
+                        else {
+                            return Err(unsupported(
+                                span,
+                                "a nested group without its outer group",
+                            ));
+                        };
+                        let inner_stride = g.arrays[array].stride;
+                        let key = format!("#tile{group}.{array}");
+                        let slot_key = format!("#slot{group}");
+                        if let (Some(a), Some(slot)) = (self.lookup(&key), self.lookup(&slot_key)) {
+                            return Ok((a, Some(slot), offset, inner_stride));
+                        }
+                        let block_off = g.arrays[array].offset;
+                        let count = *count;
+                        let prev = steps[n - 2].clone();
+                        let idx = match &prev.index {
+                            Index::Value(e) | Index::Key(e) | Index::Pointer(e) => {
+                                self.expr(m, variant, e, None)?
+                            }
+                            _ => {
+                                return Err(unsupported(span, "groups nested more than one level"))
+                            }
+                        };
+                        let it = m.values[idx].ty;
+                        let c = self.builder(m, false).const_int(it, count as i128);
+                        let (elem, slot) = {
+                            let mut bd = self.builder(m, false);
+                            (bd.binary(Op::Div, idx, c), bd.binary(Op::Rem, idx, c))
+                        };
+                        let addr_off = (tile_off + block_off) as i128;
+                        let (obase, ostride) = if matches!(prev.index, Index::Pointer(_)) {
+                            (idx, 0)
+                        } else {
+                            self.buffer(
+                                m,
+                                &BufferKind::GroupArray {
+                                    group: outer,
+                                    array: outer_array,
+                                },
+                            )?
+                        };
+                        let mut bd = self.builder(m, false);
+                        let p = bd.m.types.intern(Type::Ptr);
+                        let spec = if matches!(prev.index, Index::Pointer(_)) {
+                            OpSpec::new(mem::Op::Addr).operands(&[obase])
+                        } else {
+                            OpSpec::new(mem::Op::Addr)
+                                .operands(&[obase, elem])
+                                .attr("stride", Attr::Int(ostride as i128))
+                        };
+                        let op = bd.insert(spec.results(&[p]).attr("offset", Attr::Int(addr_off)));
+                        let a = bd.result(op, 0);
+                        self.remember(key, a, false);
+                        self.remember(slot_key, slot, false);
+                        Ok((a, Some(slot), offset, inner_stride))
+                    }
+                    Index::Missing => Err(unsupported(span, "a group without `by`")),
+                }
+            }
+            Storage::GlobalArray(_) => Err(unsupported(
+                span,
+                "a global array read whole (slice it, `a[lo : hi]`, or index it, `a[i]`)",
+            )),
+            Storage::None => Err(unsupported(span, "a field without storage")),
+        }
+    }
+
+    /// Stores `value` into stored field `name` of the node (constructor specialization).
+    pub fn store_field(
+        &mut self,
+        m: &mut Module,
+        variant: &str,
+        name: &str,
+        value: ValueId,
+    ) -> R<()> {
+        let path = self
+            .resolver
+            .resolve(variant, name)
+            .map_err(|e| resolve_error(self.spec, &e))?;
+        let FieldPath::Stored {
+            member,
+            steps,
+            storage,
+            ty,
+            ..
+        } = path
+        else {
+            return Err(unsupported(
+                Some(self.spec.model.span),
+                format!("`build {name}` of `{variant}` targets no single stored field"),
+            ));
+        };
+        let span = Some(self.spec.model.members[member].span);
+        let want = ir_type(m, &ty);
+        let value = match want {
+            Some(t) if t != m.values[value].ty => {
+                if m.types.as_int(t).is_some() && m.types.as_int(m.values[value].ty).is_some() {
+                    self.convert(m, value, t)
+                } else {
+                    return Err(unsupported(
+                        span,
+                        format!("`build {name}`: the value's type differs from the stored type"),
+                    ));
+                }
+            }
+            _ => value,
+        };
+        let (base, index, offset, stride) = self.address(m, variant, &steps, storage, span)?;
+        let mut bd = self.builder(m, false);
+        let mut spec = OpSpec::new(mem::Op::Store).attr("offset", Attr::Int(offset as i128));
+        spec = match index {
+            Some(i) => spec
+                .operands(&[base, i, value])
+                .attr("stride", Attr::Int(stride as i128)),
+            None => spec.operands(&[base, value]),
+        };
+        bd.insert(spec);
+        Ok(())
+    }
+
+    /// The global array behind logical array field `name` of `variant` (`data = primitives[..]`):
+    /// its buffer base, stride and element type.
+    pub fn array_of_field(
+        &mut self,
+        m: &mut Module,
+        variant: &str,
+        name: &str,
+    ) -> R<(ValueId, u64, TypeId)> {
+        let path = self
+            .resolver
+            .resolve(variant, name)
+            .map_err(|e| resolve_error(self.spec, &e))?;
+        if let FieldPath::Derived { value, .. } = &path {
+            if let ExprKind::Slice { base, .. } = &value.kind {
+                if let ExprKind::Name(id) = &base.kind {
+                    if let Some((kind, elem)) = self.global_array(m, variant, &id.name) {
+                        let (b, stride) = self.buffer(m, &kind)?;
+                        return Ok((b, stride, elem));
+                    }
+                }
+            }
+        }
+        Err(unsupported(
+            Some(self.spec.model.span),
+            format!("`append` to `{name}` of `{variant}`, which is no slice of a global array"),
+        ))
+    }
+
+    /// The buffer base of `kind` (for `this` of pointer layouts and the globals).
+    pub fn buffer_base(&mut self, m: &mut Module, kind: &BufferKind) -> R<(ValueId, u64)> {
+        self.buffer(m, kind)
+    }
+
+    /// The global array a name denotes, if it does: its buffer kind and element type.
+    fn global_array(
+        &mut self,
+        m: &mut Module,
+        variant: &str,
+        name: &str,
+    ) -> Option<(BufferKind, TypeId)> {
+        let path = self.resolver.resolve(variant, name).ok()?;
+        let FieldPath::Stored {
+            member,
+            storage: Storage::GlobalArray(n),
+            ..
+        } = path
+        else {
+            return None;
+        };
+        let elem = ir_type(m, &self.spec.model.global_arrays[n].elem)?;
+        Some((BufferKind::GlobalArray { member }, elem))
+    }
+
+    /// Lowers a layout expression (a derived field, a group index, a discriminant, a key).
+    pub fn expr(
+        &mut self,
+        m: &mut Module,
+        variant: &str,
+        e: &Expr,
+        want: Option<TypeId>,
+    ) -> R<ValueId> {
+        match &e.kind {
+            ExprKind::Name(id) => {
+                if let Some(i) = self.spec.model.component(&id.name) {
+                    if self.spec.model.components[i].carried.is_some() {
+                        return Err(unsupported(
+                            Some(id.span),
+                            "tree-carried reference components (`parent.`)",
+                        ));
+                    }
+                    return Ok(self.components[i]);
+                }
+                self.field(m, variant, &id.name)
+            }
+            ExprKind::Int(n) => {
+                let t = want.unwrap_or_else(|| m.types.u32());
+                Ok(self.builder(m, false).const_int(t, *n as i128))
+            }
+            ExprKind::Bool(v) => Ok(self.builder(m, false).const_bool(*v)),
+            ExprKind::Binary { op, lhs, rhs } => {
+                let (l, r) = if matches!(lhs.kind, ExprKind::Int(_)) {
+                    let r = self.expr(m, variant, rhs, want)?;
+                    let l = self.expr(m, variant, lhs, Some(m.values[r].ty))?;
+                    (l, r)
+                } else {
+                    let l = self.expr(m, variant, lhs, want)?;
+                    let r = self.expr(m, variant, rhs, Some(m.values[l].ty))?;
+                    (l, r)
+                };
+                let (l, r) = self.unify(m, l, r);
+                let mut bd = self.builder(m, false);
+                let pred = |p| Some(p);
+                let (kind, cmp) = match op {
+                    BinaryOp::Add => (Op::Add, None),
+                    BinaryOp::Sub => (Op::Sub, None),
+                    BinaryOp::Mul => (Op::Mul, None),
+                    BinaryOp::Div => (Op::Div, None),
+                    BinaryOp::Rem => (Op::Rem, None),
+                    BinaryOp::BitAnd | BinaryOp::And => (Op::And, None),
+                    BinaryOp::BitOr | BinaryOp::Or => (Op::Or, None),
+                    BinaryOp::BitXor => (Op::Xor, None),
+                    BinaryOp::Shl => (Op::Shl, None),
+                    BinaryOp::Shr => (Op::Shr, None),
+                    BinaryOp::Eq => (Op::Cmp, pred(CmpPred::Eq)),
+                    BinaryOp::Ne => (Op::Cmp, pred(CmpPred::Ne)),
+                    BinaryOp::Lt => (Op::Cmp, pred(CmpPred::Lt)),
+                    BinaryOp::Le => (Op::Cmp, pred(CmpPred::Le)),
+                    BinaryOp::Gt => (Op::Cmp, pred(CmpPred::Gt)),
+                    BinaryOp::Ge => (Op::Cmp, pred(CmpPred::Ge)),
+                };
+                Ok(match cmp {
+                    Some(p) => bd.cmp(p, l, r),
+                    None => bd.binary(kind, l, r),
+                })
+            }
+            ExprKind::Unary { op, operand } => {
+                let v = self.expr(m, variant, operand, want)?;
+                let k = match op {
+                    UnaryOp::Neg => Op::Neg,
+                    UnaryOp::Not => Op::Not,
+                    UnaryOp::BitNot => Op::BitNot,
+                };
+                Ok(self.builder(m, false).unary(k, v))
+            }
+            ExprKind::Cast { expr, ty } => {
+                let v = self.expr(m, variant, expr, None)?;
+                let Some(t) = ir_type(m, ty) else {
+                    return Err(unsupported(Some(ty.span), "a cast to this type"));
+                };
+                Ok(self.builder(m, false).cast(v, t))
+            }
+            ExprKind::Slice { base, lo, hi } => {
+                if let ExprKind::Name(id) = &base.kind {
+                    if let Some((kind, elem)) = self.global_array(m, variant, &id.name) {
+                        return self.view(m, variant, kind, elem, lo, hi);
+                    }
+                }
+                let v = self.expr(m, variant, base, None)?;
+                let (Some(a), Some(z)) = (const_int(lo), const_int(hi)) else {
+                    return Err(unsupported(
+                        Some(e.span),
+                        "a bit slice with non-literal bounds",
+                    ));
+                };
+                let t = m.values[v].ty;
+                if m.types.as_int(t).is_none() || a >= z {
+                    return Err(unsupported(
+                        Some(e.span),
+                        "a slice of something other than an integer or a global array",
+                    ));
+                }
+                Ok(self.builder(m, false).bits(v, a as u32, z as u32, t))
+            }
+            ExprKind::Index { base, index } => {
+                let ExprKind::Name(id) = &base.kind else {
+                    return Err(unsupported(
+                        Some(e.span),
+                        "an index into something other than a global array",
+                    ));
+                };
+                let Some((kind, elem)) = self.global_array(m, variant, &id.name) else {
+                    return Err(unsupported(
+                        Some(e.span),
+                        "an index into something other than a global array",
+                    ));
+                };
+                let i = self.expr(m, variant, index, None)?;
+                let (base, stride) = self.buffer(m, &kind)?;
+                Ok(self.load(m, base, Some(i), 0, stride, elem))
+            }
+            ExprKind::Call { callee, args } => self.call(m, variant, e, &callee.name, args),
+            ExprKind::Field { base, name } => {
+                let v = self.expr(m, variant, base, None)?;
+                let mut bd = self.builder(m, false);
+                let lane = match name.name.as_str() {
+                    "x" => Some(0),
+                    "y" => Some(1),
+                    "z" => Some(2),
+                    "w" => Some(3),
+                    _ => None,
+                };
+                let r = match (bd.m.types.lanes(bd.value_type(v)), lane) {
+                    (Some(_), Some(i)) => bd.lane(v, i),
+                    _ => bd.field(v, &name.name),
+                };
+                r.ok_or_else(|| {
+                    unsupported(Some(e.span), format!("field `{}` of this value", name.name))
+                })
+            }
+            ExprKind::Tuple(items) => {
+                let mut vals = Vec::new();
+                for it in items {
+                    vals.push(self.expr(m, variant, it, None)?);
+                }
+                Ok(self.builder(m, false).tuple(&vals))
+            }
+            ExprKind::Parent(id) => Err(unsupported(
+                Some(id.span),
+                "`parent.` values are not supported by destructor specialization",
+            )),
+            _ => Err(unsupported(Some(e.span), "this form of layout expression")),
+        }
+    }
+
+    /// A call in a layout expression: a record constructor, a vector constructor (`f32x3(..)`)
+    /// or a builtin whose result has its first argument's type (`fma`, `min`, `fadd_rd`, ...).
+    fn call(
+        &mut self,
+        m: &mut Module,
+        variant: &str,
+        e: &Expr,
+        callee: &str,
+        args: &[Expr],
+    ) -> R<ValueId> {
+        let mut vals: Vec<ValueId> = Vec::new();
+        for a in args {
+            let want = vals.first().map(|&v| m.values[v].ty);
+            vals.push(self.expr(m, variant, a, want)?);
+        }
+        if m.adt(callee).is_some_and(|a| a.is_record()) {
+            let t = m.types.adt(callee);
+            return Ok(self.builder(m, false).ctor(t, None, &vals));
+        }
+        if let Some(t) = vector_type(m, callee) {
+            let elem = match m.types.get(t) {
+                Type::Vector { elem, .. } => *elem,
+                _ => t,
+            };
+            let vals: Vec<ValueId> = vals.into_iter().map(|v| self.convert(m, v, elem)).collect();
+            return self
+                .builder(m, false)
+                .vector(&vals)
+                .ok_or_else(|| unsupported(Some(e.span), "a vector constructor with mixed lanes"));
+        }
+        const SAME_TYPE: [&str; 16] = [
+            "fma",
+            "min",
+            "max",
+            "abs",
+            "sqrt",
+            "floor",
+            "ceil",
+            "round",
+            "trunc",
+            "fadd_rd",
+            "fadd_ru",
+            "fsub_rd",
+            "fsub_ru",
+            "fmul_rd",
+            "fmul_ru",
+            "with_axis",
+        ];
+        match vals.first() {
+            Some(&first) if SAME_TYPE.contains(&callee) => {
+                let t = m.values[first].ty;
+                Ok(self.builder(m, false).intrinsic(callee, &vals, t))
+            }
+            _ => Err(unsupported(
+                Some(e.span),
+                format!("a call of `{callee}` in a layout expression"),
+            )),
+        }
+    }
+
+    /// `mem.view` of `array[lo : hi]`; when `hi` is written `lo + n` the length is `n` itself.
+    fn view(
+        &mut self,
+        m: &mut Module,
+        variant: &str,
+        kind: BufferKind,
+        elem: TypeId,
+        lo: &Expr,
+        hi: &Expr,
+    ) -> R<ValueId> {
+        let start = self.expr(m, variant, lo, None)?;
+        let st = m.values[start].ty;
+        let len = match (&lo.kind, &hi.kind) {
+            (
+                ExprKind::Name(a),
+                ExprKind::Binary {
+                    op: BinaryOp::Add,
+                    lhs,
+                    rhs,
+                },
+            ) if matches!(&lhs.kind, ExprKind::Name(b) if b.name == a.name) => {
+                let n = self.expr(m, variant, rhs, Some(st))?;
+                self.convert(m, n, st)
+            }
+            _ => {
+                let end = self.expr(m, variant, hi, Some(st))?;
+                let end = self.convert(m, end, st);
+                self.builder(m, false).binary(Op::Sub, end, start)
+            }
+        };
+        let (base, stride) = self.buffer(m, &kind)?;
+        let vt = m.ty(Type::View(elem));
+        let mut bd = self.builder(m, false);
+        let op = bd.insert(
+            OpSpec::new(mem::Op::View)
+                .operands(&[base, start, len])
+                .results(&[vt])
+                .attr("stride", Attr::Int(stride as i128)),
+        );
+        Ok(bd.result(op, 0))
+    }
+
+    fn convert(&mut self, m: &mut Module, v: ValueId, to: TypeId) -> ValueId {
+        if m.values[v].ty == to {
+            v
+        } else {
+            self.builder(m, false).cast(v, to)
+        }
+    }
+
+    /// Widens the narrower of two integers to the wider one's type (sema's widening rule).
+    fn unify(&mut self, m: &mut Module, l: ValueId, r: ValueId) -> (ValueId, ValueId) {
+        let (lt, rt) = (m.values[l].ty, m.values[r].ty);
+        match (m.types.as_int(lt), m.types.as_int(rt)) {
+            (Some(a), Some(b)) if a != b => {
+                if a.bits() >= b.bits() {
+                    (l, self.convert(m, r, lt))
+                } else {
+                    (self.convert(m, l, rt), r)
+                }
+            }
+            _ => (l, r),
+        }
+    }
+}
+
+/// The vector type a constructor name denotes (`f32x3`, `u16x3`).
+fn vector_type(m: &mut Module, name: &str) -> Option<TypeId> {
+    let pos = name.rfind('x')?;
+    let lanes: u32 = name[pos + 1..].parse().ok()?;
+    let elem = super::prim(&name[..pos])?;
+    let e = m.ty(elem);
+    Some(m.types.vector(e, lanes))
+}
+
+pub(super) fn const_int(e: &Expr) -> Option<i128> {
+    match e.kind {
+        ExprKind::Int(n) => Some(n as i128),
+        _ => None,
+    }
+}
+
+fn resolve_error(spec: &LayoutSpec, e: &ResolveError) -> Diagnostic {
+    let msg = match e {
+        ResolveError::UnknownVariant(v) => {
+            format!("layout `{}` has no variant `{v}`", spec.model.name.name)
+        }
+        ResolveError::Unrealized(v) => format!(
+            "no split arm of layout `{}` realizes `{v}`",
+            spec.model.name.name
+        ),
+        other => format!("no unique physical path: {other:?}"),
+    };
+    Diagnostic::error("E0381", msg).with_primary(spec.model.span, "in this layout")
+}
