@@ -29,6 +29,11 @@ pub trait Backend: Sync {
     fn stack_limit(&self) -> Option<usize> {
         None
     }
+    /// The largest scene worth giving this backend in tests (a slow one packs every tree
+    /// again in an interpreter); `None` for any.
+    fn max_triangles(&self) -> Option<usize> {
+        None
+    }
 }
 
 /// The backends the harness knows.

@@ -11,8 +11,12 @@
 //! - [`contract`]: the host side of the runtime contract (`@L.sizes`, aligned buffers,
 //!   `@L.build`, batch entries over blocks of 64, statuses with the failing ray's index) for
 //!   code specialized to a layout.
+//! - [`mem_interp`]: closest hit specialized to each library layout (`tree`+`mem` level) and
+//!   run by the interpreter over its byte memory through that contract: the layout rows of
+//!   the differential table until the JIT lands.
 
 pub mod backend;
 pub mod cases;
 pub mod contract;
+pub mod mem_interp;
 pub mod oracle;

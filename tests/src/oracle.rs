@@ -156,31 +156,47 @@ impl ClosestHit {
         rays: &[Ray],
         threads: usize,
     ) -> Result<Vec<Hit>, String> {
-        let threads = threads.max(1);
-        let stack = (8 << 20) + tree_depth(tree) * STACK_PER_LEVEL;
-        let chunk = rays.len().div_ceil(threads).max(1);
-        std::thread::scope(|s| {
-            let handles: Vec<_> = rays
-                .chunks(chunk)
-                .enumerate()
-                .map(|(k, part)| {
-                    std::thread::Builder::new()
-                        .name(format!("scion-interp-{k}"))
-                        .stack_size(stack)
-                        .spawn_scoped(s, move || self.trace_from(tree, part, k * chunk))
-                        .map_err(|e| format!("cannot start an interpreter thread: {e}"))
-                })
-                .collect();
-            let mut hits = Vec::with_capacity(rays.len());
-            for h in handles {
-                let part = h?
-                    .join()
-                    .map_err(|_| "an interpreter thread panicked".to_string())??;
-                hits.extend(part);
-            }
-            Ok(hits)
+        in_threads(tree, rays, threads, |part, first| {
+            self.trace_from(tree, part, first)
         })
     }
+}
+
+/// Runs `f(chunk, first index)` on contiguous chunks of `rays` on `threads` threads (at least
+/// one), each with a native stack sized for interpreting a recursion as deep as `tree`, and
+/// concatenates the hits; the first error (in ray order) wins.
+pub fn in_threads(
+    tree: &LogicalTree,
+    rays: &[Ray],
+    threads: usize,
+    f: impl Fn(&[Ray], usize) -> Result<Vec<Hit>, String> + Sync,
+) -> Result<Vec<Hit>, String> {
+    let threads = threads.max(1);
+    // Twice the depth: packing at the mem level recurses through two functions per level.
+    let stack = (8 << 20) + 2 * tree_depth(tree) * STACK_PER_LEVEL;
+    let chunk = rays.len().div_ceil(threads).max(1);
+    let f = &f;
+    std::thread::scope(|s| {
+        let handles: Vec<_> = rays
+            .chunks(chunk)
+            .enumerate()
+            .map(|(k, part)| {
+                std::thread::Builder::new()
+                    .name(format!("scion-interp-{k}"))
+                    .stack_size(stack)
+                    .spawn_scoped(s, move || f(part, k * chunk))
+                    .map_err(|e| format!("cannot start an interpreter thread: {e}"))
+            })
+            .collect();
+        let mut hits = Vec::with_capacity(rays.len());
+        for h in handles {
+            let part = h?
+                .join()
+                .map_err(|_| "an interpreter thread panicked".to_string())??;
+            hits.extend(part);
+        }
+        Ok(hits)
+    })
 }
 
 /// Nodes on the longest root-to-leaf path (0 for the empty tree), without recursion.
