@@ -36,6 +36,10 @@ pub enum BackendArg {
     Interp,
     /// Every triangle against every ray, no tree.
     Brute,
+    /// Closest hit specialized to `--layout` (destructor and constructor specialization),
+    /// packed by its generated `@L.build` and run by the interpreter at the mem level (slow; a
+    /// check of specialization without the JIT).
+    MemInterp,
     /// Generated code for `--layout`, compiled by Cranelift.
     Jit,
 }

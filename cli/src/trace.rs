@@ -19,6 +19,7 @@ use scion_runtime::scene::{load_obj, Scene};
 use scion_runtime::timing::{measure_with, Timing, TimingPlan};
 use scion_tests::backend::{Backend, BackendKind};
 use scion_tests::contract::{LayoutCode, Packed};
+use scion_tests::mem_interp::{MemInterpBackend, LIBRARY_LAYOUTS};
 use std::time::{Duration, Instant};
 
 /// The layouts of library/layouts, by the name `--layout` takes.
@@ -35,13 +36,15 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     // Decide the backend before the (possibly long) load, so that a backend that cannot run
     // fails at once.
     let layout = args.layout.as_deref().unwrap_or("pbrt");
-    if args.layout.is_some() && args.backend != BackendArg::Jit {
+    let uses_layout = matches!(args.backend, BackendArg::Jit | BackendArg::MemInterp);
+    if args.layout.is_some() && !uses_layout {
         eprintln!("scion: note: --layout is used by --backend jit only; this backend traces the logical tree");
     }
     let engine = match args.backend {
         BackendArg::Reference => Engine::Free(instantiate(BackendKind::Reference, args)?),
         BackendArg::Brute => Engine::Free(instantiate(BackendKind::Brute, args)?),
         BackendArg::Interp => Engine::Free(instantiate(BackendKind::Interp(1), args)?),
+        BackendArg::MemInterp => Engine::Mem(Box::new(mem_backend(layout, args.threads)?)),
         BackendArg::Jit => Engine::Layout {
             code: jit_code(layout)?,
             driver: BatchDriver::new(args.threads).map_err(CliError::new)?,
@@ -92,6 +95,31 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
             })?;
             (hits, timing, None)
         }
+        Engine::Mem(b) => {
+            progress(&format!(
+                "packing the tree into layout `{layout}` in the interpreter"
+            ));
+            let (sizes, time) = b.program().pack_report(&tree).map_err(CliError::new)?;
+            let (hits, timing) = timed(args.runs, || {
+                b.trace(&scene.triangles, &tree, &rays)
+                    .map_err(|e| CliError::new(format!("{} failed: {e}", b.name())))
+            })?;
+            let buffers = sizes
+                .iter()
+                .enumerate()
+                .map(|(i, &n)| (format!("buffer {i}"), n as usize, None))
+                .collect();
+            let note = " (sizes + build, interpreted)";
+            (
+                hits,
+                timing,
+                Some(PackInfo {
+                    time,
+                    buffers,
+                    note,
+                }),
+            )
+        }
         Engine::Layout { code, driver } => {
             progress(&format!("packing the tree into layout `{}`", code.layout()));
             let packed = Packed::new(code.as_ref(), &tree).map_err(CliError::new)?;
@@ -103,7 +131,18 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
                     )
                 })
             })?;
-            (hits, timing, Some(packed))
+            let buffers = packed
+                .specs
+                .iter()
+                .zip(packed.buffers())
+                .map(|(spec, b)| (spec.name.clone(), b.len(), Some(spec.align)))
+                .collect();
+            let info = PackInfo {
+                time: packed.pack_time,
+                buffers,
+                note: "",
+            };
+            (hits, timing, Some(info))
         }
     };
 
@@ -118,15 +157,17 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         ),
         Some(p) => {
             let parts: Vec<String> = p
-                .specs
+                .buffers
                 .iter()
-                .zip(p.buffers())
-                .map(|(spec, b)| format!("{} {} B (align {})", spec.name, b.len(), spec.align))
+                .map(|(name, n, align)| match align {
+                    Some(a) => format!("{name} {n} B (align {a})"),
+                    None => format!("{name} {n} B"),
+                })
                 .collect();
             (
-                secs(p.pack_time),
+                format!("{}{}", secs(p.time), p.note),
                 format!("{layout}: {}", parts.join(", ")),
-                p.bytes(),
+                p.buffers.iter().map(|b| b.1).sum(),
             )
         }
     };
@@ -179,6 +220,7 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
 /// through the runtime contract.
 enum Engine {
     Free(Box<dyn Backend>),
+    Mem(Box<MemInterpBackend>),
     Layout {
         code: Box<dyn LayoutCode>,
         driver: BatchDriver,
@@ -189,9 +231,36 @@ impl Engine {
     fn name(&self) -> String {
         match self {
             Engine::Free(b) => b.name(),
+            Engine::Mem(b) => b.name(),
             Engine::Layout { code, .. } => format!("jit ({})", code.layout()),
         }
     }
+}
+
+/// What packing into a layout produced: its time and each buffer (name, bytes, alignment).
+struct PackInfo {
+    time: Duration,
+    buffers: Vec<(String, usize, Option<usize>)>,
+    note: &'static str,
+}
+
+/// Closest hit specialized to the library layout `layout` (a `--layout` name), interpreted
+/// at the mem level.
+fn mem_backend(layout: &str, threads: usize) -> Result<MemInterpBackend, CliError> {
+    let stem = layout.replace('-', "_");
+    let Some(&(stem, name, _)) = LIBRARY_LAYOUTS.iter().find(|l| l.0 == stem) else {
+        let names: Vec<&str> = LAYOUTS.iter().map(|(n, _)| *n).collect();
+        return Err(CliError::new(format!(
+            "unknown layout `{layout}` for --backend mem-interp"
+        ))
+        .note(format!("library layouts: {}", names.join(", "))));
+    };
+    let threads = match threads {
+        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        t => t,
+    };
+    MemInterpBackend::new(stem, name, threads)
+        .map_err(|e| CliError::new(format!("cannot specialize closest hit to `{layout}`: {e}")))
 }
 
 fn instantiate(kind: BackendKind, args: &TraceArgs) -> Result<Box<dyn Backend>, CliError> {

@@ -38,11 +38,11 @@ fn write(dir: &Path, name: &str, body: &str) -> String {
 }
 
 #[test]
-fn traces_and_writes_the_same_hits_with_every_layout_free_backend() {
+fn traces_and_writes_the_same_hits_with_every_interpreted_and_reference_backend() {
     let dir = scratch("happy");
     let scene = write(&dir, "cube.obj", CUBE);
     let mut files = Vec::new();
-    for backend in ["reference", "interp", "brute"] {
+    for backend in ["reference", "interp", "brute", "mem-interp"] {
         let out = dir.join(format!("{backend}.hits")).display().to_string();
         let o = scion(&[
             "trace",
@@ -77,6 +77,10 @@ fn traces_and_writes_the_same_hits_with_every_layout_free_backend() {
     assert_eq!(files[0].len(), 800);
     assert_eq!(files[0], files[1], "interp differs from reference");
     assert_eq!(files[0], files[2], "brute force differs from reference");
+    assert_eq!(
+        files[0], files[3],
+        "mem-interp (pbrt) differs from reference"
+    );
 }
 
 #[test]

@@ -23,6 +23,7 @@ use scion_ir::types::IntTy;
 use scion_ir::Module;
 use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Hit, Ray, Triangle};
+use std::time::{Duration, Instant};
 
 /// The library's layouts: file stem, layout name, and whether the layout keeps the logical
 /// tree's boxes exactly (quantized layouts may legitimately differ from the reference).
@@ -112,34 +113,45 @@ impl MemClosestHit {
         })
     }
 
-    /// Packs `tree` in a fresh interpreter and traces `rays` (errors name ray `first + i`).
-    fn trace_from(
-        &self,
-        tree: &LogicalTree,
-        rays: &[Ray],
-        first: usize,
-    ) -> Result<Vec<Hit>, String> {
+    /// The byte size of each buffer for `tree` and the time `@L.sizes` plus `@L.build` take
+    /// in the interpreter (the pack time of this backend).
+    pub fn pack_report(&self, tree: &LogicalTree) -> Result<(Vec<u64>, Duration), String> {
         if tree.is_empty() {
-            return Ok(vec![Hit::MISS; rays.len()]);
+            return Ok((vec![0; self.buffers], Duration::ZERO));
         }
-        let l = &self.layout;
+        let mut it = self.interp(tree);
+        let p = self.pack(&mut it, tree)?;
+        Ok((p.sizes, p.time))
+    }
+
+    fn interp(&self, tree: &LogicalTree) -> Interp<'_> {
         let mut it = Interp::new(&self.module);
         // Packing recurses through `@L.node` and a build function per tree level.
         it.max_depth = 2 * tree_depth(tree) + 8;
         it.max_steps = u64::MAX;
-        let view = put_tree(&mut it, tree)?;
+        it
+    }
+
+    /// Puts the logical tree in `it`'s memory, sizes, allocates and builds the buffers, and
+    /// finds the root's reference.
+    fn pack(&self, it: &mut Interp<'_>, tree: &LogicalTree) -> Result<Packing, String> {
+        let l = &self.layout;
+        let view = put_tree(it, tree)?;
+        let start = Instant::now();
         let ptr = |a: u64| Val::Int(i128::from(a), IntTy::U64);
-        let sizes = it.alloc_bytes(&vec![0u8; 8 * self.buffers.max(1)], 8);
-        it.call(&format!("{l}.sizes"), vec![ptr(view), ptr(sizes)])
+        let sizes_at = it.alloc_bytes(&vec![0u8; 8 * self.buffers.max(1)], 8);
+        it.call(&format!("{l}.sizes"), vec![ptr(view), ptr(sizes_at)])
             .map_err(|e| format!("@{l}.sizes: {e}"))?;
         let mut table = Vec::new();
+        let mut sizes = Vec::new();
         for i in 0..self.buffers {
-            let at = sizes + 8 * i as u64;
+            let at = sizes_at + 8 * i as u64;
             let n = it
                 .bytes(at, 8)
                 .and_then(|b| b.try_into().ok())
                 .map(u64::from_le_bytes)
                 .ok_or("sizes table outside memory")?;
+            sizes.push(n);
             let n = usize::try_from(n).map_err(|_| format!("buffer {i}: {n} bytes"))?;
             table.extend(it.alloc_bytes(&vec![0u8; n], 64).to_le_bytes());
         }
@@ -151,12 +163,9 @@ impl MemClosestHit {
             Some(Val::Int(0, _)) => {}
             other => return Err(format!("@{l}.build returned status {other:?}")),
         }
+        let time = start.elapsed();
         let cell = |it: &mut Interp<'_>| it.alloc(Val::Int(0, IntTy::U32));
-        let (c, k, s) = (
-            cell(&mut it),
-            cell(&mut it),
-            it.alloc(Val::Int(0, IntTy::I32)),
-        );
+        let (c, k, s) = (cell(it), cell(it), it.alloc(Val::Int(0, IntTy::I32)));
         let root = it
             .call(
                 &format!("{l}.node"),
@@ -173,6 +182,27 @@ impl MemClosestHit {
             .into_iter()
             .next()
             .ok_or("@node returned nothing")?;
+        Ok(Packing {
+            b,
+            root,
+            sizes,
+            time,
+        })
+    }
+
+    /// Packs `tree` in a fresh interpreter and traces `rays` (errors name ray `first + i`).
+    fn trace_from(
+        &self,
+        tree: &LogicalTree,
+        rays: &[Ray],
+        first: usize,
+    ) -> Result<Vec<Hit>, String> {
+        if tree.is_empty() {
+            return Ok(vec![Hit::MISS; rays.len()]);
+        }
+        let mut it = self.interp(tree);
+        let Packing { b, root, .. } = self.pack(&mut it, tree)?;
+        let ptr = |a: u64| Val::Int(i128::from(a), IntTy::U64);
         let mut hits = Vec::with_capacity(rays.len());
         for (j, ray) in rays.iter().enumerate() {
             let i = first + j;
@@ -195,6 +225,18 @@ impl MemClosestHit {
         }
         Ok(hits)
     }
+}
+
+/// A tree packed in an interpreter's memory.
+struct Packing {
+    /// The buffer table `%B`.
+    b: u64,
+    /// The root's reference.
+    root: Val,
+    /// Each buffer's byte size.
+    sizes: Vec<u64>,
+    /// Time of `@L.sizes`, the allocations and `@L.build`.
+    time: Duration,
 }
 
 /// The logical tree's C-ABI bytes in `it`'s memory; returns the `LogicalTreeView` address.
@@ -246,6 +288,13 @@ impl MemInterpBackend {
             stem: stem.to_string(),
             threads: threads.max(1),
         })
+    }
+}
+
+impl MemInterpBackend {
+    /// The compiled program.
+    pub fn program(&self) -> &MemClosestHit {
+        &self.program
     }
 }
 

@@ -45,8 +45,8 @@ fn backends() -> Vec<Box<dyn Backend>> {
     ));
     // Closest hit specialized to each exact library layout, interpreted at the mem level.
     for &(stem, name, exact) in LIBRARY_LAYOUTS {
-        // Debug builds interpret slowly: the two reference layouts only.
-        if exact && (release() || stem == "pbrt" || stem == "ptr") {
+        // Debug builds interpret slowly: pbrt only.
+        if exact && (release() || stem == "pbrt") {
             let b = MemInterpBackend::new(stem, name, 2).unwrap_or_else(|e| panic!("{stem}: {e}"));
             all.push(Box::new(b));
         }
