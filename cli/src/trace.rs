@@ -81,14 +81,17 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
         t => t,
     };
-    progress(&format!(
-        "tracing {} rays with {} on {threads} thread{}",
-        rays.len(),
-        engine.name(),
-        if threads == 1 { "" } else { "s" }
-    ));
+    let tracing = || {
+        progress(&format!(
+            "tracing {} rays with {} on {threads} thread{}",
+            rays.len(),
+            engine.name(),
+            if threads == 1 { "" } else { "s" }
+        ))
+    };
     let (hits, timing, packed) = match &engine {
         Engine::Free(b) => {
+            tracing();
             let (hits, timing) = timed(args.runs, || {
                 b.trace(&scene.triangles, &tree, &rays)
                     .map_err(|e| CliError::new(format!("{} failed: {e}", b.name())))
@@ -100,6 +103,7 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
                 "packing the tree into layout `{layout}` in the interpreter"
             ));
             let (sizes, time) = b.program().pack_report(&tree).map_err(CliError::new)?;
+            tracing();
             let (hits, timing) = timed(args.runs, || {
                 b.trace(&scene.triangles, &tree, &rays)
                     .map_err(|e| CliError::new(format!("{} failed: {e}", b.name())))
@@ -123,6 +127,7 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         Engine::Layout { code, driver } => {
             progress(&format!("packing the tree into layout `{}`", code.layout()));
             let packed = Packed::new(code.as_ref(), &tree).map_err(CliError::new)?;
+            tracing();
             let (hits, timing) = timed(args.runs, || {
                 packed.trace(code.as_ref(), &rays, driver).map_err(|f| {
                     CliError::new(format!("layout `{}`: {f}", code.layout())).note(
