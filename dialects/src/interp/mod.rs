@@ -9,6 +9,12 @@
 //! [`intrinsics`]. Mutable state lives in a heap of cells addressed by [`Val::Ref`]. Calls to
 //! declarations go to host functions registered with [`Interp::define_extern`].
 //!
+//! An ADT value can also be *lazy*: [`Val::Extern`] is a host handle that the interpreter
+//! destructures on demand (`match`, `field`, `is`) through the provider installed with
+//! [`Interp::set_adt_provider`], so a large host structure (a logical BVH of millions of
+//! nodes) is never materialized as [`Val::Adt`] values; only the nodes a run visits are asked
+//! for. Fields of a provided value may themselves be handles.
+//!
 //! Failures are values, never panics: division by zero, an index out of bounds, `unwrap` of
 //! `none`, a call deeper than [`Interp::max_depth`], more than [`Interp::max_steps`] ops, or IR
 //! the interpreter cannot run (which the verifier would have rejected).
@@ -52,6 +58,9 @@ pub enum Val {
     Adt(Rc<AdtVal>),
     /// A reference to a heap cell of the interpreter.
     Ref(usize),
+    /// A lazy ADT value: a host handle resolved by the ADT provider
+    /// ([`Interp::set_adt_provider`]) when the program looks inside it.
+    Extern(u64),
 }
 
 /// The payload of an ADT value.
@@ -102,6 +111,7 @@ impl Val {
                 Val::Option(_) => 8,
                 Val::Adt(_) => 9,
                 Val::Ref(_) => 10,
+                Val::Extern(_) => 11,
             }
         }
         fn seq(a: &[Val], b: &[Val]) -> Ordering {
@@ -132,6 +142,7 @@ impl Val {
                     .then_with(|| seq(&a.fields, &b.fields))
             }
             (Val::Ref(a), Val::Ref(b)) => a.cmp(b),
+            (Val::Extern(a), Val::Extern(b)) => a.cmp(b),
             _ => rank(self).cmp(&rank(other)),
         }
     }
@@ -170,6 +181,7 @@ impl fmt::Display for Val {
                 list(f, &format!("{name}("), &a.fields, ")")
             }
             Val::Ref(i) => write!(f, "ref#{i}"),
+            Val::Extern(h) => write!(f, "extern#{h}"),
         }
     }
 }
@@ -192,6 +204,11 @@ impl fmt::Display for InterpError {
 /// A host function standing for a declared function.
 pub type ExternFn = Box<dyn FnMut(&[Val]) -> Result<Vec<Val>, String>>;
 
+/// The host side of lazy ADT values: given the handle of a [`Val::Extern`], the value it
+/// stands for (type name, variant position, fields; fields may be handles again). Called each
+/// time the program looks inside a handle, so a provider over a big structure should cache.
+pub type AdtProvider<'p> = Box<dyn FnMut(u64) -> Result<Rc<AdtVal>, String> + 'p>;
+
 /// An interpreter over one module.
 pub struct Interp<'m> {
     m: &'m Module,
@@ -199,6 +216,7 @@ pub struct Interp<'m> {
     /// The byte memory of `mem` ops (see [`mem`]).
     memory: Vec<u8>,
     externs: FxHashMap<String, ExternFn>,
+    provider: Option<AdtProvider<'m>>,
     steps: u64,
     depth: usize,
     /// The most ops one top-level [`Interp::call`] may execute.
@@ -227,6 +245,7 @@ impl<'m> Interp<'m> {
             heap: Vec::new(),
             memory: Vec::new(),
             externs: FxHashMap::default(),
+            provider: None,
             steps: 0,
             depth: 0,
             max_steps: 10_000_000,
@@ -237,6 +256,24 @@ impl<'m> Interp<'m> {
     /// Lets calls to the declaration `name` run `f`.
     pub fn define_extern(&mut self, name: &str, f: ExternFn) {
         self.externs.insert(name.to_string(), f);
+    }
+
+    /// Installs the provider that resolves [`Val::Extern`] handles (replacing any earlier one).
+    pub fn set_adt_provider(&mut self, p: AdtProvider<'m>) {
+        self.provider = Some(p);
+    }
+
+    /// The ADT value `v` is: itself for [`Val::Adt`], the provider's answer for
+    /// [`Val::Extern`], `None` for anything else.
+    pub fn resolve_adt(&mut self, v: &Val) -> Result<Option<Rc<AdtVal>>, String> {
+        match v {
+            Val::Adt(a) => Ok(Some(a.clone())),
+            Val::Extern(h) => match &mut self.provider {
+                Some(p) => p(*h).map(Some),
+                None => Err(format!("lazy value extern#{h} without an ADT provider")),
+            },
+            _ => Ok(None),
+        }
     }
 
     /// A new heap cell holding `v`; returns the reference (for `mut` arguments).

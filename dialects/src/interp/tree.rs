@@ -25,6 +25,20 @@ impl Interp<'_> {
             .ok_or_else(|| err(Some(op), "op has no result"))
     }
 
+    /// The single operand of `match`, `field` or `is` as an ADT value, resolving a lazy
+    /// [`Val::Extern`] through the provider.
+    fn adt_operand(&mut self, args: &[Val], op: OpId, kind: Op) -> Result<Rc<AdtVal>, InterpError> {
+        let bad = |what: &str| err(Some(op), format!("`tree.{}`: {what}", kind.mnemonic()));
+        let [v] = args else {
+            return Err(bad("one operand expected"));
+        };
+        match self.resolve_adt(v) {
+            Ok(Some(a)) => Ok(a),
+            Ok(None) => Err(bad("operand is not an ADT value")),
+            Err(e) => Err(bad(&e)),
+        }
+    }
+
     /// Executes one op: binds its results in `env`, or returns how the region is left.
     ///
     /// Ops that run regions or calls go through [`Interp::exec_control`], whose frame is small,
@@ -95,9 +109,7 @@ impl Interp<'_> {
         let bad = |what: &str| err(Some(op), format!("`tree.{}`: {what}", kind.mnemonic()));
         Ok(Step::Values(match kind {
             Op::Match => {
-                let [Val::Adt(a)] = &args[..] else {
-                    return Err(bad("operand is not an ADT value"));
-                };
+                let a = self.adt_operand(&args, op, kind)?;
                 let adt = m.adt(&a.ty).ok_or_else(|| bad("undeclared ADT"))?;
                 let arms = o
                     .attr("arms")
@@ -333,14 +345,12 @@ impl Interp<'_> {
             }
             Op::Field => {
                 let i = index_attr(o.int_attr("index"));
-                match &args[..] {
-                    [Val::Adt(a)] => vec![a
-                        .fields
-                        .get(i)
-                        .cloned()
-                        .ok_or_else(|| bad("field out of range"))?],
-                    _ => return Err(bad("operand is not an ADT value")),
-                }
+                let a = self.adt_operand(&args, op, kind)?;
+                vec![a
+                    .fields
+                    .get(i)
+                    .cloned()
+                    .ok_or_else(|| bad("field out of range"))?]
             }
             Op::Ctor => {
                 let ty = self.result_type(op)?;
@@ -358,9 +368,7 @@ impl Interp<'_> {
                 }))]
             }
             Op::Is => {
-                let [Val::Adt(a)] = &args[..] else {
-                    return Err(bad("operand is not an ADT value"));
-                };
+                let a = self.adt_operand(&args, op, kind)?;
                 let adt = m.adt(&a.ty).ok_or_else(|| bad("undeclared ADT"))?;
                 let want = o
                     .str_attr("variant")

@@ -1,0 +1,157 @@
+//! `scion`: the command that runs Scion's traversals on scenes (issue 3 item 7, paper §9).
+//!
+//! `scion trace` loads an OBJ scene, builds its logical tree (binned SAH or median), generates
+//! or reads rays, traces them with a backend (the runtime's Rust reference, the `tree`
+//! interpreter over the logical tree, brute force, or the JIT of a layout), times the trace by
+//! the paper's method, prints sizes and throughput on standard output and writes the hits file
+//! (docs/formats.md). Progress goes to standard error. User errors (a missing scene, a NaN in an
+//! OBJ file, a bad flag) are `error:` lines and exit status 1; clap's usage errors exit 2.
+
+mod trace;
+
+use clap::{Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Scion: layout-specialized tree traversals.
+#[derive(Parser, Debug)]
+#[command(name = "scion", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Trace closest-hit rays through a scene and report sizes, times and hits.
+    Trace(TraceArgs),
+}
+
+/// The backends of `scion trace`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BackendArg {
+    /// The runtime's Rust traversal of the logical tree (the prelude's arithmetic).
+    Reference,
+    /// The `tree` interpreter running library/algorithms/closest_hit.scion (slow; an oracle).
+    Interp,
+    /// Every triangle against every ray, no tree.
+    Brute,
+    /// Closest hit specialized to `--layout` (destructor and constructor specialization),
+    /// packed by its generated `@L.build` and run by the interpreter at the mem level (slow; a
+    /// check of specialization without the JIT).
+    MemInterp,
+    /// Generated code for `--layout`, compiled by Cranelift.
+    Jit,
+}
+
+/// Ray generators.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum RaysArg {
+    /// A pinhole camera looking at the scene, one jittered ray per pixel.
+    Primary,
+    /// Origins uniform in the scene's box, directions uniform on the sphere.
+    Secondary,
+    /// Origins in the box, axis-parallel directions with signed-zero lanes.
+    Axis,
+}
+
+/// Tree builders.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BuilderArg {
+    /// Binned SAH (32 bins), leaves of up to `--leaf-size` triangles.
+    Sah,
+    /// Median split of the longest axis, one triangle per leaf.
+    Median,
+}
+
+/// Arguments of `scion trace`.
+#[derive(clap::Args, Debug)]
+pub struct TraceArgs {
+    /// The scene: an OBJ file.
+    #[arg(long, value_name = "PATH.obj")]
+    pub scene: PathBuf,
+    /// The layout for `--backend jit` (a name from library/layouts, e.g. pbrt, ptr,
+    /// pbrt-align16, pbrt-soaos, pbrt-q16, or a .scion file; default pbrt). Layout-free
+    /// backends trace the logical tree and ignore it.
+    #[arg(long)]
+    pub layout: Option<String>,
+    /// Which rays to generate (ignored with --rays-file).
+    #[arg(long, value_enum, default_value = "primary")]
+    pub rays: RaysArg,
+    /// How many rays to generate.
+    #[arg(long, default_value_t = 1 << 16, value_parser = clap::value_parser!(u64).range(1..=1 << 32))]
+    pub n: u64,
+    /// Seed of the ray generator.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Read the rays from this file (docs/formats.md) instead of generating them.
+    #[arg(long, value_name = "RAYS.bin", conflicts_with_all = ["rays", "n", "seed"])]
+    pub rays_file: Option<PathBuf>,
+    /// How to trace.
+    #[arg(long, value_enum, default_value = "reference")]
+    pub backend: BackendArg,
+    /// Threads (0 = one per core).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Write the hits here (docs/formats.md).
+    #[arg(short = 'o', long = "output", value_name = "HITS.bin")]
+    pub output: Option<PathBuf>,
+    /// Tree builder.
+    #[arg(long, value_enum, default_value = "sah")]
+    pub builder: BuilderArg,
+    /// Largest leaf of the SAH builder (1..=15).
+    #[arg(long, default_value_t = 15, value_parser = clap::value_parser!(u32).range(1..=15))]
+    pub leaf_size: u32,
+    /// Timed runs: 9 is the paper's method (1 warm-up, 9 runs, mean of the middle 5); 1 is a
+    /// single untimed-warm-up run for quick use; other counts drop (runs - 1) / 4 at each end.
+    #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub runs: u32,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Trace(args) => trace::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {}", e.message);
+            for note in &e.notes {
+                eprintln!("  note: {note}");
+            }
+            ExitCode::from(1)
+        }
+    }
+}
+
+/// A user-facing failure: one message and optional notes.
+#[derive(Debug)]
+pub struct CliError {
+    /// What went wrong.
+    pub message: String,
+    /// What to do about it.
+    pub notes: Vec<String>,
+}
+
+impl CliError {
+    /// An error without notes.
+    pub fn new(message: impl Into<String>) -> CliError {
+        CliError {
+            message: message.into(),
+            notes: Vec::new(),
+        }
+    }
+
+    /// Adds a note.
+    pub fn note(mut self, n: impl Into<String>) -> CliError {
+        self.notes.push(n.into());
+        self
+    }
+}
+
+impl From<String> for CliError {
+    fn from(message: String) -> CliError {
+        CliError::new(message)
+    }
+}

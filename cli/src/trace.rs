@@ -1,0 +1,406 @@
+//! `scion trace`: scene -> logical tree -> rays -> hits, with the numbers the paper reports
+//! (§9: build and pack time, trace time by the trimmed mean of 9 runs, Mrays/s, bytes of the
+//! structure and per node).
+//!
+//! The layout-free backends (reference, interp, brute) trace the logical tree itself: their
+//! structure is the tree's node array plus its reordered triangles, and there is nothing to
+//! pack. `--backend jit` follows the runtime contract of docs/design/specialization.md §3
+//! through `scion_tests::contract` (`@L.sizes`, one aligned allocation per buffer, `@L.build`
+//! timed as the pack time, the batch entry over blocks of 64, a nonzero status reported with
+//! the failing ray); the specializer and the JIT are not in this build yet, so [`jit_code`]
+//! answers with an error saying so.
+
+use crate::{BackendArg, BuilderArg, CliError, RaysArg, TraceArgs};
+use scion_runtime::batch::BatchDriver;
+use scion_runtime::bvh::{build_median, build_sah_binned, LogicalNode, LogicalTree, SahOptions};
+use scion_runtime::geom::{Hit, Ray, Triangle};
+use scion_runtime::query::{axis_rays, primary_rays, read_rays, secondary_rays, write_hits};
+use scion_runtime::scene::{load_obj, Scene};
+use scion_runtime::timing::{measure_with, Timing, TimingPlan};
+use scion_tests::backend::{Backend, BackendKind};
+use scion_tests::contract::{LayoutCode, Packed};
+use scion_tests::mem_interp::{MemInterpBackend, LIBRARY_LAYOUTS};
+use std::time::{Duration, Instant};
+
+/// The layouts of library/layouts, by the name `--layout` takes.
+pub const LAYOUTS: &[(&str, &str)] = &[
+    ("pbrt", "library/layouts/pbrt.scion"),
+    ("ptr", "library/layouts/ptr.scion"),
+    ("pbrt-align16", "library/layouts/pbrt_align16.scion"),
+    ("pbrt-soaos", "library/layouts/pbrt_soaos.scion"),
+    ("pbrt-q16", "library/layouts/pbrt_q16.scion"),
+];
+
+/// Runs `scion trace`.
+pub fn run(args: &TraceArgs) -> Result<(), CliError> {
+    // Decide the backend before the (possibly long) load, so that a backend that cannot run
+    // fails at once.
+    let layout = args.layout.as_deref().unwrap_or("pbrt");
+    let uses_layout = matches!(args.backend, BackendArg::Jit | BackendArg::MemInterp);
+    if args.layout.is_some() && !uses_layout {
+        eprintln!("scion: note: --layout is used by --backend jit only; this backend traces the logical tree");
+    }
+    let engine = match args.backend {
+        BackendArg::Reference => Engine::Free(instantiate(BackendKind::Reference, args)?),
+        BackendArg::Brute => Engine::Free(instantiate(BackendKind::Brute, args)?),
+        BackendArg::Interp => Engine::Free(instantiate(BackendKind::Interp(1), args)?),
+        BackendArg::MemInterp => Engine::Mem(Box::new(mem_backend(layout, args.threads)?)),
+        BackendArg::Jit => Engine::Layout {
+            code: jit_code(layout)?,
+            driver: BatchDriver::new(args.threads).map_err(CliError::new)?,
+        },
+    };
+
+    progress(&format!("loading {}", args.scene.display()));
+    let t = Instant::now();
+    let scene = load_obj(&args.scene).map_err(|e| {
+        let err = CliError::new(format!("cannot load the scene: {e}"));
+        match e.line() {
+            Some(_) => err.note("scenes are Wavefront OBJ files (docs/formats.md)"),
+            None => err,
+        }
+    })?;
+    let load_time = t.elapsed();
+
+    progress(&format!(
+        "building the logical tree of {} triangles",
+        scene.len()
+    ));
+    let t = Instant::now();
+    let tree = build(&scene, args);
+    let build_time = t.elapsed();
+    let cap = match args.builder {
+        BuilderArg::Sah => args.leaf_size as usize,
+        BuilderArg::Median => 1,
+    };
+    tree.validate_with_cap(cap)
+        .map_err(|e| CliError::new(format!("the builder made an invalid tree: {e}")))?;
+
+    let rays = rays(&scene, args)?;
+    let threads = match args.threads {
+        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        t => t,
+    };
+    let tracing = || {
+        progress(&format!(
+            "tracing {} rays with {} on {threads} thread{}",
+            rays.len(),
+            engine.name(),
+            if threads == 1 { "" } else { "s" }
+        ))
+    };
+    let (hits, timing, packed) = match &engine {
+        Engine::Free(b) => {
+            tracing();
+            let (hits, timing) = timed(args.runs, || {
+                b.trace(&scene.triangles, &tree, &rays)
+                    .map_err(|e| CliError::new(format!("{} failed: {e}", b.name())))
+            })?;
+            (hits, timing, None)
+        }
+        Engine::Mem(b) => {
+            progress(&format!(
+                "packing the tree into layout `{layout}` in the interpreter"
+            ));
+            let (sizes, time) = b.program().pack_report(&tree).map_err(CliError::new)?;
+            tracing();
+            let (hits, timing) = timed(args.runs, || {
+                b.trace(&scene.triangles, &tree, &rays)
+                    .map_err(|e| CliError::new(format!("{} failed: {e}", b.name())))
+            })?;
+            let buffers = sizes
+                .iter()
+                .enumerate()
+                .map(|(i, &n)| (format!("buffer {i}"), n as usize, None))
+                .collect();
+            let note = " (sizes + build, interpreted)";
+            (
+                hits,
+                timing,
+                Some(PackInfo {
+                    time,
+                    buffers,
+                    note,
+                }),
+            )
+        }
+        Engine::Layout { code, driver } => {
+            progress(&format!("packing the tree into layout `{}`", code.layout()));
+            let packed = Packed::new(code.as_ref(), &tree).map_err(CliError::new)?;
+            tracing();
+            let (hits, timing) = timed(args.runs, || {
+                packed.trace(code.as_ref(), &rays, driver).map_err(|f| {
+                    CliError::new(format!("layout `{}`: {f}", code.layout())).note(
+                        "trees deeper than the generated traversal's stack cannot be traced \
+                         with this layout; try --builder sah with a larger --leaf-size",
+                    )
+                })
+            })?;
+            let buffers = packed
+                .specs
+                .iter()
+                .zip(packed.buffers())
+                .map(|(spec, b)| (spec.name.clone(), b.len(), Some(spec.align)))
+                .collect();
+            let info = PackInfo {
+                time: packed.pack_time,
+                buffers,
+                note: "",
+            };
+            (hits, timing, Some(info))
+        }
+    };
+
+    let stats = tree.stats();
+    let node_bytes = tree.nodes.len() * std::mem::size_of::<LogicalNode>();
+    let prim_bytes = tree.primitives.len() * std::mem::size_of::<Triangle>();
+    let (pack_line, layout_line, bytes) = match &packed {
+        None => (
+            "0 s (layout-free backend: it reads the logical tree)".to_string(),
+            format!("none (logical tree: {node_bytes} B of nodes + {prim_bytes} B of triangles)"),
+            node_bytes + prim_bytes,
+        ),
+        Some(p) => {
+            let parts: Vec<String> = p
+                .buffers
+                .iter()
+                .map(|(name, n, align)| match align {
+                    Some(a) => format!("{name} {n} B (align {a})"),
+                    None => format!("{name} {n} B"),
+                })
+                .collect();
+            (
+                format!("{}{}", secs(p.time), p.note),
+                format!("{layout}: {}", parts.join(", ")),
+                p.buffers.iter().map(|b| b.1).sum(),
+            )
+        }
+    };
+    let hit_count = hits.iter().filter(|h| h.is_hit()).count();
+    let builder = match args.builder {
+        BuilderArg::Sah => format!("binned SAH, leaves <= {}", args.leaf_size),
+        BuilderArg::Median => "median, one triangle per leaf".to_string(),
+    };
+    let source = match &args.rays_file {
+        Some(p) => format!("from {}", p.display()),
+        None => format!("{:?} (seed {})", args.rays, args.seed).to_lowercase(),
+    };
+    println!("scene        {}", args.scene.display());
+    println!("triangles    {}", scene.len());
+    println!(
+        "nodes        {} ({} interior, {} leaves, depth {}, SAH cost {:.2})",
+        stats.nodes, stats.interior, stats.leaves, stats.depth, stats.sah_cost
+    );
+    println!("builder      {builder}");
+    println!("load time    {}", secs(load_time));
+    println!("build time   {}", secs(build_time));
+    println!("pack time    {pack_line}");
+    println!("layout       {layout_line}");
+    println!(
+        "structure    {bytes} bytes, {:.1} bytes/node",
+        bytes as f64 / stats.nodes.max(1) as f64
+    );
+    println!("rays         {} {source}", rays.len());
+    println!("backend      {} on {threads} threads", engine.name());
+    println!(
+        "trace time   {} ({})",
+        secs(timing.mean),
+        plan_text(args.runs)
+    );
+    println!(
+        "throughput   {} Mrays/s ({:.1} ns/ray)",
+        significant(timing.queries_per_second(rays.len()) / 1e6),
+        timing.ns_per_query(rays.len())
+    );
+    println!("hits         {hit_count} of {} rays", rays.len());
+    if let Some(path) = &args.output {
+        write_hits(path, &hits)
+            .map_err(|e| CliError::new(format!("cannot write the hits: {e}")))?;
+        println!("output       {} ({} bytes)", path.display(), hits.len() * 8);
+    }
+    Ok(())
+}
+
+/// How `scion trace` traces: a layout-free backend, or code specialized to a layout driven
+/// through the runtime contract.
+enum Engine {
+    Free(Box<dyn Backend>),
+    Mem(Box<MemInterpBackend>),
+    Layout {
+        code: Box<dyn LayoutCode>,
+        driver: BatchDriver,
+    },
+}
+
+impl Engine {
+    fn name(&self) -> String {
+        match self {
+            Engine::Free(b) => b.name(),
+            Engine::Mem(b) => b.name(),
+            Engine::Layout { code, .. } => format!("jit ({})", code.layout()),
+        }
+    }
+}
+
+/// What packing into a layout produced: its time and each buffer (name, bytes, alignment).
+struct PackInfo {
+    time: Duration,
+    buffers: Vec<(String, usize, Option<usize>)>,
+    note: &'static str,
+}
+
+/// Closest hit specialized to the library layout `layout` (a `--layout` name), interpreted
+/// at the mem level.
+fn mem_backend(layout: &str, threads: usize) -> Result<MemInterpBackend, CliError> {
+    let stem = layout.replace('-', "_");
+    let Some(&(stem, name, _)) = LIBRARY_LAYOUTS.iter().find(|l| l.0 == stem) else {
+        let names: Vec<&str> = LAYOUTS.iter().map(|(n, _)| *n).collect();
+        return Err(CliError::new(format!(
+            "unknown layout `{layout}` for --backend mem-interp"
+        ))
+        .note(format!("library layouts: {}", names.join(", "))));
+    };
+    let threads = match threads {
+        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        t => t,
+    };
+    MemInterpBackend::new(stem, name, threads)
+        .map_err(|e| CliError::new(format!("cannot specialize closest hit to `{layout}`: {e}")))
+}
+
+fn instantiate(kind: BackendKind, args: &TraceArgs) -> Result<Box<dyn Backend>, CliError> {
+    kind.instantiate(args.threads).map_err(CliError::new)
+}
+
+/// The closest-hit code specialized to `layout` and compiled by the JIT. The layout name is
+/// checked first, so a typo is reported as such; layout specialization and the Cranelift JIT
+/// are not part of this build yet, which is an error (never a stand-in result).
+fn jit_code(layout: &str) -> Result<Box<dyn LayoutCode>, CliError> {
+    let known = LAYOUTS.iter().any(|(n, _)| *n == layout) || layout.ends_with(".scion");
+    if !known {
+        let names: Vec<&str> = LAYOUTS.iter().map(|(n, _)| *n).collect();
+        return Err(CliError::new(format!("unknown layout `{layout}`"))
+            .note(format!("known layouts: {}", names.join(", ")))
+            .note("or give the path of a .scion file that defines the layout"));
+    }
+    Err(CliError::new(format!(
+        "--backend jit is not available in this build (layout `{layout}`): layout \
+         specialization and the Cranelift JIT are not merged yet"
+    ))
+    .note(
+        "use --backend reference (the Rust reference) or --backend interp (the tree interpreter)",
+    ))
+}
+
+fn build(scene: &Scene, args: &TraceArgs) -> LogicalTree {
+    match args.builder {
+        BuilderArg::Sah => build_sah_binned(
+            &scene.triangles,
+            &SahOptions {
+                max_leaf: args.leaf_size as usize,
+                ..SahOptions::default()
+            },
+        ),
+        BuilderArg::Median => build_median(&scene.triangles),
+    }
+}
+
+fn rays(scene: &Scene, args: &TraceArgs) -> Result<Vec<Ray>, CliError> {
+    if let Some(path) = &args.rays_file {
+        progress(&format!("reading rays from {}", path.display()));
+        return read_rays(path).map_err(|e| CliError::new(format!("cannot read the rays: {e}")));
+    }
+    let b = scene.bounds();
+    if scene.is_empty() {
+        return Err(CliError::new(format!(
+            "{}: the scene has no triangles, so there is no box to aim generated rays at",
+            args.scene.display()
+        ))
+        .note("give rays with --rays-file"));
+    }
+    let n = usize::try_from(args.n).map_err(|_| CliError::new("--n: too many rays"))?;
+    Ok(match args.rays {
+        RaysArg::Primary => {
+            // The smallest image of about n pixels: w = ceil(sqrt n) columns, enough rows,
+            // then the first n pixels in raster order.
+            let w = (n as f64).sqrt().ceil().max(1.0) as usize;
+            let h = n.div_ceil(w).max(1);
+            let (w, h) = (to_u32(w, "--n")?, to_u32(h, "--n")?);
+            let mut r = primary_rays(b, w, h, args.seed);
+            r.truncate(n);
+            r
+        }
+        RaysArg::Secondary => secondary_rays(b, n, args.seed),
+        RaysArg::Axis => axis_rays(b, n, args.seed),
+    })
+}
+
+fn to_u32(v: usize, what: &str) -> Result<u32, CliError> {
+    u32::try_from(v).map_err(|_| CliError::new(format!("{what}: {v} is too large")))
+}
+
+/// Traces once for the hits, then times by the plan of `runs` (the first trace is the
+/// warm-up; with `runs == 1` it is also the one timed run).
+fn timed(
+    runs: u32,
+    mut trace: impl FnMut() -> Result<Vec<Hit>, CliError>,
+) -> Result<(Vec<Hit>, Timing), CliError> {
+    let t = Instant::now();
+    let hits = trace()?;
+    let first = t.elapsed();
+    if runs == 1 {
+        return Ok((
+            hits,
+            Timing {
+                raw: vec![first],
+                mean: first,
+            },
+        ));
+    }
+    let drop = ((runs - 1) / 4) as usize;
+    let plan = TimingPlan {
+        warmup: 0,
+        runs: runs as usize,
+        drop_low: drop,
+        drop_high: drop,
+    };
+    let mut failed = None;
+    let timing = measure_with(&plan, || {
+        if let Err(e) = trace() {
+            failed = Some(e);
+        }
+    });
+    match failed {
+        Some(e) => Err(e),
+        None => Ok((hits, timing)),
+    }
+}
+
+fn plan_text(runs: u32) -> String {
+    if runs == 1 {
+        return "1 run, no warm-up".into();
+    }
+    let drop = (runs - 1) / 4;
+    format!(
+        "mean of {} of {runs} runs after 1 warm-up, dropping the {drop} fastest and {drop} slowest",
+        runs - 2 * drop
+    )
+}
+
+/// `x` with four significant digits (throughputs span 0.001 to 1000 Mrays/s).
+fn significant(x: f64) -> String {
+    let digits = if x > 0.0 && x.is_finite() {
+        (3 - x.log10().floor() as i32).clamp(0, 9) as usize
+    } else {
+        3
+    };
+    format!("{x:.digits$}")
+}
+
+fn secs(d: Duration) -> String {
+    format!("{:.6} s", d.as_secs_f64())
+}
+
+fn progress(what: &str) {
+    eprintln!("scion: {what}...");
+}

@@ -1,0 +1,262 @@
+//! Integration tests of the `scion` command: the happy path on a small OBJ file (reference and
+//! interpreter write the same hits file; rays files are read), and the user errors (a missing
+//! scene, a NaN coordinate reported with file and line, bad flags, the JIT not available, an
+//! unknown layout, an empty scene) as clear messages with exit status 1 (2 for clap's usage
+//! errors), never a panic.
+
+use scion_runtime::geom::{Ray, Vec3};
+use scion_runtime::query::{read_hits, write_rays};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn scratch(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("scion-cli-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create scratch folder");
+    dir
+}
+
+fn scion(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_scion"))
+        .args(args)
+        .output()
+        .expect("run scion")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+/// A unit cube's six faces as 12 triangles.
+const CUBE: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n\
+f 1 2 3 4\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+
+fn write(dir: &Path, name: &str, body: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, body).unwrap();
+    p.display().to_string()
+}
+
+#[test]
+fn traces_and_writes_the_same_hits_with_every_interpreted_and_reference_backend() {
+    let dir = scratch("happy");
+    let scene = write(&dir, "cube.obj", CUBE);
+    let mut files = Vec::new();
+    for backend in ["reference", "interp", "brute", "mem-interp"] {
+        let out = dir.join(format!("{backend}.hits")).display().to_string();
+        let o = scion(&[
+            "trace",
+            "--scene",
+            &scene,
+            "--backend",
+            backend,
+            "--rays",
+            "secondary",
+            "--n",
+            "100",
+            "--runs",
+            "1",
+            "--threads",
+            "2",
+            "-o",
+            &out,
+        ]);
+        let stdout = text(&o.stdout);
+        assert!(o.status.success(), "{backend}: {}", text(&o.stderr));
+        assert!(stdout.contains("triangles    12"), "{stdout}");
+        assert!(stdout.contains("Mrays/s"), "{stdout}");
+        assert!(stdout.contains("bytes/node"), "{stdout}");
+        // Rays start inside the cube: every one hits a face.
+        assert!(stdout.contains("hits         100 of 100 rays"), "{stdout}");
+        assert!(
+            text(&o.stderr).contains("scion: loading"),
+            "progress goes to stderr"
+        );
+        files.push(std::fs::read(&out).unwrap());
+    }
+    assert_eq!(files[0].len(), 800);
+    assert_eq!(files[0], files[1], "interp differs from reference");
+    assert_eq!(files[0], files[2], "brute force differs from reference");
+    assert_eq!(
+        files[0], files[3],
+        "mem-interp (pbrt) differs from reference"
+    );
+}
+
+#[test]
+fn reads_rays_files_and_times_by_the_paper_method() {
+    let dir = scratch("raysfile");
+    let scene = write(&dir, "cube.obj", CUBE);
+    let rays_path = dir.join("in.rays");
+    let rays = [
+        Ray::new(Vec3::new(0.5, 0.5, -1.0), Vec3::new(0.0, 0.0, 1.0)),
+        Ray::new(Vec3::new(5.0, 5.0, 5.0), Vec3::new(0.0, 1.0, 0.0)),
+    ];
+    write_rays(&rays_path, &rays).unwrap();
+    let out = dir.join("out.hits");
+    let o = scion(&[
+        "trace",
+        "--scene",
+        &scene,
+        "--layout",
+        "ptr",
+        "--rays-file",
+        &rays_path.display().to_string(),
+        "--builder",
+        "median",
+        "-o",
+        &out.display().to_string(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let stdout = text(&o.stdout);
+    assert!(stdout.contains("mean of 5 of 9 runs"), "{stdout}");
+    assert!(stdout.contains("median"), "{stdout}");
+    assert!(stdout.contains("layout       none"), "{stdout}");
+    let e = text(&o.stderr);
+    assert!(e.contains("--layout is used by --backend jit only"), "{e}");
+    let hits = read_hits(&out).unwrap();
+    assert_eq!(hits.len(), 2);
+    assert_eq!(hits[0].t, 1.0);
+    assert!(!hits[1].is_hit());
+}
+
+#[test]
+fn a_missing_scene_is_an_error() {
+    let o = scion(&["trace", "--scene", "/nonexistent/scene.obj", "--runs", "1"]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = text(&o.stderr);
+    assert!(e.contains("error: cannot load the scene"), "{e}");
+    assert!(e.contains("/nonexistent/scene.obj"), "{e}");
+    assert!(!e.contains("panicked"), "{e}");
+}
+
+#[test]
+fn a_nan_coordinate_names_file_and_line() {
+    let dir = scratch("nan");
+    let scene = write(&dir, "nan.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n");
+    let o = scion(&["trace", "--scene", &scene, "--runs", "1"]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = text(&o.stderr);
+    assert!(e.contains(&format!("{scene}:3:")), "{e}");
+    assert!(o.stdout.is_empty(), "no results on error");
+}
+
+#[test]
+fn bad_flags_are_usage_errors() {
+    let dir = scratch("flags");
+    let scene = write(&dir, "cube.obj", CUBE);
+    for (args, want) in [
+        (vec!["trace", "--scene", &scene, "--backend", "gpu"], "gpu"),
+        (vec!["trace", "--scene", &scene, "--leaf-size", "16"], "16"),
+        (
+            vec!["trace", "--scene", &scene, "--rays", "tertiary"],
+            "tertiary",
+        ),
+        (vec!["trace", "--scene", &scene, "--n", "-3"], "-3"),
+        (vec!["trace", "--scene", &scene, "--runs", "0"], "0"),
+        (vec!["trace", "--scene", &scene, "--n", "0"], "0"),
+        (
+            vec![
+                "trace",
+                "--scene",
+                &scene,
+                "--rays-file",
+                "x.rays",
+                "--n",
+                "5",
+            ],
+            "cannot be used with",
+        ),
+        (vec!["trace"], "--scene"),
+        (vec!["render"], "render"),
+    ] {
+        let o = scion(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        let e = text(&o.stderr);
+        assert!(e.contains(want), "{args:?}: {e}");
+    }
+}
+
+#[test]
+fn the_jit_backend_says_it_is_not_available() {
+    let o = scion(&[
+        "trace",
+        "--scene",
+        "/nonexistent.obj",
+        "--backend",
+        "jit",
+        "--layout",
+        "ptr",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = text(&o.stderr);
+    assert!(e.contains("--backend jit is not available"), "{e}");
+    assert!(e.contains("`ptr`"), "{e}");
+
+    let o = scion(&[
+        "trace",
+        "--scene",
+        "x.obj",
+        "--backend",
+        "jit",
+        "--layout",
+        "btree",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = text(&o.stderr);
+    assert!(e.contains("unknown layout `btree`"), "{e}");
+    assert!(e.contains("pbrt-soaos"), "{e}");
+}
+
+#[test]
+fn empty_scenes_need_a_rays_file() {
+    let dir = scratch("empty");
+    let scene = write(&dir, "empty.obj", "# nothing\n");
+    let o = scion(&["trace", "--scene", &scene, "--runs", "1"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(text(&o.stderr).contains("no triangles"));
+
+    let rays_path = dir.join("in.rays");
+    write_rays(
+        &rays_path,
+        &[Ray::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0))],
+    )
+    .unwrap();
+    for backend in ["reference", "interp"] {
+        let o = scion(&[
+            "trace",
+            "--scene",
+            &scene,
+            "--backend",
+            backend,
+            "--rays-file",
+            &rays_path.display().to_string(),
+            "--runs",
+            "1",
+        ]);
+        assert!(o.status.success(), "{backend}: {}", text(&o.stderr));
+        assert!(text(&o.stdout).contains("hits         0 of 1 rays"));
+    }
+}
+
+#[test]
+fn a_bad_rays_file_is_an_error() {
+    let dir = scratch("badrays");
+    let scene = write(&dir, "cube.obj", CUBE);
+    let rays = write(&dir, "bad.rays", "12345");
+    let o = scion(&[
+        "trace",
+        "--scene",
+        &scene,
+        "--rays-file",
+        &rays,
+        "--runs",
+        "1",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = text(&o.stderr);
+    assert!(
+        e.contains("cannot read the rays") && e.contains("bad.rays"),
+        "{e}"
+    );
+}

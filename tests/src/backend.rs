@@ -1,0 +1,115 @@
+//! Backends: ways to trace closest-hit rays through a scene's logical tree. Input: the scene's
+//! triangles, its logical tree, rays; output: one [`Hit`] per ray in the hits-file convention
+//! (a miss is [`Hit::MISS`]).
+//!
+//! The differential tests and the `scion` command pick backends by [`BackendKind`]; adding a
+//! backend (the JIT of one layout) is one more variant and one more arm of
+//! [`BackendKind::instantiate`].
+
+use crate::oracle::ClosestHit;
+use scion_runtime::batch::BatchDriver;
+use scion_runtime::bvh::LogicalTree;
+use scion_runtime::geom::{Hit, Ray, Triangle};
+use scion_runtime::reference::{closest_hits_brute, closest_hits_tree};
+
+/// A way to trace rays.
+pub trait Backend: Sync {
+    /// A short name for reports (`reference`, `interp-O1`, ...).
+    fn name(&self) -> String;
+    /// Closest hits of `rays` in `tree` (built over `triangles`).
+    fn trace(
+        &self,
+        triangles: &[Triangle],
+        tree: &LogicalTree,
+        rays: &[Ray],
+    ) -> Result<Vec<Hit>, String>;
+    /// The deepest tree the backend traverses without a stack overflow, when bounded
+    /// (generated code keeps a fixed-size stack); on deeper trees an error saying
+    /// "stack overflow" is a correct answer.
+    fn stack_limit(&self) -> Option<usize> {
+        None
+    }
+    /// The largest scene worth giving this backend in tests (a slow one packs every tree
+    /// again in an interpreter); `None` for any.
+    fn max_triangles(&self) -> Option<usize> {
+        None
+    }
+}
+
+/// The backends the harness knows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BackendKind {
+    /// The runtime's Rust traversal with the prelude's arithmetic.
+    Reference,
+    /// Every triangle, no tree.
+    Brute,
+    /// The `tree` interpreter running `closest_hit.scion` compiled at this `-O` level.
+    Interp(u8),
+}
+
+impl BackendKind {
+    /// The backend, ready to trace on `threads` threads (0 = one per core).
+    pub fn instantiate(self, threads: usize) -> Result<Box<dyn Backend>, String> {
+        Ok(match self {
+            BackendKind::Reference => Box::new(Reference {
+                driver: BatchDriver::new(threads)?,
+            }),
+            BackendKind::Brute => Box::new(Brute {
+                driver: BatchDriver::new(threads)?,
+            }),
+            BackendKind::Interp(level) => Box::new(Interpreter {
+                program: ClosestHit::compile(level)?,
+                level,
+                threads: if threads == 0 {
+                    std::thread::available_parallelism().map_or(1, |n| n.get())
+                } else {
+                    threads
+                },
+            }),
+        })
+    }
+}
+
+/// [`BackendKind::Reference`].
+pub struct Reference {
+    driver: BatchDriver,
+}
+
+impl Backend for Reference {
+    fn name(&self) -> String {
+        "reference".into()
+    }
+    fn trace(&self, _: &[Triangle], tree: &LogicalTree, rays: &[Ray]) -> Result<Vec<Hit>, String> {
+        Ok(closest_hits_tree(tree, rays, &self.driver))
+    }
+}
+
+/// [`BackendKind::Brute`].
+pub struct Brute {
+    driver: BatchDriver,
+}
+
+impl Backend for Brute {
+    fn name(&self) -> String {
+        "brute".into()
+    }
+    fn trace(&self, tris: &[Triangle], _: &LogicalTree, rays: &[Ray]) -> Result<Vec<Hit>, String> {
+        Ok(closest_hits_brute(tris, rays, &self.driver))
+    }
+}
+
+/// [`BackendKind::Interp`].
+pub struct Interpreter {
+    program: ClosestHit,
+    level: u8,
+    threads: usize,
+}
+
+impl Backend for Interpreter {
+    fn name(&self) -> String {
+        format!("interp-O{}", self.level)
+    }
+    fn trace(&self, _: &[Triangle], tree: &LogicalTree, rays: &[Ray]) -> Result<Vec<Hit>, String> {
+        self.program.trace_all(tree, rays, self.threads)
+    }
+}

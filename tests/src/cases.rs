@@ -1,0 +1,169 @@
+//! What the differential rows run on: scenes (the real ones of `shared/scenes` and the
+//! runtime's generated hard cases), trees (binned SAH with leaves of 15 and 4, median), ray
+//! sets (primary, secondary, axis-parallel with signed zeros, and feature rays that graze
+//! vertices and edges or start on surfaces), and [`compare`], the bit-for-bit check.
+
+use scion_runtime::bvh::{build_median, build_sah_binned, LogicalTree, SahOptions};
+use scion_runtime::geom::{Hit, Ray, Vec3};
+use scion_runtime::query::{axis_rays, primary_rays, secondary_rays};
+use scion_runtime::reference::why_pruned;
+use scion_runtime::scene::{load_obj, Scene};
+
+pub use scion_runtime::scene::manifest::{scenes_dir, REAL_SCENES};
+
+/// Loads the real scene `name` (`teapot`, ...) from [`scenes_dir`].
+pub fn real_scene(name: &str) -> Result<Scene, String> {
+    let dir = scenes_dir().ok_or("no real scenes (set SCION_SCENES)")?;
+    load_obj(dir.join(format!("{name}.obj"))).map_err(|e| e.to_string())
+}
+
+/// The trees a row can use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TreeKind {
+    /// Binned SAH, leaves of up to 15 triangles (the default).
+    Sah15,
+    /// Binned SAH, leaves of up to 4 triangles.
+    Sah4,
+    /// Median split, one triangle per leaf (the deepest balanced tree).
+    Median,
+}
+
+impl TreeKind {
+    /// Builds the tree over `scene`.
+    pub fn build(self, scene: &Scene) -> LogicalTree {
+        match self {
+            TreeKind::Sah15 => build_sah_binned(&scene.triangles, &SahOptions::default()),
+            TreeKind::Sah4 => build_sah_binned(
+                &scene.triangles,
+                &SahOptions {
+                    max_leaf: 4,
+                    ..SahOptions::default()
+                },
+            ),
+            TreeKind::Median => build_median(&scene.triangles),
+        }
+    }
+}
+
+/// The ray sets a row can use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RayKind {
+    /// A pinhole camera's jittered pixels (`n` is rounded down to a square).
+    Primary,
+    /// Origins in the box, directions on the sphere.
+    Secondary,
+    /// Origins in the box, directions `±e_k` with `+0.0`/`-0.0` in the other lanes.
+    Axis,
+    /// Through vertices, edge midpoints and centroids from outside, and from those points
+    /// along axes (starting on the surface, zero lanes).
+    Features,
+}
+
+impl RayKind {
+    /// About `n` rays of this kind for `scene`, reproducible from `seed`.
+    pub fn rays(self, scene: &Scene, n: usize, seed: u64) -> Vec<Ray> {
+        let b = scene.bounds();
+        match self {
+            RayKind::Primary => {
+                let side = (n as f64).sqrt().floor().max(1.0) as u32;
+                primary_rays(b, side, side, seed)
+            }
+            RayKind::Secondary => secondary_rays(b, n, seed),
+            RayKind::Axis => axis_rays(b, n, seed),
+            RayKind::Features => feature_rays(scene, n),
+        }
+    }
+}
+
+/// About `n` rays that stress edges and vertices (see [`RayKind::Features`]).
+pub fn feature_rays(scene: &Scene, n: usize) -> Vec<Ray> {
+    let mut rays = Vec::new();
+    let b = scene.bounds();
+    if b.is_empty() || scene.is_empty() {
+        return rays;
+    }
+    let c = b.center();
+    let e = b.extent();
+    let span = e.x.max(e.y).max(e.z).max(f32::MIN_POSITIVE);
+    let eye = c + Vec3::new(0.31, 0.57, 1.13) * (span * 2.0);
+    // 18 rays per triangle visited.
+    let per = 18;
+    let step = (scene.len() * per / n.max(per)).max(1);
+    for t in scene.triangles.iter().step_by(step) {
+        let centroid = (t.p0 + t.p1 + t.p2) * (1.0 / 3.0);
+        for target in [
+            t.p0,
+            t.p1,
+            t.p2,
+            (t.p0 + t.p1) * 0.5,
+            (t.p1 + t.p2) * 0.5,
+            centroid,
+        ] {
+            rays.push(Ray::new(eye, target - eye));
+            rays.push(Ray::new(target, Vec3::new(0.0, 0.0, -1.0)));
+            rays.push(Ray::new(target, Vec3::new(-0.0, 1.0, 0.0)));
+        }
+    }
+    rays
+}
+
+/// What one comparison found.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Agreement {
+    /// Rays compared.
+    pub rays: usize,
+    /// Rays that hit something.
+    pub hits: usize,
+    /// Rays where brute force found a hit that traversal cannot reach, explained by
+    /// `reference::why_pruned` (docs/runtime.md, "Brute force and traversal").
+    pub pruned: usize,
+}
+
+/// Checks a backend's hits: bit for bit equal to the reference traversal `tree_ref`, and to
+/// brute force `brute` except where `why_pruned` proves the brute-force hit lies in a node the
+/// traversal must prune (then the backend's hit is never better than brute force's). The
+/// error names the row, the ray and both hits.
+pub fn compare(
+    what: &str,
+    tree: &LogicalTree,
+    rays: &[Ray],
+    got: &[Hit],
+    tree_ref: &[Hit],
+    brute: &[Hit],
+) -> Result<Agreement, String> {
+    if got.len() != rays.len() {
+        return Err(format!(
+            "{what}: {} hits for {} rays",
+            got.len(),
+            rays.len()
+        ));
+    }
+    let mut a = Agreement {
+        rays: rays.len(),
+        ..Agreement::default()
+    };
+    for (i, ((g, r), b)) in got.iter().zip(tree_ref).zip(brute).enumerate() {
+        let ray = &rays[i];
+        if !g.bit_eq(r) {
+            return Err(format!(
+                "{what}: ray {i} {ray:?}: got {g:?} (t bits {:#010x}), reference traversal \
+                 {r:?} (t bits {:#010x})",
+                g.t.to_bits(),
+                r.t.to_bits()
+            ));
+        }
+        a.hits += usize::from(g.is_hit());
+        if g.bit_eq(b) {
+            continue;
+        }
+        let brute_better = b.is_hit() && (b.t < g.t || (b.t == g.t && b.prim < g.prim));
+        if !brute_better || why_pruned(tree, ray, b.prim, b.t).is_none() {
+            return Err(format!(
+                "{what}: ray {i} {ray:?}: got {g:?}, brute force {b:?}, and pruning does not \
+                 explain the difference"
+            ));
+        }
+        a.pruned += 1;
+    }
+    Ok(a)
+}

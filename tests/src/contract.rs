@@ -1,0 +1,276 @@
+//! The host side of the runtime contract of docs/design/specialization.md §3, for code
+//! specialized to a layout (the JIT's, later): ask `@L.sizes` for each buffer's byte size,
+//! allocate each buffer once with the layout's alignment, pack with `@L.build`, then run the
+//! batch entry over threads in blocks of 64 with each result initialized to
+//! `(ray.tmax, 0xFFFFFFFF)`. Input: a [`LayoutCode`] and a logical tree; output: [`Packed`]
+//! buffers, then hits or the index of the ray whose traversal failed.
+//!
+//! [`LayoutCode`] is the safe face of the three entry points; whoever holds native code (the
+//! Cranelift JIT) implements it with its calls, and [`LayoutBackend`] makes it one more
+//! [`Backend`] of the differential table and of `scion trace`. The empty tree never reaches the
+//! code: every ray misses.
+
+use crate::backend::Backend;
+use scion_runtime::batch::BatchDriver;
+use scion_runtime::bvh::{LogicalNode, LogicalTree};
+use scion_runtime::geom::{Hit, Ray, Triangle};
+use std::fmt;
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+/// Status of the batch entry: success.
+pub const STATUS_OK: i32 = 0;
+/// Status of the batch entry: the traversal's explicit stack overflowed.
+pub const STATUS_STACK_OVERFLOW: i32 = 1;
+
+/// One buffer of a layout's plan.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct BufferSpec {
+    /// The buffer's name in the layout (for reports).
+    pub name: String,
+    /// Its alignment in bytes (a power of two).
+    pub align: usize,
+}
+
+/// The entry points of one algorithm specialized to one layout (design note §3).
+pub trait LayoutCode: Sync {
+    /// The layout's name.
+    fn layout(&self) -> String;
+    /// The layout's buffers, in the order `@L.sizes` and `@L.build` use.
+    fn buffers(&self) -> Vec<BufferSpec>;
+    /// `@L.sizes`: writes each buffer's byte size for `tree` into `sizes`
+    /// (`sizes.len() == buffers().len()`).
+    fn sizes(&self, tree: &LogicalTree, sizes: &mut [u64]);
+    /// `@L.build`: packs `tree` into the buffers (each exactly its size, aligned); 0 or an
+    /// error status.
+    fn build(&self, tree: &LogicalTree, buffers: &mut [&mut [u8]]) -> i32;
+    /// The batch entry: traces `queries[i]` into `results[i]` (in/out, initialized by the
+    /// caller) for every `i`, in order; 0, or the status of the first failing query, after
+    /// which it stops.
+    fn batch(&self, buffers: &[&[u8]], queries: &[Ray], results: &mut [(f32, u32)]) -> i32;
+    /// The deepest tree the traversal handles without [`STATUS_STACK_OVERFLOW`], when bounded.
+    fn stack_limit(&self) -> Option<usize> {
+        None
+    }
+}
+
+/// The header `%tree` points to in `@L.sizes(%tree, %sizes)` and `@L.build(%tree, %B)`
+/// (design note §3.1): the logical tree's arrays in C form. Building one is safe; whoever
+/// calls native code with its address keeps the tree alive for the call.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct LogicalTreeView {
+    /// `tree.nodes` (44-byte `LogicalNode`s).
+    pub nodes: *const LogicalNode,
+    /// Number of nodes.
+    pub node_count: u32,
+    /// Index of the root, `u32::MAX` for the empty tree.
+    pub root: u32,
+    /// `tree.primitives` (40-byte `Triangle`s).
+    pub prims: *const Triangle,
+    /// Number of primitives.
+    pub prim_count: u32,
+}
+
+impl LogicalTreeView {
+    /// The view of `tree`; `None` when a count does not fit `u32`.
+    pub fn new(tree: &LogicalTree) -> Option<LogicalTreeView> {
+        Some(LogicalTreeView {
+            nodes: tree.nodes.as_ptr(),
+            node_count: u32::try_from(tree.nodes.len()).ok()?,
+            root: tree.root,
+            prims: tree.primitives.as_ptr(),
+            prim_count: u32::try_from(tree.primitives.len()).ok()?,
+        })
+    }
+}
+
+/// The result record of closest hit: `best = (t, primitive id)`.
+pub type Best = (f32, u32);
+
+/// A block's first query index and its results.
+type Block = (usize, Vec<Best>);
+
+/// A traversal that failed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TraceFailure {
+    /// Index of the ray in the batch.
+    pub ray: usize,
+    /// The batch entry's status.
+    pub status: i32,
+}
+
+impl fmt::Display for TraceFailure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let what = match self.status {
+            STATUS_STACK_OVERFLOW => "traversal stack overflow (the tree is deeper than the \
+                                      generated code's stack)"
+                .to_string(),
+            s => format!("status {s}"),
+        };
+        write!(f, "ray {}: {what}", self.ray)
+    }
+}
+
+/// A tree packed into a layout's buffers.
+pub struct Packed {
+    /// Each buffer's allocation (one per buffer, with room to align).
+    storage: Vec<Vec<u8>>,
+    /// Where each buffer starts in its allocation, and its size.
+    ranges: Vec<(usize, usize)>,
+    /// The plan's buffers.
+    pub specs: Vec<BufferSpec>,
+    /// Time of `@L.sizes`, the allocations and `@L.build`.
+    pub pack_time: Duration,
+    /// False for the empty tree (nothing was packed; every ray misses).
+    pub nonempty: bool,
+}
+
+impl Packed {
+    /// Packs `tree` for `code`; the error carries `@L.build`'s status.
+    pub fn new(code: &dyn LayoutCode, tree: &LogicalTree) -> Result<Packed, String> {
+        let start = Instant::now();
+        let specs = code.buffers();
+        if tree.is_empty() {
+            return Ok(Packed {
+                storage: Vec::new(),
+                ranges: Vec::new(),
+                specs,
+                pack_time: start.elapsed(),
+                nonempty: false,
+            });
+        }
+        let mut sizes = vec![0u64; specs.len()];
+        code.sizes(tree, &mut sizes);
+        let mut storage = Vec::with_capacity(specs.len());
+        let mut ranges = Vec::with_capacity(specs.len());
+        for (spec, &size) in specs.iter().zip(&sizes) {
+            if !spec.align.is_power_of_two() {
+                return Err(format!(
+                    "buffer `{}`: alignment {} is not a power of two",
+                    spec.name, spec.align
+                ));
+            }
+            let size = usize::try_from(size)
+                .map_err(|_| format!("buffer `{}`: {size} bytes do not fit", spec.name))?;
+            let buf = vec![0u8; size + spec.align];
+            let offset = buf.as_ptr().align_offset(spec.align);
+            storage.push(buf);
+            ranges.push((offset, size));
+        }
+        let mut views: Vec<&mut [u8]> = storage
+            .iter_mut()
+            .zip(&ranges)
+            .map(|(b, &(o, n))| &mut b[o..o + n])
+            .collect();
+        let status = code.build(tree, &mut views);
+        if status != STATUS_OK {
+            return Err(format!(
+                "@{}.build failed with status {status}",
+                code.layout()
+            ));
+        }
+        Ok(Packed {
+            storage,
+            ranges,
+            specs,
+            pack_time: start.elapsed(),
+            nonempty: true,
+        })
+    }
+
+    /// The buffers, aligned, each exactly its size.
+    pub fn buffers(&self) -> Vec<&[u8]> {
+        self.storage
+            .iter()
+            .zip(&self.ranges)
+            .map(|(b, &(o, n))| &b[o..o + n])
+            .collect()
+    }
+
+    /// Bytes of all buffers (without alignment padding).
+    pub fn bytes(&self) -> usize {
+        self.ranges.iter().map(|r| r.1).sum()
+    }
+
+    /// Closest hits of `rays` by the batch entry over `driver`'s threads, blocks of 64. A
+    /// failing block is re-run one query at a time to name the first failing ray.
+    pub fn trace(
+        &self,
+        code: &dyn LayoutCode,
+        rays: &[Ray],
+        driver: &BatchDriver,
+    ) -> Result<Vec<Hit>, TraceFailure> {
+        if !self.nonempty {
+            return Ok(vec![Hit::MISS; rays.len()]);
+        }
+        let buffers = self.buffers();
+        let init = |r: &Ray| (r.tmax, u32::MAX);
+        let done: Mutex<Vec<Block>> = Mutex::new(Vec::new());
+        let failed: Mutex<Option<TraceFailure>> = Mutex::new(None);
+        driver.run(rays.len(), |begin, end| {
+            let queries = &rays[begin..end];
+            let mut results: Vec<(f32, u32)> = queries.iter().map(init).collect();
+            let status = code.batch(&buffers, queries, &mut results);
+            if status != STATUS_OK {
+                let first = (begin..end)
+                    .find_map(|i| {
+                        let mut one = [init(&rays[i])];
+                        let s = code.batch(&buffers, &rays[i..i + 1], &mut one);
+                        (s != STATUS_OK).then_some(TraceFailure { ray: i, status: s })
+                    })
+                    .unwrap_or(TraceFailure { ray: begin, status });
+                let mut f = failed.lock().unwrap_or_else(|p| p.into_inner());
+                if f.is_none_or(|old| first.ray < old.ray) {
+                    *f = Some(first);
+                }
+                return;
+            }
+            done.lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .push((begin, results));
+        });
+        if let Some(f) = failed.into_inner().unwrap_or_else(|p| p.into_inner()) {
+            return Err(f);
+        }
+        let mut hits = vec![Hit::MISS; rays.len()];
+        for (begin, results) in done.into_inner().unwrap_or_else(|p| p.into_inner()) {
+            for (k, (t, id)) in results.into_iter().enumerate() {
+                hits[begin + k] = Hit::from_best(t, id);
+            }
+        }
+        Ok(hits)
+    }
+}
+
+/// A [`LayoutCode`] as a [`Backend`]: packs, then traces (each `trace` packs again, so the
+/// differential rows check `@L.build` on every tree).
+pub struct LayoutBackend {
+    code: Box<dyn LayoutCode>,
+    driver: BatchDriver,
+}
+
+impl LayoutBackend {
+    /// The backend of `code` on `threads` threads (0 = one per core).
+    pub fn new(code: Box<dyn LayoutCode>, threads: usize) -> Result<LayoutBackend, String> {
+        Ok(LayoutBackend {
+            code,
+            driver: BatchDriver::new(threads)?,
+        })
+    }
+}
+
+impl Backend for LayoutBackend {
+    fn name(&self) -> String {
+        format!("layout-{}", self.code.layout())
+    }
+    fn trace(&self, _: &[Triangle], tree: &LogicalTree, rays: &[Ray]) -> Result<Vec<Hit>, String> {
+        let packed = Packed::new(self.code.as_ref(), tree)?;
+        packed
+            .trace(self.code.as_ref(), rays, &self.driver)
+            .map_err(|f| f.to_string())
+    }
+    fn stack_limit(&self) -> Option<usize> {
+        self.code.stack_limit()
+    }
+}

@@ -1,0 +1,313 @@
+//! A layout backend without the JIT: `closest_hit.scion` specialized to a library layout
+//! (`destructor-specialize`, `constructor-specialize`: the `tree`+`mem` level) and run by the
+//! interpreter over its byte memory, through the runtime contract of
+//! docs/design/specialization.md §3.1. Input: a logical tree and rays; output: hits.
+//!
+//! Per interpreter: the logical tree's C-ABI bytes (`LogicalTreeView`, 44-byte nodes, 40-byte
+//! triangles) go into the interpreter's memory; `@L.sizes` gives each buffer's size; each
+//! buffer is allocated once (64-byte aligned) and `@L.build` packs; then every ray runs
+//! `closest_hit(%B, ray, root, best)` with `best = (ray.tmax, 0xFFFFFFFF)`. The root's
+//! reference is what `@L.node` returns for the root: calling it once more on the packed
+//! buffers (fresh counters) places every node at the same place again and returns it (index 0
+//! for `by I` layouts in pre-order, an address for `ptr` layouts).
+
+use crate::backend::Backend;
+use crate::oracle::{in_threads, ray_val, tree_depth, CLOSEST_HIT, CLOSEST_HIT_NAME};
+use scion_compiler::driver::cli::Emit;
+use scion_compiler::driver::session::{PRELUDE, PRELUDE_NAME};
+use scion_compiler::frontend::{self, Frontend, PassOptions};
+use scion_ir::diag::SourceMap;
+use scion_ir::interp::{Interp, Val};
+use scion_ir::op::OpKind;
+use scion_ir::types::IntTy;
+use scion_ir::Module;
+use scion_runtime::bvh::LogicalTree;
+use scion_runtime::geom::{Hit, Ray, Triangle};
+use std::time::{Duration, Instant};
+
+/// The library's layouts: file stem, layout name, and whether the layout keeps the logical
+/// tree's boxes exactly (quantized layouts may legitimately differ from the reference).
+pub const LIBRARY_LAYOUTS: &[(&str, &str, bool)] = &[
+    ("pbrt", "LinearBVH", true),
+    ("ptr", "PtrBVH", true),
+    ("pbrt_align16", "PbrtAlign16", true),
+    ("pbrt_soaos", "PbrtSoAoS", true),
+    ("pbrt_q16", "PbrtQ16", false),
+];
+
+/// The source of a library layout by file stem.
+pub fn layout_source(stem: &str) -> Option<&'static str> {
+    Some(match stem {
+        "pbrt" => include_str!("../../library/layouts/pbrt.scion"),
+        "ptr" => include_str!("../../library/layouts/ptr.scion"),
+        "pbrt_align16" => include_str!("../../library/layouts/pbrt_align16.scion"),
+        "pbrt_soaos" => include_str!("../../library/layouts/pbrt_soaos.scion"),
+        "pbrt_q16" => include_str!("../../library/layouts/pbrt_q16.scion"),
+        _ => return None,
+    })
+}
+
+/// Closest hit specialized to one layout, at the `mem` level.
+pub struct MemClosestHit {
+    module: Module,
+    layout: String,
+    buffers: usize,
+}
+
+impl MemClosestHit {
+    /// Compiles closest hit for the library layout in file `stem` named `layout`.
+    pub fn compile(stem: &str, layout: &str) -> Result<MemClosestHit, String> {
+        let text = layout_source(stem).ok_or_else(|| format!("no library layout `{stem}`"))?;
+        let mut sources = SourceMap::new();
+        let prelude = [sources.add(PRELUDE_NAME, PRELUDE)];
+        let inputs = [
+            sources.add(CLOSEST_HIT_NAME, CLOSEST_HIT),
+            sources.add(format!("library/layouts/{stem}.scion"), text),
+        ];
+        let fe = Frontend {
+            sources: &sources,
+            prelude: &prelude,
+            inputs: &inputs,
+        };
+        let pipeline = vec![
+            "destructor-specialize".to_string(),
+            "constructor-specialize".to_string(),
+        ];
+        let popts = PassOptions {
+            layout: Some(layout.to_string()),
+            ..PassOptions::default()
+        };
+        let r = frontend::compile(&fe, Emit::Mem, &pipeline, &popts);
+        if let Some(ice) = r.internal_error {
+            return Err(format!("internal compiler error: {ice}"));
+        }
+        if r.diagnostics.has_errors() {
+            return Err(r.diagnostics.render(&sources));
+        }
+        let out = r.output.ok_or("no mem-level output")?;
+        let file = sources.add("<mem IR>", out.clone());
+        let module = scion_ir::parse_module(&out, file)
+            .map_err(|d| format!("printed mem IR does not parse back: {}", d.render(&sources)))?;
+        for f in ["closest_hit", "sizes", "build", "node"] {
+            let name = if f == "closest_hit" {
+                f.to_string()
+            } else {
+                format!("{layout}.{f}")
+            };
+            if module.func_by_name(&name).is_none() {
+                return Err(format!("the specialized module has no `@{name}`"));
+            }
+        }
+        // Buffers: one past the largest `mem.buffer` index.
+        let buffers = module
+            .ops
+            .iter()
+            .filter(|(_, o)| matches!(o.kind, OpKind::Mem(scion_ir::mem::Op::Buffer)))
+            .filter_map(|(_, o)| o.int_attr("index"))
+            .max()
+            .map_or(0, |i| i as usize + 1);
+        Ok(MemClosestHit {
+            module,
+            layout: layout.to_string(),
+            buffers,
+        })
+    }
+
+    /// The byte size of each buffer for `tree` and the time `@L.sizes` plus `@L.build` take
+    /// in the interpreter (the pack time of this backend).
+    pub fn pack_report(&self, tree: &LogicalTree) -> Result<(Vec<u64>, Duration), String> {
+        if tree.is_empty() {
+            return Ok((vec![0; self.buffers], Duration::ZERO));
+        }
+        let mut it = self.interp(tree);
+        let p = self.pack(&mut it, tree)?;
+        Ok((p.sizes, p.time))
+    }
+
+    fn interp(&self, tree: &LogicalTree) -> Interp<'_> {
+        let mut it = Interp::new(&self.module);
+        // Packing recurses through `@L.node` and a build function per tree level.
+        it.max_depth = 2 * tree_depth(tree) + 8;
+        it.max_steps = u64::MAX;
+        it
+    }
+
+    /// Puts the logical tree in `it`'s memory, sizes, allocates and builds the buffers, and
+    /// finds the root's reference.
+    fn pack(&self, it: &mut Interp<'_>, tree: &LogicalTree) -> Result<Packing, String> {
+        let l = &self.layout;
+        let view = put_tree(it, tree)?;
+        let start = Instant::now();
+        let ptr = |a: u64| Val::Int(i128::from(a), IntTy::U64);
+        let sizes_at = it.alloc_bytes(&vec![0u8; 8 * self.buffers.max(1)], 8);
+        it.call(&format!("{l}.sizes"), vec![ptr(view), ptr(sizes_at)])
+            .map_err(|e| format!("@{l}.sizes: {e}"))?;
+        let mut table = Vec::new();
+        let mut sizes = Vec::new();
+        for i in 0..self.buffers {
+            let at = sizes_at + 8 * i as u64;
+            let n = it
+                .bytes(at, 8)
+                .and_then(|b| b.try_into().ok())
+                .map(u64::from_le_bytes)
+                .ok_or("sizes table outside memory")?;
+            sizes.push(n);
+            let n = usize::try_from(n).map_err(|_| format!("buffer {i}: {n} bytes"))?;
+            table.extend(it.alloc_bytes(&vec![0u8; n], 64).to_le_bytes());
+        }
+        let b = it.alloc_bytes(&table, 8);
+        let status = it
+            .call(&format!("{l}.build"), vec![ptr(view), ptr(b)])
+            .map_err(|e| format!("@{l}.build: {e}"))?;
+        match status.first() {
+            Some(Val::Int(0, _)) => {}
+            other => return Err(format!("@{l}.build returned status {other:?}")),
+        }
+        let time = start.elapsed();
+        let cell = |it: &mut Interp<'_>| it.alloc(Val::Int(0, IntTy::U32));
+        let (c, k, s) = (cell(it), cell(it), it.alloc(Val::Int(0, IntTy::I32)));
+        let root = it
+            .call(
+                &format!("{l}.node"),
+                vec![
+                    ptr(view),
+                    ptr(b),
+                    Val::Int(i128::from(tree.root), IntTy::U32),
+                    c,
+                    k,
+                    s,
+                ],
+            )
+            .map_err(|e| format!("@{l}.node: {e}"))?
+            .into_iter()
+            .next()
+            .ok_or("@node returned nothing")?;
+        Ok(Packing {
+            b,
+            root,
+            sizes,
+            time,
+        })
+    }
+
+    /// Packs `tree` in a fresh interpreter and traces `rays` (errors name ray `first + i`).
+    fn trace_from(
+        &self,
+        tree: &LogicalTree,
+        rays: &[Ray],
+        first: usize,
+    ) -> Result<Vec<Hit>, String> {
+        if tree.is_empty() {
+            return Ok(vec![Hit::MISS; rays.len()]);
+        }
+        let mut it = self.interp(tree);
+        let Packing { b, root, .. } = self.pack(&mut it, tree)?;
+        let ptr = |a: u64| Val::Int(i128::from(a), IntTy::U64);
+        let mut hits = Vec::with_capacity(rays.len());
+        for (j, ray) in rays.iter().enumerate() {
+            let i = first + j;
+            let best = it.alloc(Val::Tuple(vec![
+                Val::F32(ray.tmax),
+                Val::Int(i128::from(u32::MAX), IntTy::U32),
+            ]));
+            it.call(
+                "closest_hit",
+                vec![ptr(b), ray_val(ray), root.clone(), best.clone()],
+            )
+            .map_err(|e| format!("ray {i}: {e}"))?;
+            hits.push(match it.read(&best) {
+                Some(Val::Tuple(p)) => match &p[..] {
+                    [Val::F32(t), Val::Int(id, _)] => Hit::from_best(*t, *id as u32),
+                    _ => return Err(format!("ray {i}: bad `best`")),
+                },
+                _ => return Err(format!("ray {i}: bad `best`")),
+            });
+        }
+        Ok(hits)
+    }
+}
+
+/// A tree packed in an interpreter's memory.
+struct Packing {
+    /// The buffer table `%B`.
+    b: u64,
+    /// The root's reference.
+    root: Val,
+    /// Each buffer's byte size.
+    sizes: Vec<u64>,
+    /// Time of `@L.sizes`, the allocations and `@L.build`.
+    time: Duration,
+}
+
+/// The logical tree's C-ABI bytes in `it`'s memory; returns the `LogicalTreeView` address.
+fn put_tree(it: &mut Interp<'_>, tree: &LogicalTree) -> Result<u64, String> {
+    let mut nb = Vec::with_capacity(44 * tree.nodes.len());
+    for n in &tree.nodes {
+        nb.extend(n.kind.to_le_bytes());
+        for x in n.bounds {
+            nb.extend(x.to_le_bytes());
+        }
+        for w in [n.child[0], n.child[1], n.prim_offset, n.prim_count] {
+            nb.extend(w.to_le_bytes());
+        }
+    }
+    let mut pb = Vec::with_capacity(40 * tree.primitives.len());
+    for t in &tree.primitives {
+        for p in [t.p0, t.p1, t.p2] {
+            for x in p.to_array() {
+                pb.extend(x.to_le_bytes());
+            }
+        }
+        pb.extend(t.id.to_le_bytes());
+    }
+    let count = |n: usize| u32::try_from(n).map_err(|_| format!("{n} does not fit u32"));
+    let na = it.alloc_bytes(&nb, 4);
+    let pa = it.alloc_bytes(&pb, 4);
+    let mut h = Vec::with_capacity(32);
+    h.extend(na.to_le_bytes());
+    h.extend(count(tree.nodes.len())?.to_le_bytes());
+    h.extend(tree.root.to_le_bytes());
+    h.extend(pa.to_le_bytes());
+    h.extend(count(tree.primitives.len())?.to_le_bytes());
+    h.extend(0u32.to_le_bytes());
+    Ok(it.alloc_bytes(&h, 8))
+}
+
+/// [`MemClosestHit`] as a [`Backend`] on `threads` threads (each packs its own copy).
+pub struct MemInterpBackend {
+    program: MemClosestHit,
+    stem: String,
+    threads: usize,
+}
+
+impl MemInterpBackend {
+    /// The backend for library layout `stem` (`pbrt`, `ptr`, ...) named `layout`.
+    pub fn new(stem: &str, layout: &str, threads: usize) -> Result<MemInterpBackend, String> {
+        Ok(MemInterpBackend {
+            program: MemClosestHit::compile(stem, layout)?,
+            stem: stem.to_string(),
+            threads: threads.max(1),
+        })
+    }
+}
+
+impl MemInterpBackend {
+    /// The compiled program.
+    pub fn program(&self) -> &MemClosestHit {
+        &self.program
+    }
+}
+
+impl Backend for MemInterpBackend {
+    fn name(&self) -> String {
+        format!("mem-interp-{}", self.stem)
+    }
+    fn trace(&self, _: &[Triangle], tree: &LogicalTree, rays: &[Ray]) -> Result<Vec<Hit>, String> {
+        in_threads(tree, rays, self.threads, |part, first| {
+            self.program.trace_from(tree, part, first)
+        })
+    }
+    fn max_triangles(&self) -> Option<usize> {
+        Some(2_000)
+    }
+}

@@ -1,0 +1,301 @@
+//! Differential tests: every backend's closest hits equal the runtime's reference traversal bit
+//! for bit (same `t` bits, same primitive id), and brute force except where pruning provably
+//! drops the brute-force hit (docs/runtime.md, "Brute force and traversal").
+//!
+//! The test is a table: one row per (scene, tree, ray kind, backend). [`BACKENDS`] lists the
+//! backends; a new backend (the JIT of a layout) is one more entry there and one more
+//! `BackendKind` variant. Scenes: the generated hard cases (always) and the real scenes of
+//! `shared/scenes` (skipped with a printed line when missing; those over 20 k triangles only
+//! in release builds). The interpreter is slow, so real scenes get few rays (release: 128
+//! primary and 64 secondary, plus 64 axis and 64 feature rays on scenes under 50 k triangles;
+//! debug builds a quarter of that).
+
+mod common;
+
+use scion_runtime::batch::BatchDriver;
+use scion_runtime::bvh::LogicalTree;
+use scion_runtime::geom::Ray;
+use scion_runtime::reference::{closest_hits_brute, closest_hits_tree};
+use scion_runtime::scene::{gen, Scene};
+use scion_tests::backend::{Backend, BackendKind};
+use scion_tests::cases::{compare, real_scene, scenes_dir, RayKind, TreeKind, REAL_SCENES};
+use scion_tests::contract::LayoutBackend;
+use scion_tests::mem_interp::{MemInterpBackend, LIBRARY_LAYOUTS};
+use scion_tests::oracle::tree_depth;
+use std::time::Instant;
+
+/// The backends under test, each compared with the reference on every (scene, tree, rays).
+const BACKENDS: &[BackendKind] = &[
+    BackendKind::Reference,
+    BackendKind::Interp(0),
+    BackendKind::Interp(1),
+];
+
+/// The backends of [`BACKENDS`] and the layouts run through the runtime contract: the
+/// hand-written `flat32` of `common`, and closest hit specialized to each library layout that
+/// keeps boxes exact, run by the interpreter at the mem level (scenes up to 2 k triangles);
+/// the JIT of each layout will join here.
+fn backends() -> Vec<Box<dyn Backend>> {
+    let mut all: Vec<Box<dyn Backend>> = BACKENDS
+        .iter()
+        .map(|b| b.instantiate(2).unwrap_or_else(|e| panic!("{b:?}: {e}")))
+        .collect();
+    all.push(Box::new(
+        LayoutBackend::new(Box::new(common::Flat32), 2).expect("threads"),
+    ));
+    // Closest hit specialized to each exact library layout, interpreted at the mem level.
+    for &(stem, name, exact) in LIBRARY_LAYOUTS {
+        // Debug builds interpret slowly: pbrt only.
+        if exact && (release() || stem == "pbrt") {
+            let b = MemInterpBackend::new(stem, name, 2).unwrap_or_else(|e| panic!("{stem}: {e}"));
+            all.push(Box::new(b));
+        }
+    }
+    all
+}
+
+/// Where a row's scene comes from.
+#[derive(Clone, Copy, Debug)]
+enum SceneSource {
+    /// `shared/scenes/NAME.obj`.
+    Real(&'static str),
+    /// Position in `scene::gen::hard_cases()`.
+    Hard(usize),
+}
+
+/// One row of the table, without its backend (every backend runs on every row).
+#[derive(Clone, Copy, Debug)]
+struct Row {
+    scene: SceneSource,
+    tree: TreeKind,
+    rays: RayKind,
+    n: usize,
+    seed: u64,
+}
+
+fn release() -> bool {
+    !cfg!(debug_assertions)
+}
+
+/// The rows: every hard case with SAH and median trees and all four ray kinds (128 rays each
+/// in release, 32 in debug); every real scene (small ones in debug builds) with an SAH tree
+/// (also SAH-4 and median under 2 k triangles), primary and secondary rays, plus axis and
+/// feature rays under 50 k triangles.
+fn rows() -> Vec<Row> {
+    let mut rows = Vec::new();
+    // Debug builds interpret about 20 times slower: half the rays, small real scenes only.
+    let k = if release() { 4 } else { 1 };
+    for (i, _) in gen::hard_cases().iter().enumerate() {
+        for tree in [TreeKind::Sah15, TreeKind::Median] {
+            for rays in [
+                RayKind::Primary,
+                RayKind::Secondary,
+                RayKind::Axis,
+                RayKind::Features,
+            ] {
+                rows.push(Row {
+                    scene: SceneSource::Hard(i),
+                    tree,
+                    rays,
+                    n: 32 * k,
+                    seed: 7 + i as u64,
+                });
+            }
+        }
+    }
+    if scenes_dir().is_none() {
+        println!("SKIPPED: real scenes (no shared/scenes; set SCION_SCENES)");
+        return rows;
+    }
+    for info in REAL_SCENES {
+        let (name, tris) = (info.name, info.triangles);
+        if tris > 20_000 && !release() {
+            println!("SKIPPED in debug builds: {name} ({tris} triangles)");
+            continue;
+        }
+        let small = tris < 50_000;
+        let mut kinds = vec![(RayKind::Primary, 32 * k), (RayKind::Secondary, 16 * k)];
+        if small {
+            kinds.push((RayKind::Axis, 16 * k));
+            kinds.push((RayKind::Features, 16 * k));
+        }
+        let mut trees = vec![TreeKind::Sah15];
+        if tris < 2_000 {
+            trees.push(TreeKind::Sah4);
+            trees.push(TreeKind::Median);
+        }
+        for &tree in &trees {
+            for &(rays, n) in &kinds {
+                rows.push(Row {
+                    scene: SceneSource::Real(name),
+                    tree,
+                    rays,
+                    n,
+                    seed: 42,
+                });
+            }
+        }
+    }
+    rows
+}
+
+fn load(src: SceneSource, hard: &[Scene]) -> Scene {
+    match src {
+        SceneSource::Real(name) => real_scene(name).unwrap_or_else(|e| panic!("{e}")),
+        SceneSource::Hard(i) => hard[i].clone(),
+    }
+}
+
+#[test]
+fn backends_agree_with_the_reference() {
+    let start = Instant::now();
+    let backends = backends();
+    let driver = BatchDriver::new(2).unwrap();
+    let hard = gen::hard_cases();
+    let rows = rows();
+    let mut failures = Vec::new();
+    let (mut compared, mut hits, mut pruned, mut overflows) = (0usize, 0usize, 0usize, 0usize);
+    // Consecutive rows share a scene and a tree: load and build once.
+    let mut current: Option<(String, TreeKind, Scene, LogicalTree)> = None;
+    for row in &rows {
+        let key = format!("{:?}", row.scene);
+        if current
+            .as_ref()
+            .is_none_or(|(k, t, _, _)| *k != key || *t != row.tree)
+        {
+            let scene = load(row.scene, &hard);
+            let tree = row.tree.build(&scene);
+            tree.validate_with_cap(15)
+                .unwrap_or_else(|e| panic!("{key} {:?}: invalid tree: {e}", row.tree));
+            current = Some((key, row.tree, scene, tree));
+        }
+        let (_, _, scene, tree) = current.as_ref().expect("set above");
+        let rays: Vec<Ray> = row.rays.rays(scene, row.n, row.seed);
+        let tree_ref = closest_hits_tree(tree, &rays, &driver);
+        let brute = closest_hits_brute(&scene.triangles, &rays, &driver);
+        for b in &backends {
+            if b.max_triangles().is_some_and(|m| scene.len() > m) {
+                continue;
+            }
+            let what = format!(
+                "{} {:?} {:?} x{} {}",
+                scene.name,
+                row.tree,
+                row.rays,
+                rays.len(),
+                b.name()
+            );
+            let got = match b.trace(&scene.triangles, tree, &rays) {
+                Ok(g) => g,
+                Err(e) => {
+                    // A bounded stack may overflow on a tree deeper than it, and must say so.
+                    let deep = b.stack_limit().is_some_and(|l| tree_depth(tree) > l);
+                    if deep && e.contains("stack overflow") {
+                        overflows += 1;
+                    } else {
+                        failures.push(format!("{what}: {e}"));
+                    }
+                    continue;
+                }
+            };
+            match compare(&what, tree, &rays, &got, &tree_ref, &brute) {
+                Ok(a) => {
+                    compared += a.rays;
+                    hits += a.hits;
+                    pruned += a.pruned;
+                }
+                Err(e) => failures.push(e),
+            }
+        }
+    }
+    println!(
+        "{} rows x {} backends: {compared} rays compared, {hits} hits, {pruned} explained by \
+         pruning, {overflows} rows with a reported stack overflow on a deep tree, {:.1} s",
+        rows.len(),
+        backends.len(),
+        start.elapsed().as_secs_f64()
+    );
+    assert!(
+        failures.is_empty(),
+        "{} failures:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+    assert!(hits > 0, "no row hit anything: the rays miss every scene");
+}
+
+/// The oracle's own failure modes are errors, not panics or wrong results.
+#[test]
+fn oracle_reports_bad_programs() {
+    let bad = scion_tests::oracle::ClosestHit::compile_source(
+        "bad.scion",
+        "func closest_hit(ray: Ray, bvh: BVH, best: mut (f32, u32)) = nope",
+        1,
+    );
+    let e = bad.err().expect("an undefined name is a compile error");
+    assert!(e.contains("error"), "{e}");
+    let none = scion_tests::oracle::ClosestHit::compile_source(
+        "other.scion",
+        "func other(x: f32) -> f32 = x",
+        0,
+    );
+    assert!(none.err().expect("no closest_hit").contains("closest_hit"));
+}
+
+/// The empty scene: every ray misses, without running the program.
+#[test]
+fn empty_scene_misses() {
+    let p = scion_tests::oracle::ClosestHit::compile(1).unwrap();
+    let tree = LogicalTree::empty();
+    let rays = vec![Ray::new(
+        scion_runtime::geom::Vec3::new(0.0, 0.0, 0.0),
+        scion_runtime::geom::Vec3::new(0.0, 0.0, 1.0),
+    )];
+    let hits = p.trace_all(&tree, &rays, 2).unwrap();
+    assert!(hits[0].bit_eq(&scion_runtime::geom::Hit::MISS));
+}
+
+/// The harness catches a wrong backend: the tie rule reversed (largest id wins on equal `t`)
+/// differs from the reference on duplicated triangles, and `compare` says where.
+#[test]
+fn a_wrong_tie_rule_is_caught() {
+    use scion_tests::oracle::{ClosestHit, CLOSEST_HIT};
+    let mutated = CLOSEST_HIT.replace("t.id < best[1]", "t.id > best[1]");
+    assert_ne!(mutated, CLOSEST_HIT, "the mutation must apply");
+    let p = ClosestHit::compile_source("mutated.scion", &mutated, 1).unwrap();
+    let scene = gen::duplicated(&gen::quad_grid(4, 4), 3);
+    let tree = TreeKind::Sah15.build(&scene);
+    let rays = RayKind::Primary.rays(&scene, 64, 1);
+    let driver = BatchDriver::sequential();
+    let tree_ref = closest_hits_tree(&tree, &rays, &driver);
+    let brute = closest_hits_brute(&scene.triangles, &rays, &driver);
+    let got = p.trace_all(&tree, &rays, 1).unwrap();
+    let e = compare("mutated", &tree, &rays, &got, &tree_ref, &brute).unwrap_err();
+    assert!(e.contains("reference traversal"), "{e}");
+}
+
+/// An interpreter failure names the ray by its index in the whole batch, whatever thread ran
+/// it.
+#[test]
+fn interpreter_errors_name_the_ray() {
+    use scion_runtime::geom::Vec3;
+    use scion_tests::oracle::{ClosestHit, CLOSEST_HIT};
+    let mutated = CLOSEST_HIT.replace("best = (d, t.id);", "best = (d, t.id / (t.id - t.id));");
+    assert_ne!(mutated, CLOSEST_HIT, "the mutation must apply");
+    let p = ClosestHit::compile_source("div0.scion", &mutated, 0).unwrap();
+    let scene = gen::one_triangle();
+    let tree = TreeKind::Sah15.build(&scene);
+    let c = scene.bounds().center();
+    let away = Ray::new(Vec3::new(1e3, 1e3, 1e3), Vec3::new(1.0, 0.0, 0.0));
+    let mut rays = vec![away; 8];
+    // Rays 5 and 7 hit the triangle from both sides of its plane.
+    let n = {
+        let t = &scene.triangles[0];
+        (t.p1 - t.p0).cross(t.p2 - t.p0)
+    };
+    rays[5] = Ray::new(c + n, n * -1.0);
+    rays[7] = rays[5];
+    let e = p.trace_all(&tree, &rays, 2).unwrap_err();
+    assert!(e.starts_with("ray 5: "), "{e}");
+    assert!(e.contains("division by zero"), "{e}");
+}
