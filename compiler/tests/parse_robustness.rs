@@ -6,98 +6,27 @@ mod common;
 
 use common::{library_files, parse_str};
 use proptest::prelude::*;
+use scion_compiler::fuzz::DICTIONARY;
 use scion_compiler::syntax::print::print_program;
 
-/// Fragments that exercise every token kind and every construct's keyword.
-const FRAGMENTS: &[&str] = &[
-    "type",
-    "func",
-    "layout",
-    "build",
-    "group",
-    "indirect",
-    "split",
-    "by",
-    "from",
-    "let",
-    "mut",
-    "match",
-    "if",
-    "elif",
-    "else",
-    "foreach",
-    "in",
-    "return",
-    "as",
-    "to",
-    "this",
-    "parent",
-    "true",
-    "false",
-    "inf",
-    "root",
-    "order",
-    "pre",
-    "post",
-    "size",
-    "align",
-    "set",
-    "option",
-    "x",
-    "Leaf",
-    "_",
-    "f32x3",
+/// Lexer edge cases added to the front-end fuzzer's dictionary ([`DICTIONARY`]: every keyword,
+/// operator and construct): malformed literals and vector words, stray characters.
+const LEXER_EDGES: &[&str] = &[
     "u8x0",
-    "0",
     "42",
-    "0x1F",
-    "0b101",
     "1_000",
-    "1.0",
-    "1e-3",
     "2.5e+8",
     "0x",
     "1e",
     "99999999999999999999999999999999999999999",
-    "(",
-    ")",
-    "{",
-    "}",
-    "[",
-    "]",
-    ",",
-    ";",
-    ":",
-    ".",
-    "->",
-    "---",
-    "=",
-    "==",
-    "!=",
-    "<",
-    "<=",
-    ">",
-    ">=",
-    "+",
-    "-",
-    "*",
-    "/",
-    "%",
-    "&",
-    "&&",
-    "|",
-    "||",
-    "^",
-    "~",
-    "!",
-    "<<",
-    ">>",
     "//c\n",
-    "\n",
-    " ",
     "@",
-    "é",
 ];
+
+/// Fragments that exercise every token kind and every construct's keyword.
+fn fragments() -> Vec<&'static str> {
+    DICTIONARY.iter().chain(LEXER_EDGES).copied().collect()
+}
 
 /// Parses `src`, and when it parses cleanly, checks that its printed form does too.
 fn check(src: &str) {
@@ -121,7 +50,8 @@ fn check(src: &str) {
 }
 
 fn soup() -> impl Strategy<Value = String> {
-    prop::collection::vec(prop::sample::select(FRAGMENTS), 0..60).prop_map(|parts| parts.join(" "))
+    prop::collection::vec(prop::sample::select(fragments()), 0..60)
+        .prop_map(|parts| parts.join(" "))
 }
 
 /// A library file with random edits: (file index, [(kind, position, fragment or byte)]).
@@ -147,7 +77,8 @@ fn mutate(text: &str, edits: &[(u8, usize, usize)]) -> String {
             }
             // Insert a fragment (a token).
             1 => {
-                let frag = FRAGMENTS[what % FRAGMENTS.len()];
+                let fragments = fragments();
+                let frag = fragments[what % fragments.len()];
                 bytes.splice(at..at, frag.bytes().chain(std::iter::once(b' ')));
             }
             // Swap two bytes.
