@@ -106,6 +106,11 @@ pub struct TraceArgs {
     /// single untimed-warm-up run for quick use; other counts drop (runs - 1) / 4 at each end.
     #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub runs: u32,
+    /// Entries of the generated traversal's explicit stack (`--backend jit`; the compiler's
+    /// `recursion-to-stack:stack-size`, default 64). A tree too deep for it is an error naming
+    /// the first ray that overflowed.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
+    pub stack_size: Option<u32>,
 }
 
 fn main() -> ExitCode {
