@@ -3,14 +3,19 @@
 //! `recursion-to-stack`, `lo-inline`), compiled by Cranelift (`scion-clif`) and run through the
 //! runtime contract of docs/design/specialization.md §3 as a [`LayoutCode`]. Input: a library
 //! layout (file stem and layout name) and a stack size; output: native `@L.sizes`, `@L.build`
-//! and a batch entry that calls the native `@closest_hit` once per query.
+//! and the batch entry.
 //!
-//! The batch entry is host code (not a generated `@closest_hit.L.batch`): it calls
-//! `@closest_hit(%B, ray (8 x f32), root, %best) -> i32` through a typed `extern "C"` pointer
-//! whose signature is checked against the `lo` function first. The root reference is what the
-//! generated `@L.node` returns for the logical root: after `@L.build`, `@L.node` runs once more
-//! with fresh counters (placing every node at the same place again) and its result is kept per
-//! packed buffer set (an integer reference as is, a pointer as buffer + offset).
+//! The batch entry is generated here as `lo` ([`batch_entry`]) and compiled with the rest:
+//! `@closest_hit.L.batch(%B, %queries, %results, %begin: u64, %end: u64, %root) -> (i32)` loads
+//! query `i` (a 32-byte `Ray`: origin, direction, tmin, tmax), calls `@closest_hit(%B, ray,
+//! %root, &results[i])` (the 8-byte result record `(f32, u32)`, in/out) and stops at the first
+//! nonzero status. It deviates from design note §3 in one point: the root reference is a
+//! parameter, since the host finds it after packing. The host calls the entries through typed
+//! `extern "C"` pointers whose signatures are checked against the `lo` functions first. The
+//! root reference is what the generated `@L.node` returns for the logical root: after
+//! `@L.build`, `@L.node` runs once more with fresh counters (placing every node at the same
+//! place again) and its result is kept per packed buffer set (an integer reference as is, a
+//! pointer as buffer + offset).
 
 #![allow(unsafe_code)]
 
@@ -57,33 +62,15 @@ type NodePtrFn = unsafe extern "C" fn(
     *mut u32,
     *mut i32,
 ) -> *const u8;
-/// `@closest_hit(%B, ox, oy, oz, dx, dy, dz, tmin, tmax, root, %best) -> i32`.
-type TraceIdxFn = unsafe extern "C" fn(
-    *const *const u8,
-    f32,
-    f32,
-    f32,
-    f32,
-    f32,
-    f32,
-    f32,
-    f32,
-    u32,
-    *mut u32,
-) -> i32;
-type TracePtrFn = unsafe extern "C" fn(
-    *const *const u8,
-    f32,
-    f32,
-    f32,
-    f32,
-    f32,
-    f32,
-    f32,
-    f32,
-    *const u8,
-    *mut u32,
-) -> i32;
+/// `@closest_hit.L.batch(%B, %queries, %results, %begin, %end, %root) -> i32`, root `u32`.
+type BatchIdxFn =
+    unsafe extern "C" fn(*const *const u8, *const Ray, *mut [u32; 2], u64, u64, u32) -> i32;
+/// The same with a `ptr` root.
+type BatchPtrFn =
+    unsafe extern "C" fn(*const *const u8, *const Ray, *mut [u32; 2], u64, u64, *const u8) -> i32;
+
+// The query record the batch entry reads: 8 `f32`s, 32 bytes.
+const _: () = assert!(std::mem::size_of::<Ray>() == 32);
 
 /// The kind of the layout's reference type.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -181,6 +168,16 @@ impl JitClosestHit {
             .map_err(|d| format!("printed lo IR does not parse back: {}", d.render(&sources)))?;
         let refs = check_signatures(&m, layout)?;
         let buffers = buffer_count(&m, &format!("{layout}.sizes"))?;
+        let batch_name = format!("closest_hit.{layout}.batch");
+        let with_batch = format!("{out}\n{}", batch_entry(&batch_name, refs));
+        let file = sources.add("<lo IR with the batch entry>", with_batch.clone());
+        let m = scion_ir::parse_module(&with_batch, file).map_err(|d| {
+            format!(
+                "the generated batch entry does not parse: {}",
+                d.render(&sources)
+            )
+        })?;
+        scion_ir::verify(&m).map_err(|e| format!("the generated batch entry: {e:?}"))?;
         let jit = JitModule::compile(&m).map_err(|e| e.to_string())?;
         let get = |name: &str| {
             jit.function_ptr(name)
@@ -189,7 +186,7 @@ impl JitClosestHit {
         let sizes = get(&format!("{layout}.sizes"))?;
         let build = get(&format!("{layout}.build"))?;
         let node = get(&format!("{layout}.node"))?;
-        let trace = get("closest_hit")?;
+        let trace = get(&batch_name)?;
         // SAFETY: `check_signatures` checked that `@L.sizes` is `(ptr, ptr) -> ()` and
         // `@L.build` is `(ptr, ptr) -> (i32)`, which in the host's C calling convention are
         // these function types; the code lives as long as `jit`, kept in `_code`.
@@ -385,71 +382,92 @@ impl LayoutCode for JitClosestHit {
         let Some(root) = root else {
             return -1;
         };
-        let table: Vec<*const u8> = buffers.iter().map(|b| b.as_ptr()).collect();
-        let b = table.as_ptr();
-        for (q, res) in queries.iter().zip(results.iter_mut()) {
-            let mut best = [res.0.to_bits(), res.1];
-            let (o, d) = (q.origin, q.dir);
-            let status = match root {
-                Root::Index(r) => {
-                    // SAFETY: `@closest_hit` was checked to take (ptr, 8 x f32, u32, ptr) and
-                    // return i32; `table` holds the packed buffers' addresses (alive for the
-                    // call), `r` is the root `@L.node` returned for them, and `best` is a live
-                    // 8-byte cell `(f32, u32)` the traversal reads and writes.
-                    let f = unsafe { std::mem::transmute::<*const u8, TraceIdxFn>(self.trace) };
-                    // SAFETY: see above.
-                    unsafe {
-                        f(
-                            b,
-                            o.x,
-                            o.y,
-                            o.z,
-                            d.x,
-                            d.y,
-                            d.z,
-                            q.tmin,
-                            q.tmax,
-                            r,
-                            best.as_mut_ptr(),
-                        )
-                    }
-                }
-                Root::Pointer(i, off) => {
-                    let Some(buf) = buffers.get(i) else {
-                        return -1;
-                    };
-                    let r = buf.as_ptr().wrapping_add(off);
-                    // SAFETY: as for the index case, with the root an address inside the
-                    // packed buffer `i` (found there after `@L.build`).
-                    let f = unsafe { std::mem::transmute::<*const u8, TracePtrFn>(self.trace) };
-                    // SAFETY: see above.
-                    unsafe {
-                        f(
-                            b,
-                            o.x,
-                            o.y,
-                            o.z,
-                            d.x,
-                            d.y,
-                            d.z,
-                            q.tmin,
-                            q.tmax,
-                            r,
-                            best.as_mut_ptr(),
-                        )
-                    }
-                }
-            };
-            if status != STATUS_OK {
-                return status;
-            }
-            *res = (f32::from_bits(best[0]), best[1]);
+        if queries.len() != results.len() {
+            return -1;
         }
-        STATUS_OK
+        let table: Vec<*const u8> = buffers.iter().map(|b| b.as_ptr()).collect();
+        let mut records: Vec<[u32; 2]> = results.iter().map(|r| [r.0.to_bits(), r.1]).collect();
+        let (q, r, end) = (queries.as_ptr(), records.as_mut_ptr(), queries.len() as u64);
+        let status = match root {
+            Root::Index(root) => {
+                // SAFETY: the batch entry was generated with this signature (the root a `u32`,
+                // checked from `@closest_hit`); `table` holds the packed buffers' addresses
+                // (alive for the call), `root` is what `@L.node` returned for them, and it
+                // reads `queries[0..end]` (32-byte `Ray`s) and reads and writes
+                // `records[0..end]` (8-byte records), both exactly `end` long.
+                let f = unsafe { std::mem::transmute::<*const u8, BatchIdxFn>(self.trace) };
+                // SAFETY: see above.
+                unsafe { f(table.as_ptr(), q, r, 0, end, root) }
+            }
+            Root::Pointer(i, off) => {
+                let Some(buf) = buffers.get(i) else {
+                    return -1;
+                };
+                let root = buf.as_ptr().wrapping_add(off);
+                // SAFETY: as for the index case, with the root an address inside the packed
+                // buffer `i` (found there after `@L.build`).
+                let f = unsafe { std::mem::transmute::<*const u8, BatchPtrFn>(self.trace) };
+                // SAFETY: see above.
+                unsafe { f(table.as_ptr(), q, r, 0, end, root) }
+            }
+        };
+        for (res, rec) in results.iter_mut().zip(records) {
+            *res = (f32::from_bits(rec[0]), rec[1]);
+        }
+        status
     }
     /// A node at depth `k` (root 1) runs with at most `k - 1` pending entries and pushes two,
     /// so trees of depth up to `stack_size - 1` never overflow.
     fn stack_limit(&self) -> Option<usize> {
         Some(self.stack_size.saturating_sub(1) as usize)
     }
+}
+
+/// The `lo` text of the batch entry `@name(%B, %queries, %results, %begin, %end, %root) -> (i32)`
+/// over `@closest_hit` (see the module comment).
+fn batch_entry(name: &str, refs: RefKind) -> String {
+    let r = match refs {
+        RefKind::Index => "u32",
+        RefKind::Pointer => "ptr",
+    };
+    let f = "f32, f32, f32, f32, f32, f32, f32, f32";
+    let mut t = format!(
+        "func @{name}(%0: ptr, %1: ptr, %2: ptr, %3: u64, %4: u64, %5: {r}) -> (i32) {{\n\
+         \x20 \"lo.br\"()[^bb1(%3 : u64)] : () -> ()\n\
+         ^bb1(%6: u64):\n\
+         \x20 %7 = \"lo.cmp\"(%6, %4) {{pred = \"lt\"}} : (u64, u64) -> i1\n\
+         \x20 \"lo.cond_br\"(%7)[^bb2, ^bb4] : (i1) -> ()\n\
+         ^bb2:\n\
+         \x20 %8 = \"lo.const\"() {{value = 32}} : () -> u64\n\
+         \x20 %9 = \"lo.mul\"(%6, %8) : (u64, u64) -> u64\n\
+         \x20 %10 = \"lo.ptr_add\"(%1, %9) : (ptr, u64) -> ptr\n"
+    );
+    for k in 0..8 {
+        t.push_str(&format!(
+            "  %{} = \"lo.load\"(%10) {{offset = {}}} : (ptr) -> f32\n",
+            11 + k,
+            4 * k
+        ));
+    }
+    t.push_str(&format!(
+        "  %19 = \"lo.const\"() {{value = 8}} : () -> u64\n\
+         \x20 %20 = \"lo.mul\"(%6, %19) : (u64, u64) -> u64\n\
+         \x20 %21 = \"lo.ptr_add\"(%2, %20) : (ptr, u64) -> ptr\n\
+         \x20 %22 = \"lo.call\"(%0, %11, %12, %13, %14, %15, %16, %17, %18, %5, %21) \
+         {{callee = @closest_hit}} : (ptr, {f}, {r}, ptr) -> i32\n\
+         \x20 %23 = \"lo.const\"() {{value = 0}} : () -> i32\n\
+         \x20 %24 = \"lo.cmp\"(%22, %23) {{pred = \"ne\"}} : (i32, i32) -> i1\n\
+         \x20 \"lo.cond_br\"(%24)[^bb5, ^bb3] : (i1) -> ()\n\
+         ^bb3:\n\
+         \x20 %25 = \"lo.const\"() {{value = 1}} : () -> u64\n\
+         \x20 %26 = \"lo.add\"(%6, %25) : (u64, u64) -> u64\n\
+         \x20 \"lo.br\"()[^bb1(%26 : u64)] : () -> ()\n\
+         ^bb4:\n\
+         \x20 %27 = \"lo.const\"() {{value = 0}} : () -> i32\n\
+         \x20 \"lo.return\"(%27) : (i32) -> ()\n\
+         ^bb5:\n\
+         \x20 \"lo.return\"(%22) : (i32) -> ()\n\
+         }}\n"
+    ));
+    t
 }

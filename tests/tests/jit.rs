@@ -85,3 +85,26 @@ fn unknown_layouts_and_bad_stack_sizes_are_errors() {
         .unwrap();
     assert!(e.contains("stack"), "{e}");
 }
+
+/// The generated batch entry traces queries in order and stops at the first nonzero status,
+/// leaving that query's result as the caller initialized it.
+#[test]
+fn the_batch_entry_stops_at_the_first_overflow() {
+    let scene = gen::random_soup(64, 0.1, 9);
+    let tree = build_caterpillar(&scene.triangles, DeepSide::Left);
+    let code = JitClosestHit::compile("ptr", "PtrBVH", Some(4)).unwrap();
+    let packed = Packed::new(&code, &tree).unwrap();
+    let c = scene.bounds().center();
+    let away = Ray::new(Vec3::new(1e3, 1e3, 1e3), Vec3::new(1.0, 0.0, 0.0));
+    let mut rays = vec![away; 6];
+    rays[3] = Ray::new(c, Vec3::new(0.0, 0.0, 1.0));
+    let mut results = vec![(7.0f32, 9u32); 6];
+    let status = code.batch(&packed.buffers(), &rays, &mut results);
+    assert_eq!(status, STATUS_STACK_OVERFLOW);
+    // Queries 0-2 missed (their records are kept as given: nothing closer than t = 7 was
+    // found), query 3 overflowed and the batch stopped there.
+    assert!(results.iter().all(|&r| r == (7.0, 9)));
+    let mut one = vec![(f32::INFINITY, u32::MAX); 3];
+    assert_eq!(code.batch(&packed.buffers(), &rays[..3], &mut one), 0);
+    assert!(one.iter().all(|&r| r.1 == u32::MAX));
+}
