@@ -7,8 +7,8 @@
 //! pack. `--backend jit` follows the runtime contract of docs/design/specialization.md §3
 //! through `scion_tests::contract` (`@L.sizes`, one aligned allocation per buffer, `@L.build`
 //! timed as the pack time, the batch entry over blocks of 64, a nonzero status reported with
-//! the failing ray); the specializer and the JIT are not in this build yet, so [`jit_code`]
-//! answers with an error saying so.
+//! the failing ray), with the code of `scion_tests::jit` (closest hit specialized to the
+//! layout, lowered to `lo` at `-O1` and compiled by Cranelift; the compile time is printed).
 
 use crate::{BackendArg, BuilderArg, CliError, RaysArg, TraceArgs};
 use scion_runtime::batch::BatchDriver;
@@ -19,6 +19,7 @@ use scion_runtime::scene::{load_obj, Scene};
 use scion_runtime::timing::{measure_with, Timing, TimingPlan};
 use scion_tests::backend::{Backend, BackendKind};
 use scion_tests::contract::{LayoutCode, Packed};
+use scion_tests::jit::JitClosestHit;
 use scion_tests::mem_interp::{MemInterpBackend, LIBRARY_LAYOUTS};
 use std::time::{Duration, Instant};
 
@@ -37,6 +38,9 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     // fails at once.
     let layout = args.layout.as_deref().unwrap_or("pbrt");
     let uses_layout = matches!(args.backend, BackendArg::Jit | BackendArg::MemInterp);
+    if args.stack_size.is_some() && args.backend != BackendArg::Jit {
+        eprintln!("scion: note: --stack-size is used by --backend jit only");
+    }
     if args.layout.is_some() && !uses_layout {
         eprintln!("scion: note: --layout is used by --backend jit only; this backend traces the logical tree");
     }
@@ -46,7 +50,7 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         BackendArg::Interp => Engine::Free(instantiate(BackendKind::Interp(1), args)?),
         BackendArg::MemInterp => Engine::Mem(Box::new(mem_backend(layout, args.threads)?)),
         BackendArg::Jit => Engine::Layout {
-            code: jit_code(layout)?,
+            code: jit_code(layout, args.stack_size)?,
             driver: BatchDriver::new(args.threads).map_err(CliError::new)?,
         },
     };
@@ -164,9 +168,12 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
             let parts: Vec<String> = p
                 .buffers
                 .iter()
-                .map(|(name, n, align)| match align {
-                    Some(a) => format!("{name} {n} B (align {a})"),
-                    None => format!("{name} {n} B"),
+                .map(|(name, n, align)| {
+                    let per_node = *n as f64 / stats.nodes.max(1) as f64;
+                    match align {
+                        Some(a) => format!("{name} {n} B (align {a}, {per_node:.1} B/node)"),
+                        None => format!("{name} {n} B ({per_node:.1} B/node)"),
+                    }
                 })
                 .collect();
             (
@@ -272,24 +279,29 @@ fn instantiate(kind: BackendKind, args: &TraceArgs) -> Result<Box<dyn Backend>, 
     kind.instantiate(args.threads).map_err(CliError::new)
 }
 
-/// The closest-hit code specialized to `layout` and compiled by the JIT. The layout name is
-/// checked first, so a typo is reported as such; layout specialization and the Cranelift JIT
-/// are not part of this build yet, which is an error (never a stand-in result).
-fn jit_code(layout: &str) -> Result<Box<dyn LayoutCode>, CliError> {
-    let known = LAYOUTS.iter().any(|(n, _)| *n == layout) || layout.ends_with(".scion");
-    if !known {
+/// The closest-hit code specialized to the library layout `layout` (a `--layout` name) and
+/// compiled by the JIT, with a traversal stack of `stack_size` entries. The layout name is
+/// checked first, so a typo is reported as such.
+fn jit_code(layout: &str, stack_size: Option<u32>) -> Result<Box<dyn LayoutCode>, CliError> {
+    let stem = layout.replace('-', "_");
+    let Some(&(stem, name, _)) = LIBRARY_LAYOUTS.iter().find(|l| l.0 == stem) else {
         let names: Vec<&str> = LAYOUTS.iter().map(|(n, _)| *n).collect();
-        return Err(CliError::new(format!("unknown layout `{layout}`"))
-            .note(format!("known layouts: {}", names.join(", ")))
-            .note("or give the path of a .scion file that defines the layout"));
-    }
-    Err(CliError::new(format!(
-        "--backend jit is not available in this build (layout `{layout}`): layout \
-         specialization and the Cranelift JIT are not merged yet"
-    ))
-    .note(
-        "use --backend reference (the Rust reference) or --backend interp (the tree interpreter)",
-    ))
+        let err = CliError::new(format!("unknown layout `{layout}` for --backend jit"))
+            .note(format!("library layouts: {}", names.join(", ")));
+        return Err(if layout.ends_with(".scion") {
+            err.note("--backend jit compiles the library's layouts only")
+        } else {
+            err
+        });
+    };
+    progress(&format!("compiling closest hit for layout `{name}`"));
+    let code = JitClosestHit::compile(stem, name, stack_size)
+        .map_err(|e| CliError::new(format!("cannot compile closest hit for `{layout}`: {e}")))?;
+    eprintln!(
+        "scion: compiled in {:.3} s",
+        code.compile_time.as_secs_f64()
+    );
+    Ok(Box::new(code))
 }
 
 fn build(scene: &Scene, args: &TraceArgs) -> LogicalTree {

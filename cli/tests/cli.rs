@@ -1,6 +1,7 @@
-//! Integration tests of the `scion` command: the happy path on a small OBJ file (reference and
-//! interpreter write the same hits file; rays files are read), and the user errors (a missing
-//! scene, a NaN coordinate reported with file and line, bad flags, the JIT not available, an
+//! Integration tests of the `scion` command: the happy path on a small OBJ file (reference,
+//! interpreter and the JIT of pbrt and ptr write the same hits file; rays files are read; a
+//! JIT stack too small names the overflowing ray), and the user errors (a missing
+//! scene, a NaN coordinate reported with file and line, bad flags, an
 //! unknown layout, an empty scene) as clear messages with exit status 1 (2 for clap's usage
 //! errors), never a panic.
 
@@ -177,22 +178,126 @@ fn bad_flags_are_usage_errors() {
     }
 }
 
-#[test]
-fn the_jit_backend_says_it_is_not_available() {
-    let o = scion(&[
-        "trace",
-        "--scene",
-        "/nonexistent.obj",
-        "--backend",
-        "jit",
-        "--layout",
-        "ptr",
-    ]);
-    assert_eq!(o.status.code(), Some(1));
-    let e = text(&o.stderr);
-    assert!(e.contains("--backend jit is not available"), "{e}");
-    assert!(e.contains("`ptr`"), "{e}");
+/// A soup of `n` small triangles in the unit cube (a deterministic LCG), as OBJ text.
+fn soup(n: usize) -> String {
+    let mut state = 12345u64;
+    let mut f = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 40) as f32) / (1u64 << 24) as f32
+    };
+    let mut obj = String::new();
+    for i in 0..n {
+        let c = [f(), f(), f()];
+        for _ in 0..3 {
+            obj.push_str(&format!(
+                "v {} {} {}\n",
+                c[0] + 0.1 * f(),
+                c[1] + 0.1 * f(),
+                c[2] + 0.1 * f()
+            ));
+        }
+        obj.push_str(&format!("f {} {} {}\n", 3 * i + 1, 3 * i + 2, 3 * i + 3));
+    }
+    obj
+}
 
+#[test]
+fn the_jit_writes_the_reference_hits_for_pbrt_and_ptr() {
+    let dir = scratch("jit");
+    let scene = write(&dir, "soup.obj", &soup(400));
+    let run = |backend: &str, layout: &str, rays: &str| {
+        let out = dir.join(format!("{backend}-{layout}-{rays}.hits"));
+        let o = scion(&[
+            "trace",
+            "--scene",
+            &scene,
+            "--backend",
+            backend,
+            "--layout",
+            layout,
+            "--rays",
+            rays,
+            "--n",
+            "3000",
+            "--runs",
+            "1",
+            "-o",
+            &out.display().to_string(),
+        ]);
+        assert!(
+            o.status.success(),
+            "{backend} {layout}: {}",
+            text(&o.stderr)
+        );
+        (text(&o.stdout), std::fs::read(&out).unwrap())
+    };
+    for rays in ["primary", "secondary"] {
+        let (_, want) = run("reference", "pbrt", rays);
+        assert_eq!(want.len(), 3000 * 8);
+        for (layout, per_node) in [("pbrt", "32.0 B/node"), ("ptr", "48.0 B/node")] {
+            let (stdout, got) = run("jit", layout, rays);
+            assert_eq!(got, want, "jit {layout} {rays} differs from reference");
+            assert!(stdout.contains(per_node), "{stdout}");
+            assert!(stdout.contains("backend      jit ("), "{stdout}");
+            assert!(stdout.contains("pack time    0."), "{stdout}");
+            assert!(stdout.contains("Mrays/s"), "{stdout}");
+        }
+    }
+}
+
+#[test]
+fn a_small_jit_stack_reports_the_overflowing_ray() {
+    let dir = scratch("jitstack");
+    let scene = write(&dir, "cube.obj", CUBE);
+    let rays_path = dir.join("in.rays");
+    // Rays 0-4 miss the scene's box (no push); ray 5 starts inside it.
+    let away = Ray::new(Vec3::new(5.0, 5.0, 5.0), Vec3::new(0.0, 1.0, 0.0));
+    let mut rays = vec![away; 8];
+    rays[5] = Ray::new(Vec3::new(0.5, 0.5, 0.5), Vec3::new(0.0, 0.0, 1.0));
+    rays[7] = rays[5];
+    write_rays(&rays_path, &rays).unwrap();
+    let args = |stack: &'static str| {
+        let mut a = vec![
+            "trace".to_string(),
+            "--scene".into(),
+            scene.clone(),
+            "--backend".into(),
+            "jit".into(),
+            "--layout".into(),
+            "pbrt".into(),
+            "--builder".into(),
+            "median".into(),
+            "--rays-file".into(),
+            rays_path.display().to_string(),
+            "--runs".into(),
+            "1".into(),
+        ];
+        if !stack.is_empty() {
+            a.extend(["--stack-size".to_string(), stack.to_string()]);
+        }
+        a
+    };
+    let run = |a: Vec<String>| {
+        let refs: Vec<&str> = a.iter().map(|s| s.as_str()).collect();
+        scion(&refs)
+    };
+    let o = run(args("1"));
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o.stdout));
+    let e = text(&o.stderr);
+    assert!(e.contains("ray 5: traversal stack overflow"), "{e}");
+    // The default stack holds the cube's median tree.
+    let o = run(args(""));
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(text(&o.stdout).contains("hits         2 of 8 rays"));
+    // A zero-entry stack is a usage error.
+    let o = run(args("0"));
+    assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn the_jit_backend_rejects_unknown_layouts() {
     let o = scion(&[
         "trace",
         "--scene",

@@ -1,5 +1,5 @@
 //! The host side of the runtime contract of docs/design/specialization.md §3, for code
-//! specialized to a layout (the JIT's, later): ask `@L.sizes` for each buffer's byte size,
+//! specialized to a layout (the JIT's, `crate::jit`): ask `@L.sizes` for each buffer's byte size,
 //! allocate each buffer once with the layout's alignment, pack with `@L.build`, then run the
 //! batch entry over threads in blocks of 64 with each result initialized to
 //! `(ray.tmax, 0xFFFFFFFF)`. Input: a [`LayoutCode`] and a logical tree; output: [`Packed`]

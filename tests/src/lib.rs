@@ -13,10 +13,13 @@
 //!   code specialized to a layout.
 //! - [`mem_interp`]: closest hit specialized to each library layout (`tree`+`mem` level) and
 //!   run by the interpreter over its byte memory through that contract: the layout rows of
-//!   the differential table until the JIT lands.
+//!   the differential table without the JIT.
+//! - [`jit`]: closest hit specialized to each library layout, lowered to `lo` and compiled by
+//!   Cranelift, as a [`contract::LayoutCode`].
 
 pub mod backend;
 pub mod cases;
 pub mod contract;
+pub mod jit;
 pub mod mem_interp;
 pub mod oracle;

@@ -20,6 +20,7 @@ use scion_runtime::scene::{gen, Scene};
 use scion_tests::backend::{Backend, BackendKind};
 use scion_tests::cases::{compare, real_scene, scenes_dir, RayKind, TreeKind, REAL_SCENES};
 use scion_tests::contract::LayoutBackend;
+use scion_tests::jit::JitClosestHit;
 use scion_tests::mem_interp::{MemInterpBackend, LIBRARY_LAYOUTS};
 use scion_tests::oracle::tree_depth;
 use std::time::Instant;
@@ -33,8 +34,8 @@ const BACKENDS: &[BackendKind] = &[
 
 /// The backends of [`BACKENDS`] and the layouts run through the runtime contract: the
 /// hand-written `flat32` of `common`, and closest hit specialized to each library layout that
-/// keeps boxes exact, run by the interpreter at the mem level (scenes up to 2 k triangles);
-/// the JIT of each layout will join here.
+/// keeps boxes exact, run by the interpreter at the mem level (scenes up to 2 k triangles)
+/// and compiled by the Cranelift JIT (every scene).
 fn backends() -> Vec<Box<dyn Backend>> {
     let mut all: Vec<Box<dyn Backend>> = BACKENDS
         .iter()
@@ -51,8 +52,23 @@ fn backends() -> Vec<Box<dyn Backend>> {
             all.push(Box::new(b));
         }
     }
+    // The same, lowered to `lo` and compiled by Cranelift: every exact layout, every row, with
+    // a stack of 256 entries so that the deepest hard case (depth 69) is compared too (the
+    // default 64 and its overflow status are tested in tests/jit.rs and the CLI tests).
+    for &(stem, name, exact) in LIBRARY_LAYOUTS {
+        if exact {
+            let code = JitClosestHit::compile(stem, name, Some(JIT_STACK))
+                .unwrap_or_else(|e| panic!("jit {stem}: {e}"));
+            all.push(Box::new(
+                LayoutBackend::new(Box::new(code), 2).expect("threads"),
+            ));
+        }
+    }
     all
 }
+
+/// Entries of the JIT rows' traversal stack.
+const JIT_STACK: u32 = 256;
 
 /// Where a row's scene comes from.
 #[derive(Clone, Copy, Debug)]
@@ -192,6 +208,7 @@ fn backends_agree_with_the_reference() {
                     let deep = b.stack_limit().is_some_and(|l| tree_depth(tree) > l);
                     if deep && e.contains("stack overflow") {
                         overflows += 1;
+                        println!("stack overflow (tree depth {}): {what}", tree_depth(tree));
                     } else {
                         failures.push(format!("{what}: {e}"));
                     }

@@ -1,0 +1,110 @@
+//! The JIT of each library layout through the runtime contract: buffer sizes per node as the
+//! layout catalog says (pbrt 32 bytes, ptr 48), hits bit-identical to the reference, and a
+//! traversal stack smaller than the tree reported as a stack overflow naming the first ray.
+
+use scion_runtime::batch::BatchDriver;
+use scion_runtime::bvh::{build_caterpillar, build_sah_binned, DeepSide, SahOptions};
+use scion_runtime::geom::{Ray, Vec3};
+use scion_runtime::reference::closest_hits_tree;
+use scion_runtime::scene::gen;
+use scion_tests::contract::{LayoutCode, Packed, TraceFailure, STATUS_STACK_OVERFLOW};
+use scion_tests::jit::JitClosestHit;
+
+#[test]
+fn jit_layouts_pack_to_their_sizes_and_match_the_reference() {
+    let scene = gen::random_soup(500, 0.1, 11);
+    let tree = build_sah_binned(&scene.triangles, &SahOptions::default());
+    let rays = scion_runtime::query::secondary_rays(scene.bounds(), 700, 5);
+    let driver = BatchDriver::new(2).unwrap();
+    let want = closest_hits_tree(&tree, &rays, &driver);
+    for (stem, name, node_bytes) in [("pbrt", "LinearBVH", 32), ("ptr", "PtrBVH", 48)] {
+        let code = JitClosestHit::compile(stem, name, None).unwrap();
+        assert_eq!(code.layout(), name);
+        let packed = Packed::new(&code, &tree).unwrap();
+        let bufs = packed.buffers();
+        let prims = 40 * tree.primitives.len();
+        assert!(
+            bufs.iter()
+                .any(|b| b.len() == node_bytes * tree.nodes.len()),
+            "{stem}: no buffer of {node_bytes} bytes per node: {:?}",
+            bufs.iter().map(|b| b.len()).collect::<Vec<_>>()
+        );
+        assert!(bufs.iter().any(|b| b.len() == prims), "{stem}: primitives");
+        for b in &bufs {
+            assert_eq!(b.as_ptr() as usize % 64, 0);
+        }
+        let got = packed.trace(&code, &rays, &driver).unwrap();
+        let same = got.iter().zip(&want).filter(|(g, w)| g.bit_eq(w)).count();
+        assert_eq!(same, rays.len(), "{stem}: hits differ from the reference");
+        assert!(got.iter().any(|h| h.is_hit()), "{stem}: no hits");
+    }
+}
+
+#[test]
+fn a_small_stack_overflows_on_a_deep_tree_and_names_the_ray() {
+    let scene = gen::random_soup(64, 0.1, 9);
+    let tree = build_caterpillar(&scene.triangles, DeepSide::Left);
+    let c = scene.bounds().center();
+    let away = Ray::new(Vec3::new(1e3, 1e3, 1e3), Vec3::new(1.0, 0.0, 0.0));
+    let mut rays = vec![away; 200];
+    rays[137] = Ray::new(c, Vec3::new(0.0, 0.0, 1.0));
+    rays[180] = rays[137];
+    let driver = BatchDriver::new(2).unwrap();
+    for (stem, name) in [("pbrt", "LinearBVH"), ("ptr", "PtrBVH")] {
+        let code = JitClosestHit::compile(stem, name, Some(4)).unwrap();
+        assert_eq!(code.stack_limit(), Some(3));
+        let packed = Packed::new(&code, &tree).unwrap();
+        let e = packed.trace(&code, &rays, &driver).unwrap_err();
+        assert_eq!(
+            e,
+            TraceFailure {
+                ray: 137,
+                status: STATUS_STACK_OVERFLOW
+            },
+            "{stem}"
+        );
+        // The default stack (64 entries) holds the same tree: the hits are the reference's.
+        let code = JitClosestHit::compile(stem, name, None).unwrap();
+        let packed = Packed::new(&code, &tree).unwrap();
+        let got = packed.trace(&code, &rays, &driver).unwrap();
+        let want = closest_hits_tree(&tree, &rays, &driver);
+        assert!(got.iter().zip(&want).all(|(g, w)| g.bit_eq(w)), "{stem}");
+    }
+}
+
+#[test]
+fn unknown_layouts_and_bad_stack_sizes_are_errors() {
+    let e = JitClosestHit::compile("nope", "X", None).err().unwrap();
+    assert!(e.contains("no library layout"), "{e}");
+    let e = JitClosestHit::compile("pbrt", "NoSuchLayout", None)
+        .err()
+        .unwrap();
+    assert!(e.contains("NoSuchLayout"), "{e}");
+    let e = JitClosestHit::compile("pbrt", "LinearBVH", Some(0))
+        .err()
+        .unwrap();
+    assert!(e.contains("stack"), "{e}");
+}
+
+/// The generated batch entry traces queries in order and stops at the first nonzero status,
+/// leaving that query's result as the caller initialized it.
+#[test]
+fn the_batch_entry_stops_at_the_first_overflow() {
+    let scene = gen::random_soup(64, 0.1, 9);
+    let tree = build_caterpillar(&scene.triangles, DeepSide::Left);
+    let code = JitClosestHit::compile("ptr", "PtrBVH", Some(4)).unwrap();
+    let packed = Packed::new(&code, &tree).unwrap();
+    let c = scene.bounds().center();
+    let away = Ray::new(Vec3::new(1e3, 1e3, 1e3), Vec3::new(1.0, 0.0, 0.0));
+    let mut rays = vec![away; 6];
+    rays[3] = Ray::new(c, Vec3::new(0.0, 0.0, 1.0));
+    let mut results = vec![(7.0f32, 9u32); 6];
+    let status = code.batch(&packed.buffers(), &rays, &mut results);
+    assert_eq!(status, STATUS_STACK_OVERFLOW);
+    // Queries 0-2 missed (their records are kept as given: nothing closer than t = 7 was
+    // found), query 3 overflowed and the batch stopped there.
+    assert!(results.iter().all(|&r| r == (7.0, 9)));
+    let mut one = vec![(f32::INFINITY, u32::MAX); 3];
+    assert_eq!(code.batch(&packed.buffers(), &rays[..3], &mut one), 0);
+    assert!(one.iter().all(|&r| r.1 == u32::MAX));
+}
