@@ -25,6 +25,9 @@
 mod flat;
 mod intrinsics;
 mod mem_ops;
+mod opmap;
+
+use opmap::{lo_of, unsigned};
 
 pub use flat::{layout, leaves};
 
@@ -775,33 +778,5 @@ impl OrTy for Option<TypeId> {
             Some(t) => Ok(t),
             None => cx.err("op without a result"),
         }
-    }
-}
-
-fn unsigned(t: scion_ir::types::IntTy) -> scion_ir::types::IntTy {
-    use scion_ir::types::IntTy::*;
-    match t {
-        I8 | U8 => U8,
-        I16 | U16 => U16,
-        I32 | U32 => U32,
-        I64 | U64 => U64,
-    }
-}
-
-fn lo_of(k: T) -> L {
-    match k {
-        T::Add => L::Add,
-        T::Sub => L::Sub,
-        T::Mul => L::Mul,
-        T::Div => L::Div,
-        T::Rem => L::Rem,
-        T::And => L::And,
-        T::Or => L::Or,
-        T::Xor => L::Xor,
-        T::Shl => L::Shl,
-        T::Shr => L::Shr,
-        T::Neg => L::Neg,
-        T::BitNot => L::BitNot,
-        _ => L::Not,
     }
 }
