@@ -124,13 +124,29 @@ unsafe impl Send for JitClosestHit {}
 // SAFETY: as above; the only mutable state (`roots`) is behind a mutex.
 unsafe impl Sync for JitClosestHit {}
 
+/// The `-O` level [`JitClosestHit::compile`] uses: 2, so `mem-cse` merges the layout's
+/// redundant loads before lowering.
+pub const JIT_OPT_LEVEL: u8 = 2;
+
 impl JitClosestHit {
     /// Compiles closest hit for the library layout in file `stem` (`pbrt`, `ptr`, ...) named
-    /// `layout`, with a traversal stack of `stack_size` entries (`None`: the default, 64).
+    /// `layout`, with a traversal stack of `stack_size` entries (`None`: the default, 64), at
+    /// [`JIT_OPT_LEVEL`].
     pub fn compile(
         stem: &str,
         layout: &str,
         stack_size: Option<u32>,
+    ) -> Result<JitClosestHit, String> {
+        JitClosestHit::compile_at(stem, layout, stack_size, JIT_OPT_LEVEL)
+    }
+
+    /// As [`JitClosestHit::compile`], with the tree/mem passes of `-O{opt_level}` after the
+    /// specializations.
+    pub fn compile_at(
+        stem: &str,
+        layout: &str,
+        stack_size: Option<u32>,
+        opt_level: u8,
     ) -> Result<JitClosestHit, String> {
         let start = Instant::now();
         let text = layout_source(stem).ok_or_else(|| format!("no library layout `{stem}`"))?;
@@ -149,7 +165,7 @@ impl JitClosestHit {
             "destructor-specialize".to_string(),
             "constructor-specialize".to_string(),
         ];
-        pipeline.extend(for_level(1));
+        pipeline.extend(for_level(opt_level));
         let popts = PassOptions {
             layout: Some(layout.to_string()),
             stack_size,

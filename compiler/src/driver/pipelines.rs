@@ -2,6 +2,8 @@
 //!
 //! * `-O0`: nothing (the IR exactly as generated, for reading and for pass tests).
 //! * `-O1` and up: `const-fold` first, so that `dce` sees the operands it made dead.
+//! * `-O2` and up: `mem-cse` between them (after the specializations, which `select` puts
+//!   first), so that `dce` drops the copies it made dead.
 //! * `--emit=mem` (with `--layout`), and `--emit=lo|clif` with `--layout`:
 //!   `destructor-specialize` and `constructor-specialize` first, then the level's passes
 //!   (`--emit=lo|clif` then lower to `lo` in `driver::lower`).
@@ -14,7 +16,8 @@ use scion_ir::diag::Diagnostic;
 pub fn for_level(level: u8) -> Vec<String> {
     let names: &[&str] = match level {
         0 => &[],
-        _ => &["const-fold", "dce"],
+        1 => &["const-fold", "dce"],
+        _ => &["const-fold", "mem-cse", "dce"],
     };
     names.iter().map(|s| s.to_string()).collect()
 }

@@ -3,10 +3,12 @@
 //!
 //! Generic passes that work on any dialect (`const-fold`, `dce`) come from `scion-ir`; passes
 //! that need the compiler's knowledge of layouts are registered here next to them
-//! ([`tree_to_mem`]) and below them to `lo` ([`mem_to_lo`], [`recursion_to_stack`],
+//! ([`tree_to_mem`], [`mem_cse`]) and below them to `lo` ([`mem_to_lo`], [`recursion_to_stack`],
 //! [`lo_inline`]). Pass order lives in `driver/pipelines.rs` alone.
 
 pub mod lo_inline;
+#[path = "mem/cse.rs"]
+pub mod mem_cse;
 pub mod mem_to_lo;
 #[path = "mem/recursion_to_stack.rs"]
 pub mod recursion_to_stack;
@@ -30,6 +32,13 @@ pub fn registry() -> PassRegistry {
         input: Level::Mem,
         output: Level::Mem,
         create: || Box::new(tree_to_mem::constructor::ConstructorSpecialize),
+    });
+    r.register(PassInfo {
+        name: "mem-cse",
+        summary: "reuse dominating equivalent pure tree/mem ops, layout loads included",
+        input: Level::Any,
+        output: Level::Any,
+        create: || Box::new(mem_cse::MemCse),
     });
     lower_passes(&mut r);
     r

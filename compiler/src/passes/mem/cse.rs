@@ -1,0 +1,236 @@
+//! `mem-cse`: common-subexpression elimination over the pure ops of the structured `tree`/`mem`
+//! level (level: any → same; paper §7.3, "redundant loads are eliminated and common
+//! subexpressions reused across control-flow boundaries").
+//!
+//! An op is replaced by an equivalent op that dominates it: same kind, same operands (after
+//! aliasing), same attributes and same result types, defined earlier in the same block or in an
+//! enclosing block. Regions are structured, so dominance is scoping: an op inside a region of a
+//! `tree.if`/`tree.match`/`tree.foreach` may reuse one from outside, never one from a sibling
+//! region. The copy's results are aliased to the original's (`rewrite::replace_all_uses`);
+//! `dce` removes the dead copy afterwards.
+//!
+//! ```text
+//! %a = "mem.load"(%n) {offset = 28} : (ptr) -> u16
+//! %r = "tree.if"(%c) ({ %b = "mem.load"(%n) {offset = 28} : (ptr) -> u16 ... })   // %b → %a
+//! ```
+//!
+//! Candidates: pure `tree` ops except `tree.var` (each makes a fresh cell) and `tree.load` (a
+//! cell `tree.store` mutates), and `mem.buffer`, `mem.addr`, `mem.view`, `mem.load`. Loads count
+//! as pure because the layout's buffers are immutable during a traversal. Where a function does
+//! write (the constructor's `mem.store`s, the build ops, a call of a function that writes, or a
+//! region holding one of these), loads are keyed by a memory epoch that each write advances, so
+//! a load never reuses one from before a write (a region that writes advances the epoch both
+//! before and after it, which covers loops). Calls are never merged. `lo` functions (CFG
+//! regions) are left alone.
+
+use rustc_hash::{FxHashMap, FxHashSet};
+use scion_ir::module::Module;
+use scion_ir::op::OpKind;
+use scion_ir::pass::{Pass, PassCx, PassError};
+use scion_ir::{mem, rewrite, tree, walk, BlockId, FuncId, OpId, TypeId, ValueId};
+
+/// The `mem-cse` pass.
+#[derive(Default)]
+pub struct MemCse;
+
+impl Pass for MemCse {
+    fn name(&self) -> &'static str {
+        "mem-cse"
+    }
+
+    fn summary(&self) -> &'static str {
+        "reuse dominating equivalent pure tree/mem ops (loads of the immutable layout included)"
+    }
+
+    fn run(&mut self, m: &mut Module, _cx: &mut PassCx) -> Result<bool, PassError> {
+        let writers = layout_writers(m);
+        let mut changed = false;
+        for f in m.func_order.clone() {
+            let body = m.funcs[f].body;
+            let blocks = m.regions[body].blocks.clone();
+            if blocks.len() != 1 {
+                continue;
+            }
+            let mut cx = Scope {
+                writers: &writers,
+                epoch: 0,
+                table: FxHashMap::default(),
+                changed: false,
+            };
+            cx.block(m, blocks[0]);
+            changed |= cx.changed;
+        }
+        Ok(changed)
+    }
+}
+
+/// What makes two ops equivalent: kind, resolved operands, attributes (printed, since they are
+/// compared whole), result types, and for `mem.load` the memory epoch (0 for other ops).
+type Key = (OpKind, Vec<ValueId>, String, Vec<TypeId>, u32);
+
+/// The walk's state: the table of available ops, valid in the current block and its enclosing
+/// ones, and the memory epoch (advanced by every write).
+struct Scope<'a> {
+    writers: &'a FxHashSet<FuncId>,
+    epoch: u32,
+    table: FxHashMap<Key, OpId>,
+    changed: bool,
+}
+
+impl Scope<'_> {
+    /// Visits the ops of `block` in order, then removes what it added to the table.
+    fn block(&mut self, m: &mut Module, block: BlockId) {
+        let mut added = Vec::new();
+        for op in m.blocks[block].ops.clone() {
+            let kind = m.ops[op].kind;
+            if !kind.has_structured_regions() {
+                continue;
+            }
+            if self.candidate(kind) && m.ops[op].regions.is_empty() && !m.ops[op].results.is_empty()
+            {
+                let epoch = if kind.is_mem(mem::Op::Load) {
+                    self.epoch
+                } else {
+                    0
+                };
+                let key = key_of(m, op, epoch);
+                if let Some(&prev) = self.table.get(&key) {
+                    let (old, new) = (m.ops[op].results.clone(), m.ops[prev].results.clone());
+                    for (o, n) in old.into_iter().zip(new) {
+                        rewrite::replace_all_uses(m, o, n);
+                    }
+                    self.changed = true;
+                } else {
+                    self.table.insert(key.clone(), op);
+                    added.push(key);
+                }
+                continue;
+            }
+            let writes = writes_layout(m, self.writers, op);
+            if writes {
+                self.epoch += 1;
+            }
+            for r in m.ops[op].regions.clone() {
+                let blocks = m.regions[r].blocks.clone();
+                if let [b] = blocks[..] {
+                    self.block(m, b);
+                }
+            }
+            if writes {
+                self.epoch += 1;
+            }
+        }
+        for k in added {
+            self.table.remove(&k);
+        }
+    }
+
+    /// True for the kinds this pass may merge.
+    fn candidate(&self, kind: OpKind) -> bool {
+        match kind {
+            OpKind::Tree(tree::Op::Var | tree::Op::Load) => false,
+            OpKind::Tree(op) => op.is_pure(),
+            OpKind::Mem(op) => op.is_pure(),
+            OpKind::Lo(_) => false,
+        }
+    }
+}
+
+/// The equivalence key of `op`.
+fn key_of(m: &Module, op: OpId, epoch: u32) -> Key {
+    let o = &m.ops[op];
+    (
+        o.kind,
+        o.operands
+            .iter()
+            .map(|&v| rewrite::resolve_value(m, v))
+            .collect(),
+        format!("{:?}", o.attrs),
+        o.results.iter().map(|&r| m.value_type(r)).collect(),
+        epoch,
+    )
+}
+
+/// True when `op` (or an op in its regions) may write a layout: `mem.store`, a build op, a
+/// call of a writer, or a call without a known callee.
+fn writes_layout(m: &Module, writers: &FxHashSet<FuncId>, op: OpId) -> bool {
+    let here = |op: OpId| {
+        let o = &m.ops[op];
+        match o.kind {
+            OpKind::Tree(tree::Op::Call) => match o.attr("callee") {
+                Some(scion_ir::attr::Attr::Sym(s)) => m
+                    .func_by_name(s)
+                    .is_none_or(|g| writers.contains(&g) || m.is_declaration(g)),
+                _ => true,
+            },
+            kind => writes_directly(kind),
+        }
+    };
+    if here(op) {
+        return true;
+    }
+    let mut any = false;
+    for &r in &m.ops[op].regions {
+        walk::walk_region(m, r, walk::Order::Pre, &mut |inner| any |= here(inner));
+    }
+    any
+}
+
+/// True for the kinds that write a layout themselves (`lo` ops count: not analysed).
+fn writes_directly(kind: OpKind) -> bool {
+    matches!(
+        kind,
+        OpKind::Mem(mem::Op::Store)
+            | OpKind::Tree(
+                tree::Op::BuildStore
+                    | tree::Op::BuildStoreBits
+                    | tree::Op::BuildChild
+                    | tree::Op::Append
+            )
+            | OpKind::Lo(_)
+    )
+}
+
+/// The functions that may write a layout: those holding `mem.store` or a build op, and those
+/// calling one of them (or a function without a body), to a fixed point.
+fn layout_writers(m: &Module) -> FxHashSet<FuncId> {
+    let mut calls: FxHashMap<FuncId, Vec<String>> = FxHashMap::default();
+    let mut writers = FxHashSet::default();
+    for &f in &m.func_order {
+        let mut callees = Vec::new();
+        let mut writes = false;
+        walk::walk_region(m, m.funcs[f].body, walk::Order::Pre, &mut |op| {
+            let o = &m.ops[op];
+            match o.kind {
+                OpKind::Tree(tree::Op::Call) => match o.attr("callee") {
+                    Some(scion_ir::attr::Attr::Sym(s)) => callees.push(s.clone()),
+                    _ => writes = true,
+                },
+                kind => writes |= writes_directly(kind),
+            }
+        });
+        if writes {
+            writers.insert(f);
+        }
+        calls.insert(f, callees);
+    }
+    loop {
+        let mut grew = false;
+        for &f in &m.func_order {
+            if writers.contains(&f) {
+                continue;
+            }
+            let bad = calls[&f].iter().any(|c| match m.func_by_name(c) {
+                Some(g) => writers.contains(&g) || m.is_declaration(g),
+                None => true,
+            });
+            if bad {
+                writers.insert(f);
+                grew = true;
+            }
+        }
+        if !grew {
+            return writers;
+        }
+    }
+}
