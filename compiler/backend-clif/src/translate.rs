@@ -385,6 +385,9 @@ impl Fx<'_, '_> {
                 };
                 Some(self.b.ins().iadd(args[0], d))
             }
+            L::GlobalId => {
+                return Err("`lo.global_id` is a GPU op: Cranelift targets CPUs only".into())
+            }
             L::StackSlot => {
                 let size = o.int_attr("size").unwrap_or(1) as u32;
                 let align = o.int_attr("align").unwrap_or(8).max(1) as u32;

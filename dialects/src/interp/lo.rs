@@ -281,6 +281,12 @@ impl<'m> LoInterp<'m> {
                 ),
                 _ => return Err(bad()),
             },
+            Op::GlobalId => {
+                return Err(err(
+                    Some(op),
+                    "`lo.global_id` has no meaning outside a GPU kernel",
+                ))
+            }
             Op::StackSlot => {
                 let size = o.int_attr("size").ok_or_else(bad)? as usize;
                 let align = o.int_attr("align").unwrap_or(8).max(1) as u64;

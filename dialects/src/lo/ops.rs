@@ -86,6 +86,10 @@ pub enum Op {
     /// `lo.stack_slot {size, align}` `() -> ptr`: a fresh `size`-byte slot in the function's
     /// frame, valid until the function returns.
     StackSlot,
+    /// `lo.global_id` `() -> u64`: the index of the GPU thread running this code in a
+    /// one-dimensional launch (`blockIdx.x * blockDim.x + threadIdx.x`). Only GPU targets
+    /// (`nvptx64`) give it a meaning: CPU backends and the interpreter reject it.
+    GlobalId,
     /// `lo.call {callee = @f}` `(args...) -> (results...)`.
     Call,
     /// `lo.br` `() -> ()` with one successor.
@@ -98,7 +102,7 @@ pub enum Op {
 
 impl Op {
     /// Every op, in declaration order.
-    pub const ALL: [Op; 39] = [
+    pub const ALL: [Op; 40] = [
         Op::Const,
         Op::Add,
         Op::Sub,
@@ -134,6 +138,7 @@ impl Op {
         Op::Store,
         Op::PtrAdd,
         Op::StackSlot,
+        Op::GlobalId,
         Op::Call,
         Op::Br,
         Op::CondBr,
@@ -178,6 +183,7 @@ impl Op {
             Op::Store => "store",
             Op::PtrAdd => "ptr_add",
             Op::StackSlot => "stack_slot",
+            Op::GlobalId => "global_id",
             Op::Call => "call",
             Op::Br => "br",
             Op::CondBr => "cond_br",

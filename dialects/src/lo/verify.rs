@@ -9,7 +9,7 @@ use crate::attr::Attr;
 use crate::entity::{OpId, TypeId};
 use crate::module::Module;
 use crate::tree::CmpPred;
-use crate::types::{FloatTy, Type};
+use crate::types::{FloatTy, IntTy, Type};
 use crate::verify::OpContext;
 
 type VResult = Result<(), String>;
@@ -196,6 +196,13 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
                 o.int_attr("align")
                     .is_none_or(|a| a > 0 && (a & (a - 1)) == 0),
                 || format!("`{name}`: `align` must be a power of two"),
+            )
+        }
+        Op::GlobalId => {
+            counts(0, 1)?;
+            require(
+                matches!(t.get(rt[0]), Type::Int(IntTy::U64)),
+                || format!("`{name}` gives a u64"),
             )
         }
         Op::Call => {
