@@ -114,7 +114,10 @@ fn reads_rays_files_and_times_by_the_paper_method() {
     assert!(stdout.contains("median"), "{stdout}");
     assert!(stdout.contains("layout       none"), "{stdout}");
     let e = text(&o.stderr);
-    assert!(e.contains("--layout is used by --backend jit only"), "{e}");
+    assert!(
+        e.contains("--layout is used by --backend jit|llvm|mem-interp only"),
+        "{e}"
+    );
     let hits = read_hits(&out).unwrap();
     assert_eq!(hits.len(), 2);
     assert_eq!(hits[0].t, 1.0);
@@ -241,6 +244,10 @@ fn the_jit_writes_the_reference_hits_for_pbrt_and_ptr() {
             assert_eq!(got, want, "jit {layout} {rays} differs from reference");
             assert!(stdout.contains(per_node), "{stdout}");
             assert!(stdout.contains("backend      jit ("), "{stdout}");
+            let (stdout, got) = run("llvm", layout, rays);
+            assert_eq!(got, want, "llvm {layout} {rays} differs from reference");
+            assert!(stdout.contains(per_node), "{stdout}");
+            assert!(stdout.contains("backend      llvm -O3 ("), "{stdout}");
             assert!(stdout.contains("pack time    0."), "{stdout}");
             assert!(stdout.contains("Mrays/s"), "{stdout}");
         }
