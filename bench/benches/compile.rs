@@ -1,9 +1,10 @@
 //! `cargo bench -p scion-bench --bench compile`: criterion micro-benchmarks of compile time, from
 //! source to machine code, of the library's closest hit specialized to one layout (pbrt):
-//! Cranelift at the JIT's level and at -O0 of the DSL pipeline.
+//! Cranelift with the DSL pipeline at -O0 and at the JIT's level, and LLVM at -O3 (DSL and LLVM
+//! pipelines both at -O3).
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use scion_tests::jit::JitClosestHit;
+use scion_tests::jit::{Codegen, JitClosestHit};
 
 fn compile_time(c: &mut Criterion) {
     let mut g = c.benchmark_group("compile closest_hit + pbrt");
@@ -13,6 +14,12 @@ fn compile_time(c: &mut Criterion) {
     });
     g.bench_function("cranelift, DSL -O2", |b| {
         b.iter(|| JitClosestHit::compile("pbrt", "LinearBVH", None).expect("compiles"))
+    });
+    g.bench_function("llvm -O3", |b| {
+        b.iter(|| {
+            JitClosestHit::compile_with("pbrt", "LinearBVH", None, 3, Codegen::Llvm(3))
+                .expect("compiles")
+        })
     });
     g.finish();
 }

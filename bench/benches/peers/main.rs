@@ -1,5 +1,5 @@
 //! `cargo bench -p scion-bench --bench peers -- [OPTIONS]`: closest-hit throughput of Scion's
-//! generated code (each backend, layouts pbrt and ptr) against the runtime's Rust reference
+//! generated code (Cranelift and LLVM -O3, layouts pbrt and ptr) against the runtime's Rust reference
 //! traversal and the peer library obvhs (BVH2, CWBVH), on one scene and one ray set, in one
 //! interleaved run by the paper's method (see `scion_bench`). Prints a markdown table; every
 //! ratio is to the reference row, measured in the same rounds.
@@ -16,7 +16,7 @@ use scion_runtime::batch::BatchDriver;
 use scion_runtime::reference::closest_hits_tree;
 use scion_runtime::timing::TimingPlan;
 use scion_tests::contract::{LayoutCode, Packed};
-use scion_tests::jit::JitClosestHit;
+use scion_tests::jit::{Codegen, JitClosestHit};
 use scion_tests::mem_interp::LIBRARY_LAYOUTS;
 use scion_tests::oracle::ClosestHit;
 use std::path::PathBuf;
@@ -134,6 +134,16 @@ fn run(a: &Args) -> Result<(), String> {
         contenders.push(layout_contender(
             format!("cranelift {layout}"),
             Box::new(jit),
+            &w,
+            &driver,
+        )?);
+        progress(&format!("compiling and packing {layout} (LLVM -O3)"));
+        let t = Instant::now();
+        let llvm = JitClosestHit::compile_with(stem, lname, None, 3, Codegen::Llvm(3))?;
+        progress(&format!("  compiled in {:.3} s", t.elapsed().as_secs_f64()));
+        contenders.push(layout_contender(
+            format!("llvm-O3 {layout}"),
+            Box::new(llvm),
             &w,
             &driver,
         )?);
