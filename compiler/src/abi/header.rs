@@ -199,7 +199,8 @@ pub fn render(sig: &EntrySig, root: &Type) -> String {
     );
     let _ = writeln!(
         s,
-        "/* The root reference of the tree packed by {} (0 for an empty tree). */\n\
+        "/* The root reference of the tree packed by {} (0 for an empty tree, which has no\n \
+         * packed node: do not run queries on it, they all miss). */\n\
          scion_{l}_ref {}(const ScionTreeView *tree, void *const *B);",
         sig.layout_fn("build"),
         sig.layout_fn("root")
