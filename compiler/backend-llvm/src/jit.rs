@@ -147,6 +147,10 @@ impl JitModule {
                     })
                     .collect::<Result<_, _>>()
                     .map_err(|e| LlvmError(e.to_string()))?,
+                (None, ValueKind::Basic(v)) if m.funcs[f].results.len() == 2 => (0..2)
+                    .map(|i| builder.build_extract_value(v.into_struct_value(), i, ""))
+                    .collect::<Result<_, _>>()
+                    .map_err(|e| LlvmError(e.to_string()))?,
                 (None, ValueKind::Basic(v)) => vec![v],
                 (None, ValueKind::Instruction(_)) => Vec::new(),
             };
@@ -218,8 +222,9 @@ impl JitModule {
     }
 
     /// The machine-code address of `@name` (C calling convention of the host), if defined.
-    /// A function with several results takes the address of a struct of them (C layout) as a
-    /// hidden first parameter and returns nothing.
+    /// A function with two results returns them as a struct of two (in two registers); one
+    /// with more takes the address of a struct of them (C layout) as a hidden first parameter
+    /// and returns nothing.
     pub fn get(&self, name: &str) -> Option<*const u8> {
         self.entries.get(name).map(|e| e.func as *const u8)
     }

@@ -4,11 +4,12 @@
 //! Types: `i1` is LLVM `i1` (a byte holding 0 or 1 in memory); integers keep their width and
 //! their signedness picks `sdiv`/`udiv`, `ashr`/`lshr`, signed or unsigned compares and
 //! extensions; `ptr` is the opaque `ptr` of address space 0 (on NVPTX the generic space, which
-//! covers global, local and shared memory). Several results are returned through memory: the
-//! function gets a hidden first parameter, the address of a caller-allocated struct of the
-//! results ([`results_struct`]), and returns `void`. (A first-class struct return would put a
-//! third `f32` result in x87's `st(0)` on x86-64, which quiets signaling NaNs; after inlining,
-//! SROA removes the memory traffic.)
+//! covers global, local and shared memory). Two results are returned as a literal struct (in
+//! two registers). More than two are returned through memory: the function gets a hidden first
+//! parameter, the address of a caller-allocated struct of the results ([`results_struct`]),
+//! and returns `void`. (A first-class struct return would put a third `f32` result in x87's
+//! `st(0)` on x86-64, which quiets signaling NaNs; after inlining, SROA removes the memory
+//! traffic.)
 //!
 //! Float semantics are those of `scion-clif` and the interpreters, bit for bit: no fast-math
 //! flags (so LLVM never contracts `a*b+c`; `llvm.fma` only for `lo.fma`); a NaN produced by
@@ -81,15 +82,15 @@ pub fn int_type(cx: &Context, bits: u32) -> inkwell::types::IntType<'_> {
     }
 }
 
-/// The struct of `f`'s results when it has several (returned through a hidden first pointer
-/// parameter), else `None`.
+/// The struct of `f`'s results when it has more than two (returned through a hidden first
+/// pointer parameter), else `None`.
 pub fn results_struct<'c>(
     cx: &'c Context,
     m: &Module,
     f: FuncId,
 ) -> R<Option<inkwell::types::StructType<'c>>> {
     let results = &m.funcs[f].results;
-    if results.len() < 2 {
+    if results.len() <= 2 {
         return Ok(None);
     }
     let tys = results
@@ -152,6 +153,9 @@ pub fn translate<'c>(
         }
         let fty = match func.results.as_slice() {
             [one] => llvm_type(cx, m, *one)?.fn_type(&params, false),
+            [a, b] => cx
+                .struct_type(&[llvm_type(cx, m, *a)?, llvm_type(cx, m, *b)?], false)
+                .fn_type(&params, false),
             _ => cx.void_type().fn_type(&params, false),
         };
         let linkage = if exports && !m.is_declaration(f) && func.attrs.get("export").is_none() {
@@ -632,6 +636,14 @@ impl<'c> Fn<'_, 'c> {
                             self.vals.insert(r, v);
                         }
                     }
+                    (None, inkwell::values::ValueKind::Basic(v)) if o.results.len() == 2 => {
+                        for (i, &r) in o.results.iter().enumerate() {
+                            let e = b
+                                .build_extract_value(v.into_struct_value(), i as u32, "")
+                                .map_err(be)?;
+                            self.vals.insert(r, e);
+                        }
+                    }
                     (None, inkwell::values::ValueKind::Basic(v)) => {
                         if let Some(&r) = o.results.first() {
                             self.vals.insert(r, v);
@@ -679,6 +691,7 @@ impl<'c> Fn<'_, 'c> {
                         b.build_return(None)
                     }
                     (None, [one]) => b.build_return(Some(one)),
+                    (None, [_, _]) => b.build_aggregate_return(&args),
                     (None, _) => b.build_return(None),
                 }
                 .map_err(be)?;
