@@ -107,6 +107,10 @@ Examples:
   The same as PTX for an sm_90 GPU (--cpu=sm_XX picks another):
     scionc -O3 --emit=ptx --layout=LinearBVH library/algorithms/closest_hit.scion \
       library/layouts/pbrt.scion
+  Print the C header and the lo entry points of closest-hit over the pbrt layout:
+    scionc --emit=header --layout LinearBVH --entry closest_hit \
+      library/algorithms/closest_hit.scion library/layouts/pbrt.scion
+    scionc --emit=lo --layout LinearBVH --entry closest_hit FILES...
 
 Code generation:
   --emit=llvm|asm|obj|ptx go through LLVM 22: --target=x86_64|aarch64|nvptx64 (default: this
@@ -118,7 +122,7 @@ Exit status: 0 on success, 1 when the input has errors, 2 on a bad command line,
 internal compiler error (a bug: please report it with the input).
 
 Not built yet (these say so with error E0901 instead of being ignored):
-  --emit=header, --run.";
+  --run.";
 
 /// `scionc`: the Scion compiler.
 ///
@@ -148,7 +152,14 @@ pub struct Options {
     #[arg(long, value_name = "NAME")]
     pub layout: Option<String>,
 
-    /// Code generation target of --emit=llvm|asm|obj|ptx (default: this machine).
+    /// Add the exported C entry points of this algorithm (a function of the inputs taking the
+    /// layout's tree) for `--layout`: `scion_L_sizes`, `scion_L_build`, `scion_L_root` and the
+    /// batch query `scion_NAME_L` (docs/c-abi.md). Needs `--layout`.
+    #[arg(long, value_name = "NAME")]
+    pub entry: Option<String>,
+
+    /// Code generation target of --emit=llvm|asm|obj|ptx (default: this machine); with
+    /// `--entry`, `nvptx64` also adds the GPU kernels to `--emit=lo`.
     #[arg(long, value_enum, value_name = "TARGET")]
     pub target: Option<Target>,
 
@@ -231,8 +242,8 @@ impl Options {
             | Emit::Llvm
             | Emit::Asm
             | Emit::Obj
-            | Emit::Ptx => None,
-            Emit::Header => Some("the C ABI header generator"),
+            | Emit::Ptx
+            | Emit::Header => None,
         };
         if let Some(planned) = emit_plan {
             return Err(NotImplemented {

@@ -48,6 +48,10 @@ pub fn check_flags(opts: &Options) -> Result<(), Diagnostic> {
     if opts.emit.is_llvm() || opts.emit == Emit::Header {
         return Ok(());
     }
+    // With `--entry`, `--target=nvptx64` adds the GPU kernels to `--emit=lo`.
+    if opts.emit == Emit::Lo && opts.entry.is_some() && opts.cpu.is_none() {
+        return Ok(());
+    }
     let flag = match (&opts.target, &opts.cpu) {
         (Some(_), _) => "--target",
         (None, Some(_)) => "--cpu",

@@ -6,7 +6,9 @@
 //!   first), so that `dce` drops the copies it made dead.
 //! * `--emit=mem` (with `--layout`), and `--emit=lo|clif` with `--layout`:
 //!   `destructor-specialize` and `constructor-specialize` first, then the level's passes
-//!   (`--emit=lo|clif` then lower to `lo` in `driver::lower`).
+//!   (`--emit=lo|clif` then lower to `lo` in `driver::lower`). `--emit=header` always
+//!   specializes (it needs `--layout` and `--entry`).
+//! * After lowering, `--entry A` adds the exported entry points (`abi::entries`), last.
 
 use super::cli::{Emit, Options};
 use crate::passes;
@@ -33,8 +35,8 @@ pub fn select(opts: &Options) -> Result<Vec<String>, Diagnostic> {
             .collect(),
         None => {
             let mut names = Vec::new();
-            let specialize =
-                opts.emit == Emit::Mem || (opts.emit.lowers_to_lo() && opts.layout.is_some());
+            let specialize = matches!(opts.emit, Emit::Mem | Emit::Header)
+                || (opts.emit.lowers_to_lo() && opts.layout.is_some());
             if specialize {
                 names.push("destructor-specialize".to_string());
                 names.push("constructor-specialize".to_string());
