@@ -344,8 +344,10 @@ impl DeviceBuffer<'_> {
     }
 
     /// The buffer's first `n` elements of `T`.
-    pub fn download<T: DeviceCopy + Default>(&self, n: usize) -> Result<Vec<T>, CudaError> {
-        let mut v = vec![T::default(); n];
+    pub fn download<T: DeviceCopy>(&self, n: usize) -> Result<Vec<T>, CudaError> {
+        // SAFETY: every bit pattern, all zeros included, is a valid `T` (`DeviceCopy`).
+        let zero: T = unsafe { std::mem::zeroed() };
+        let mut v = vec![zero; n];
         self.read(&mut v)?;
         Ok(v)
     }

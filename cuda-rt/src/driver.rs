@@ -70,7 +70,10 @@ pub enum ElapsedFn {
 
 /// The library names cudarc tries for the driver, in order.
 pub fn searched_names() -> Vec<String> {
-    cudarc::get_lib_name_candidates("cuda")
+    let mut names = cudarc::get_lib_name_candidates("cuda");
+    let mut seen = std::collections::HashSet::new();
+    names.retain(|n| seen.insert(n.clone()));
+    names
 }
 
 /// Probes once per process: library, functions, `cuInit(0)`, version. Later calls return the

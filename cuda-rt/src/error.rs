@@ -136,9 +136,10 @@ impl fmt::Display for CudaError {
         match self {
             CudaError::NoDriver { searched } => write!(
                 f,
-                "no CUDA driver: could not load the driver library (libcuda.so.1 not found; \
-                 tried {}); install the NVIDIA driver or add its folder to LD_LIBRARY_PATH",
-                searched.join(", ")
+                "no CUDA driver (libcuda.so.1 not found; {} library names tried on the \
+                 loader's path): install the NVIDIA driver or add its folder to \
+                 LD_LIBRARY_PATH",
+                searched.len()
             ),
             CudaError::DriverTooOld { version, missing } => {
                 write!(f, "the CUDA driver is too old")?;
@@ -275,7 +276,7 @@ mod tests {
         };
         let m = e.to_string();
         assert!(m.starts_with("no CUDA driver"), "{m}");
-        assert!(m.contains("libcuda.so.1"), "{m}");
+        assert!(m.contains("libcuda.so.1 not found; 2 library names tried"), "{m}");
         assert!(!m.contains('\n'), "one line: {m}");
 
         let e = CudaError::OutOfMemory {
