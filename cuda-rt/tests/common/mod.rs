@@ -1,5 +1,7 @@
 //! Shared by the GPU test binaries: the device or a skip line, and the fixture PTX.
 
+#![allow(dead_code)]
+
 use scion_cuda::Device;
 
 /// The stand-in kernels of `fixtures/probe.ll` (layout `Fixture`, algorithm `probe`).
