@@ -5,7 +5,8 @@
 //! pipeline and print what `--emit` asks for. Every failure is a value: user errors are
 //! [`Diagnostics`], compiler bugs an [`InternalError`]; nothing here panics on user input.
 
-use crate::driver::cli::{Emit, Options};
+use crate::abi::{self, EntrySig, EntryTarget};
+use crate::driver::cli::{Emit, Options, Target};
 use crate::layout::model::LayoutModel;
 use crate::layout::{check_build, check_layout};
 use crate::passes::tree_to_mem::LayoutSpec;
@@ -45,6 +46,10 @@ pub struct PassOptions {
     pub layout: Option<String>,
     /// Entries of a traversal's explicit stack (`--stack-size`, for `--emit=lo|clif`).
     pub stack_size: Option<u32>,
+    /// `--entry NAME`: add the exported C entry points of this algorithm (`abi`).
+    pub entry: Option<String>,
+    /// Whether the entries are for a GPU (`--target nvptx64`: kernels too).
+    pub entry_target: EntryTarget,
 }
 
 impl From<&Options> for PassOptions {
@@ -56,6 +61,11 @@ impl From<&Options> for PassOptions {
             time_passes: o.time_passes,
             layout: o.layout.clone(),
             stack_size: o.stack_size,
+            entry: o.entry.clone(),
+            entry_target: match o.target {
+                Some(Target::Nvptx64) => EntryTarget::Gpu,
+                _ => EntryTarget::Host,
+            },
         }
     }
 }
@@ -81,6 +91,10 @@ pub fn compile(
     popts: &PassOptions,
 ) -> CompileResult {
     let mut out = CompileResult::default();
+    if let Some(d) = entry_request_error(emit, popts) {
+        out.diagnostics.push(d);
+        return out;
+    }
     let files: Vec<FileId> = fe.prelude.iter().chain(fe.inputs).copied().collect();
     let (program, diags) = syntax::parse_program(fe.sources, &files);
     let parse_failed = diags.has_errors();
@@ -133,6 +147,7 @@ pub fn compile(
         return out;
     }
     let mut cx = PassCx::new();
+    let mut entry: Option<EntrySig> = None;
     if let Some(name) = &popts.layout {
         let decl = program.items.iter().find_map(|it| match it {
             Item::Layout(d) if d.name.name == *name => Some(d),
@@ -149,7 +164,17 @@ pub fn compile(
             return out;
         };
         let model = LayoutModel::from_ast(decl, &program);
-        cx.insert_ext(LayoutSpec::new(model));
+        let spec = LayoutSpec::new(model);
+        if let Some(algorithm) = &popts.entry {
+            match abi::signature(&program, &module, algorithm, &spec) {
+                Ok(sig) => entry = Some(sig),
+                Err(d) => {
+                    out.diagnostics.push(d);
+                    return out;
+                }
+            }
+        }
+        cx.insert_ext(spec);
     }
     if let Err(e) = run_pipeline(&mut module, pipeline, popts, &mut cx, &mut out) {
         match e {
@@ -159,8 +184,9 @@ pub fn compile(
         return out;
     }
     keep_reachable(&mut module, fe.inputs);
-    if matches!(emit, Emit::Lo | Emit::Clif) {
-        match crate::driver::lower::emit_low(&mut module, emit, popts.stack_size) {
+    if matches!(emit, Emit::Lo | Emit::Clif | Emit::Header) {
+        let entry = entry.as_ref().map(|s| (s, popts.entry_target));
+        match crate::driver::lower::emit_low(&mut module, emit, popts.stack_size, entry) {
             Ok((text, warnings)) => {
                 out.diagnostics.extend(warnings);
                 out.output = Some(text);
@@ -172,6 +198,32 @@ pub fn compile(
     }
     out.output = Some(scion_ir::print::print_module(&module));
     out
+}
+
+/// The driver's checks of `--entry` and `--emit=header` that need no input (E0910, E0914,
+/// E0915).
+fn entry_request_error(emit: Emit, popts: &PassOptions) -> Option<Diagnostic> {
+    match (&popts.entry, emit) {
+        (None, Emit::Header) => Some(
+            Diagnostic::error(
+                "E0915",
+                "`--emit=header` needs `--entry NAME` and `--layout NAME`",
+            )
+            .with_note("the header declares the entry points of one algorithm and one layout"),
+        ),
+        (Some(a), Emit::Ast | Emit::Tree | Emit::Mem | Emit::Check) => Some(
+            Diagnostic::error(
+                "E0914",
+                format!(
+                    "`--entry {a}` has no effect with `--emit={}`",
+                    emit.as_str()
+                ),
+            )
+            .with_note("entry points are added after lowering: use `--emit=lo|clif|header`"),
+        ),
+        (Some(a), _) if popts.layout.is_none() => Some(abi::needs_layout(a)),
+        _ => None,
+    }
 }
 
 fn run_pipeline(

@@ -4,6 +4,7 @@
 //! (typed AST → `tree` dialect) → passes → backends. Each stage lives in its own module and
 //! sees only the stage before it.
 
+pub mod abi;
 pub mod driver;
 pub mod frontend;
 pub mod fuzz;

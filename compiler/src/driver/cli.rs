@@ -92,8 +92,13 @@ Examples:
 Exit status: 0 on success, 1 when the input has errors, 2 on a bad command line, 101 on an
 internal compiler error (a bug: please report it with the input).
 
+  Print the C header and the lo entry points of closest-hit over the pbrt layout:
+    scionc --emit=header --layout LinearBVH --entry closest_hit \
+      library/algorithms/closest_hit.scion library/layouts/pbrt.scion
+    scionc --emit=lo --layout LinearBVH --entry closest_hit FILES...
+
 Not built yet (these say so with error E0901 instead of being ignored):
-  --emit=llvm|asm|obj|ptx|header, --target, --cpu, --run.";
+  --emit=llvm|asm|obj|ptx, --target (except with --emit=lo|header), --cpu, --run.";
 
 /// `scionc`: the Scion compiler.
 ///
@@ -122,6 +127,12 @@ pub struct Options {
     /// Layout to specialize the traversals for (a `layout` name declared in the inputs).
     #[arg(long, value_name = "NAME")]
     pub layout: Option<String>,
+
+    /// Add the exported C entry points of this algorithm (a function of the inputs taking the
+    /// layout's tree) for `--layout`: `scion_L_sizes`, `scion_L_build`, `scion_L_root` and the
+    /// batch query `scion_NAME_L` (docs/c-abi.md). Needs `--layout`.
+    #[arg(long, value_name = "NAME")]
+    pub entry: Option<String>,
 
     /// Code generation target.
     #[arg(long, value_enum, value_name = "TARGET")]
@@ -197,9 +208,14 @@ impl Options {
     /// Rejects flags whose stage is not built yet, naming them.
     pub fn check_implemented(&self) -> Result<(), NotImplemented> {
         let emit_plan = match self.emit {
-            Emit::Ast | Emit::Tree | Emit::Check | Emit::Mem | Emit::Lo | Emit::Clif => None,
+            Emit::Ast
+            | Emit::Tree
+            | Emit::Check
+            | Emit::Mem
+            | Emit::Lo
+            | Emit::Clif
+            | Emit::Header => None,
             Emit::Llvm | Emit::Asm | Emit::Obj | Emit::Ptx => Some("the LLVM backend"),
-            Emit::Header => Some("the C ABI header generator"),
         };
         if let Some(planned) = emit_plan {
             return Err(NotImplemented {
@@ -207,11 +223,13 @@ impl Options {
                 planned,
             });
         }
-        if self.target.is_some() || self.cpu.is_some() {
-            let flag = if self.target.is_some() {
-                "--target"
-            } else {
+        // `--target` chooses the entry points (`nvptx64` adds kernels) for lo and the header.
+        let target_used = matches!(self.emit, Emit::Lo | Emit::Header);
+        if (self.target.is_some() && !target_used) || self.cpu.is_some() {
+            let flag = if self.cpu.is_some() {
                 "--cpu"
+            } else {
+                "--target"
             };
             return Err(NotImplemented {
                 flag: flag.into(),

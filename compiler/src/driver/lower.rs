@@ -3,9 +3,12 @@
 //!
 //! Runs `mem-to-lo` (partial: functions that still need a layout, such as traversals of a sum
 //! ADT before destructor specialization exists for the input, are left out) and then
-//! `recursion-to-stack` with `--stack-size`, then `lo-inline`, and prints the `lo` module or its Cranelift IR.
+//! `recursion-to-stack` with `--stack-size`, then `lo-inline`, then (with `--entry`) adds the
+//! exported entry points of `abi::entries` last, and prints the `lo` module, its Cranelift IR
+//! or (`--emit=header`) the C header of the entries.
 
 use super::cli::Emit;
+use crate::abi::{self, EntrySig, EntryTarget};
 use crate::passes;
 use scion_ir::diag::{Diagnostics, InternalError};
 use scion_ir::pass::{PassCx, PassError, PassManager};
@@ -39,14 +42,44 @@ pub fn lower_to_lo(m: &mut Module, stack_size: Option<u32>) -> Result<Diagnostic
     Ok(std::mem::take(&mut cx.diagnostics))
 }
 
-/// The text `--emit=lo` or `--emit=clif` prints for the `tree` module `m`, and the warnings.
+/// Lowers `m` to `lo` ([`lower_to_lo`]) and adds the entry points of `entry` when given.
+pub fn lower_with_entries(
+    m: &mut Module,
+    stack_size: Option<u32>,
+    entry: Option<(&EntrySig, EntryTarget)>,
+) -> Result<Diagnostics, PassError> {
+    let warnings = lower_to_lo(m, stack_size)?;
+    if let Some((sig, target)) = entry {
+        abi::entries::add(m, sig, target).map_err(|d| PassError::Diagnostics(d.into()))?;
+    }
+    Ok(warnings)
+}
+
+/// The text `--emit=lo`, `--emit=clif` or `--emit=header` prints for the `tree` module `m`,
+/// and the warnings. `--emit=header` needs `entry`.
 pub fn emit_low(
     m: &mut Module,
     emit: Emit,
     stack_size: Option<u32>,
+    entry: Option<(&EntrySig, EntryTarget)>,
 ) -> Result<(String, Diagnostics), PassError> {
-    let warnings = lower_to_lo(m, stack_size)?;
+    let warnings = lower_with_entries(m, stack_size, entry)?;
     let text = match emit {
+        Emit::Header => {
+            let Some((sig, _)) = entry else {
+                return Err(PassError::Internal(InternalError::new(
+                    "--emit=header without an entry signature",
+                )));
+            };
+            let root = m
+                .func_by_name(&sig.layout_fn("root"))
+                .and_then(|f| m.funcs[f].results.first().copied())
+                .map(|t| m.types.get(t).clone())
+                .ok_or_else(|| {
+                    PassError::Internal(InternalError::new("the entries have no root function"))
+                })?;
+            abi::header::render(sig, &root)
+        }
         Emit::Clif => scion_clif::print_clif(m)
             .map_err(|e| PassError::Internal(InternalError::new(e.to_string())))?,
         _ => scion_ir::print::print_module(m),

@@ -6,7 +6,9 @@
 //!   first), so that `dce` drops the copies it made dead.
 //! * `--emit=mem` (with `--layout`), and `--emit=lo|clif` with `--layout`:
 //!   `destructor-specialize` and `constructor-specialize` first, then the level's passes
-//!   (`--emit=lo|clif` then lower to `lo` in `driver::lower`).
+//!   (`--emit=lo|clif` then lower to `lo` in `driver::lower`). `--emit=header` always
+//!   specializes (it needs `--layout` and `--entry`).
+//! * After lowering, `--entry A` adds the exported entry points (`abi::entries`), last.
 
 use super::cli::{Emit, Options};
 use crate::passes;
@@ -33,7 +35,7 @@ pub fn select(opts: &Options) -> Result<Vec<String>, Diagnostic> {
             .collect(),
         None => {
             let mut names = Vec::new();
-            let specialize = opts.emit == Emit::Mem
+            let specialize = matches!(opts.emit, Emit::Mem | Emit::Header)
                 || (matches!(opts.emit, Emit::Lo | Emit::Clif) && opts.layout.is_some());
             if specialize {
                 names.push("destructor-specialize".to_string());

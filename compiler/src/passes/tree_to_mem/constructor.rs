@@ -39,7 +39,7 @@ use scion_ir::{
 };
 
 /// Byte offsets of the logical tree's C structs.
-pub(super) mod abi {
+pub mod abi {
     pub const VIEW_NODES: u64 = 0;
     pub const VIEW_NODE_COUNT: u64 = 8;
     pub const VIEW_ROOT: u64 = 12;
