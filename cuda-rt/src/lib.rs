@@ -9,12 +9,16 @@
 //! * [`module`]: PTX modules (with the JIT log) and kernel launches;
 //! * [`args`], [`ptx`]: typed kernel arguments checked against the PTX's `.entry`
 //!   parameters, launch grids;
-//! * [`trace`]: the closest-hit pipeline (pack the logical tree on the device, trace rays).
+//! * [`trace`]: the closest-hit pipeline (pack the logical tree on the device, trace rays);
+//! * [`kit`]: self-describing PTX for machines without the compiler (`scion-gpu`);
+//! * [`compare`]: GPU hits against the CPU reference, bit for bit.
 
 pub mod args;
+pub mod compare;
 pub mod device;
 pub mod driver;
 pub mod error;
+pub mod kit;
 pub mod module;
 pub mod ptx;
 pub mod trace;

@@ -426,6 +426,23 @@ impl<'d> GpuPipeline<'d> {
     }
 }
 
+impl GpuPipeline<'_> {
+    /// Traces once for the hits (a warm-up), then `runs` more times for the kernel times.
+    pub fn trace_runs(
+        &self,
+        tree: &PackedTree<'_>,
+        rays: &DeviceRays<'_>,
+        runs: usize,
+    ) -> Result<(Vec<Hit>, Vec<Duration>), CudaError> {
+        let first = self.trace(tree, rays)?;
+        let mut times = Vec::with_capacity(runs);
+        for _ in 0..runs {
+            times.push(self.trace(tree, rays)?.kernel_time);
+        }
+        Ok((first.hits, times))
+    }
+}
+
 /// The result records before tracing: `(ray.tmax, 0xFFFFFFFF)` as two 32-bit words.
 pub fn initial_results(rays: &[Ray]) -> Vec<[u32; 2]> {
     rays.iter().map(|r| [r.tmax.to_bits(), u32::MAX]).collect()
