@@ -45,11 +45,13 @@ pub fn compile_kit(
     let stem = layout.replace('-', "_");
     let Some(&(stem, name, _)) = LIBRARY_LAYOUTS.iter().find(|l| l.0 == stem) else {
         let names: Vec<&str> = LAYOUTS.iter().map(|(n, _)| *n).collect();
-        return Err(CliError::new(format!("unknown layout `{layout}` for the GPU"))
-            .note(format!("library layouts: {}", names.join(", "))));
+        return Err(
+            CliError::new(format!("unknown layout `{layout}` for the GPU"))
+                .note(format!("library layouts: {}", names.join(", "))),
+        );
     };
-    let text = layout_source(stem)
-        .ok_or_else(|| CliError::new(format!("no library layout `{stem}`")))?;
+    let text =
+        layout_source(stem).ok_or_else(|| CliError::new(format!("no library layout `{stem}`")))?;
     let mut sources = SourceMap::new();
     let prelude = [sources.add(PRELUDE_NAME, PRELUDE)];
     let inputs = [
@@ -74,7 +76,9 @@ pub fn compile_kit(
         ..PassOptions::default()
     };
     let fail = |what: &str, detail: String| {
-        CliError::new(format!("cannot compile closest hit for `{layout}` ({what}): {detail}"))
+        CliError::new(format!(
+            "cannot compile closest hit for `{layout}` ({what}): {detail}"
+        ))
     };
     let front = |emit: Emit| -> Result<String, CliError> {
         let r = frontend::compile(&fe, emit, &pipeline, &popts);
@@ -90,8 +94,12 @@ pub fn compile_kit(
     let lo = front(Emit::Lo)?;
     let buffers = buffer_names(&front(Emit::Header)?, name).map_err(|e| fail("header", e))?;
     let file = sources.add("<lo IR>", lo.clone());
-    let m = scion_ir::parse_module(&lo, file)
-        .map_err(|d| fail("lo", format!("printed lo does not parse back: {}", d.render(&sources))))?;
+    let m = scion_ir::parse_module(&lo, file).map_err(|d| {
+        fail(
+            "lo",
+            format!("printed lo does not parse back: {}", d.render(&sources)),
+        )
+    })?;
     let opts = scion_llvm::Options {
         target: scion_llvm::Target::Nvptx64,
         cpu: cpu.map(String::from),
@@ -113,7 +121,8 @@ pub fn buffer_names(header: &str, layout: &str) -> Result<Vec<String>, String> {
             let (name, n) = l
                 .strip_prefix("#define SCION_")?
                 .split_once("_BUFFER_COUNT ")?;
-            name.eq_ignore_ascii_case(layout).then(|| n.trim().parse().ok())?
+            name.eq_ignore_ascii_case(layout)
+                .then(|| n.trim().parse().ok())?
         })
         .ok_or_else(|| format!("the header has no `#define SCION_{layout}_BUFFER_COUNT N`"))?;
     let mut names: Vec<String> = (0..count).map(|i| format!("buffer {i}")).collect();
@@ -136,7 +145,10 @@ pub fn buffer_names(header: &str, layout: &str) -> Result<Vec<String>, String> {
 
 /// `scion ptx`: writes the PTX kit of `--layout`.
 pub fn run_ptx(args: &PtxArgs) -> Result<(), CliError> {
-    progress(&format!("compiling closest hit for layout `{}` to PTX", args.layout));
+    progress(&format!(
+        "compiling closest hit for layout `{}` to PTX",
+        args.layout
+    ));
     let (kit, time) = compile_kit(&args.layout, args.stack_size, args.cpu.as_deref())?;
     write_kit(&kit, &args.output)?;
     eprintln!("scion: compiled in {:.3} s", time.as_secs_f64());
@@ -173,7 +185,9 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
             (kit, None)
         }
         None => {
-            progress(&format!("compiling closest hit for layout `{layout}` to PTX"));
+            progress(&format!(
+                "compiling closest hit for layout `{layout}` to PTX"
+            ));
             let (kit, t) = compile_kit(layout, args.stack_size, args.cpu.as_deref())?;
             (kit, Some(t))
         }
@@ -182,8 +196,8 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
         write_kit(&kit, path)?;
     }
     progress(&format!("loading {}", args.scene.display()));
-    let scene = load_obj(&args.scene)
-        .map_err(|e| CliError::new(format!("cannot load the scene: {e}")))?;
+    let scene =
+        load_obj(&args.scene).map_err(|e| CliError::new(format!("cannot load the scene: {e}")))?;
     let tree = build(&scene, args);
     let stats = tree.stats();
     let rays = rays(&scene, args)?;
@@ -200,7 +214,10 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
     )
     .map_err(gpu_err)?;
     let module_time = t.elapsed();
-    progress(&format!("packing the tree into layout `{}` on the GPU", kit.layout));
+    progress(&format!(
+        "packing the tree into layout `{}` on the GPU",
+        kit.layout
+    ));
     let packed = pipeline.pack(&tree, stats.depth).map_err(gpu_err)?;
     let on_device = pipeline.upload_rays(&rays).map_err(gpu_err)?;
     progress(&format!("tracing {} rays on the GPU", rays.len()));
@@ -281,7 +298,9 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
         println!("output       {} ({} bytes)", path.display(), hits.len() * 8);
     }
     if !check.identical() {
-        return Err(CliError::new(format!("GPU hits differ from the reference: {check}")));
+        return Err(CliError::new(format!(
+            "GPU hits differ from the reference: {check}"
+        )));
     }
     Ok(())
 }

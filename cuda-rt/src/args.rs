@@ -53,7 +53,11 @@ impl PackedArgs {
     /// Checks `args` against the kernel's parameters `params` (from its PTX `.entry`) and packs
     /// them. Each argument must have its parameter's size; a pointer must go to a 64-bit
     /// integer parameter.
-    pub fn new(kernel: &str, params: &[PtxParam], args: &[KernelArg]) -> Result<PackedArgs, CudaError> {
+    pub fn new(
+        kernel: &str,
+        params: &[PtxParam],
+        args: &[KernelArg],
+    ) -> Result<PackedArgs, CudaError> {
         let bad = |detail: String| CudaError::BadArguments {
             kernel: kernel.to_string(),
             detail,
@@ -210,8 +214,7 @@ mod tests {
             e.to_string(),
             "kernel `k`: arguments do not match the PTX: the kernel takes 2 parameters, 1 given"
         );
-        let e = PackedArgs::new("k", &params, &[KernelArg::U64(1), KernelArg::U64(2)])
-            .unwrap_err();
+        let e = PackedArgs::new("k", &params, &[KernelArg::U64(1), KernelArg::U64(2)]).unwrap_err();
         assert_eq!(
             e.to_string(),
             "kernel `k`: arguments do not match the PTX: parameter 1 (`k_param_1`) is a 4-byte \
@@ -225,7 +228,14 @@ mod tests {
     #[test]
     fn grids_cover_every_query_once() {
         assert_eq!(Grid::for_queries(0, 256).unwrap(), None);
-        for (n, blocks) in [(1, 1), (255, 1), (256, 1), (257, 2), (65536, 256), (65537, 257)] {
+        for (n, blocks) in [
+            (1, 1),
+            (255, 1),
+            (256, 1),
+            (257, 2),
+            (65536, 256),
+            (65537, 257),
+        ] {
             let g = Grid::for_queries(n, THREADS_PER_BLOCK).unwrap().unwrap();
             assert_eq!((g.blocks, g.threads), (blocks, 256), "n = {n}");
             assert!(u64::from(g.blocks) * 256 >= n && u64::from(g.blocks - 1) * 256 < n);

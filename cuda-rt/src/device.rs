@@ -148,7 +148,9 @@ impl Device {
     pub fn bind(&self) -> Result<(), CudaError> {
         // SAFETY: `context` is the retained primary context, alive until `Drop`.
         let r = unsafe { sys::cuCtxSetCurrent(self.context) };
-        check_what(r, || format!("making device {}'s context current", self.ordinal))
+        check_what(r, || {
+            format!("making device {}'s context current", self.ordinal)
+        })
     }
 
     /// The device's ordinal.
@@ -276,7 +278,11 @@ pub struct DeviceBuffer<'d> {
 
 impl std::fmt::Debug for DeviceBuffer<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "DeviceBuffer(`{}`, {} bytes @ {:#x})", self.name, self.bytes, self.ptr)
+        write!(
+            f,
+            "DeviceBuffer(`{}`, {} bytes @ {:#x})",
+            self.name, self.bytes, self.ptr
+        )
     }
 }
 
@@ -323,10 +329,11 @@ impl DeviceBuffer<'_> {
         self.device.bind()?;
         // SAFETY: copies `bytes.len()` bytes, at most the allocation's size (checked), from a
         // live host slice; synchronous.
-        let r = unsafe {
-            sys::cuMemcpyHtoD_v2(self.ptr, bytes.as_ptr().cast::<c_void>(), bytes.len())
-        };
-        check_what(r, || format!("uploading {} bytes to `{}`", bytes.len(), self.name))
+        let r =
+            unsafe { sys::cuMemcpyHtoD_v2(self.ptr, bytes.as_ptr().cast::<c_void>(), bytes.len()) };
+        check_what(r, || {
+            format!("uploading {} bytes to `{}`", bytes.len(), self.name)
+        })
     }
 
     /// Copies the start of the buffer into `out`.
@@ -340,7 +347,9 @@ impl DeviceBuffer<'_> {
         // SAFETY: copies `len` bytes, at most the allocation's size (checked), into `out`,
         // whose type accepts any bit pattern (`DeviceCopy`); synchronous.
         let r = unsafe { sys::cuMemcpyDtoH_v2(out.as_mut_ptr().cast::<c_void>(), self.ptr, len) };
-        check_what(r, || format!("downloading {len} bytes from `{}`", self.name))
+        check_what(r, || {
+            format!("downloading {len} bytes from `{}`", self.name)
+        })
     }
 
     /// The buffer's first `n` elements of `T`.

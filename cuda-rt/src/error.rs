@@ -152,22 +152,20 @@ impl fmt::Display for CudaError {
                 count,
                 ordinal,
                 code,
-            } => {
-                match code {
-                    Some(c) if *count == 0 => write!(f, "no CUDA device: {c}"),
-                    _ if *count == 0 => write!(f, "no CUDA device: the driver reports 0 devices"),
-                    Some(c) => write!(
-                        f,
-                        "no CUDA device {ordinal}: the driver reports {count} device{} ({c})",
-                        plural(*count as i64)
-                    ),
-                    None => write!(
-                        f,
-                        "no CUDA device {ordinal}: the driver reports {count} device{}",
-                        plural(*count as i64)
-                    ),
-                }
-            }
+            } => match code {
+                Some(c) if *count == 0 => write!(f, "no CUDA device: {c}"),
+                _ if *count == 0 => write!(f, "no CUDA device: the driver reports 0 devices"),
+                Some(c) => write!(
+                    f,
+                    "no CUDA device {ordinal}: the driver reports {count} device{} ({c})",
+                    plural(*count as i64)
+                ),
+                None => write!(
+                    f,
+                    "no CUDA device {ordinal}: the driver reports {count} device{}",
+                    plural(*count as i64)
+                ),
+            },
             CudaError::OutOfMemory {
                 buffer,
                 bytes,
@@ -208,7 +206,10 @@ impl fmt::Display for CudaError {
                 }
             }
             CudaError::BadArguments { kernel, detail } => {
-                write!(f, "kernel `{kernel}`: arguments do not match the PTX: {detail}")
+                write!(
+                    f,
+                    "kernel `{kernel}`: arguments do not match the PTX: {detail}"
+                )
             }
             CudaError::Launch { kernel, code } => {
                 write!(f, "kernel `{kernel}` failed: {code}")?;
@@ -220,7 +221,10 @@ impl fmt::Display for CudaError {
             CudaError::Driver { what, code } => write!(f, "{what} failed: {code}"),
             CudaError::Host(m) => f.write_str(m),
             CudaError::BuildStatus { kernel, status } => {
-                write!(f, "packing failed: kernel `{kernel}` returned status {status}")?;
+                write!(
+                    f,
+                    "packing failed: kernel `{kernel}` returned status {status}"
+                )?;
                 if *status == 1 {
                     write!(f, " (a value did not fit in its bit slice)")?;
                 }
@@ -276,7 +280,10 @@ mod tests {
         };
         let m = e.to_string();
         assert!(m.starts_with("no CUDA driver"), "{m}");
-        assert!(m.contains("libcuda.so.1 not found; 2 library names tried"), "{m}");
+        assert!(
+            m.contains("libcuda.so.1 not found; 2 library names tried"),
+            "{m}"
+        );
         assert!(!m.contains('\n'), "one line: {m}");
 
         let e = CudaError::OutOfMemory {

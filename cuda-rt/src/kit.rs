@@ -89,7 +89,10 @@ mod tests {
         assert!(kit.ptx.lines().take(3).all(|l| l.starts_with("//")));
         assert_eq!(PtxKit::parse(&kit.ptx).unwrap(), kit);
         let none = PtxKit::new("L", "A", vec![], ptx);
-        assert_eq!(PtxKit::parse(&none.ptx).unwrap().buffers, Vec::<String>::new());
+        assert_eq!(
+            PtxKit::parse(&none.ptx).unwrap().buffers,
+            Vec::<String>::new()
+        );
     }
 
     #[test]

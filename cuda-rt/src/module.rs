@@ -95,7 +95,11 @@ impl<'d> Module<'d> {
             kernel: name.to_string(),
             available: self.entries.iter().map(|e| e.name.clone()).collect(),
         };
-        let entry = self.entries.iter().find(|e| e.name == name).ok_or_else(missing)?;
+        let entry = self
+            .entries
+            .iter()
+            .find(|e| e.name == name)
+            .ok_or_else(missing)?;
         let cname = CString::new(name).map_err(|_| missing())?;
         self.device.bind()?;
         let mut func: sys::CUfunction = std::ptr::null_mut();

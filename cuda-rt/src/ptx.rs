@@ -201,7 +201,10 @@ mod tests {
     #[test]
     fn unknown_parameters_are_errors() {
         let e = entries(".entry k(\n.param .zz9 k_param_0\n)\n{\n}").unwrap_err();
-        assert_eq!(e, "kernel `k`: unknown type `.zz9` in `.param .zz9 k_param_0`");
+        assert_eq!(
+            e,
+            "kernel `k`: unknown type `.zz9` in `.param .zz9 k_param_0`"
+        );
         assert!(entries("no kernels here").unwrap().is_empty());
     }
 }

@@ -52,7 +52,9 @@ impl DeviceTreeView {
     pub fn new(tree: &LogicalTree, nodes: DevicePtr, prims: DevicePtr) -> Result<Self, CudaError> {
         let count = |n: usize, what: &str| {
             u32::try_from(n).map_err(|_| {
-                CudaError::Host(format!("the logical tree has {n} {what}, more than 2^32 - 1"))
+                CudaError::Host(format!(
+                    "the logical tree has {n} {what}, more than 2^32 - 1"
+                ))
             })
         };
         Ok(DeviceTreeView {
@@ -113,9 +115,7 @@ pub fn check_kernels(
         if got != want {
             return Err(CudaError::BadArguments {
                 kernel: name.to_string(),
-                detail: format!(
-                    "its parameters have sizes {got:?}, backends.md §1 says {want:?}"
-                ),
+                detail: format!("its parameters have sizes {got:?}, backends.md §1 says {want:?}"),
             });
         }
         Ok(())
@@ -511,10 +511,19 @@ mod tests {
                 })
             }
         };
-        assert_eq!(check_kernels(&n, shapes(vec![8, 8, 8, 8, 4, 8])).unwrap(), RootRef::U32);
-        assert_eq!(check_kernels(&n, shapes(vec![8, 8, 8, 8, 8, 8])).unwrap(), RootRef::U64);
+        assert_eq!(
+            check_kernels(&n, shapes(vec![8, 8, 8, 8, 4, 8])).unwrap(),
+            RootRef::U32
+        );
+        assert_eq!(
+            check_kernels(&n, shapes(vec![8, 8, 8, 8, 8, 8])).unwrap(),
+            RootRef::U64
+        );
         let e = check_kernels(&n, shapes(vec![8, 8, 8, 4, 4, 8])).unwrap_err();
-        assert!(e.to_string().starts_with("kernel `scion_A_L_kernel`"), "{e}");
+        assert!(
+            e.to_string().starts_with("kernel `scion_A_L_kernel`"),
+            "{e}"
+        );
         let missing = |k: &str| -> Result<Vec<usize>, CudaError> {
             Err(CudaError::MissingKernel {
                 kernel: k.into(),

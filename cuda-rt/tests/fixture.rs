@@ -42,7 +42,11 @@ fn the_fixture_ptx_is_llc_output_of_probe_ll() {
         .arg(dir.join("probe.ll"))
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert_eq!(
         String::from_utf8(out.stdout).unwrap(),
         PROBE_PTX,

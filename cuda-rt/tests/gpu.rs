@@ -63,7 +63,9 @@ fn buffers_round_trip_and_start_zeroed() {
     let Some(dev) = device_or_skip("buffers_round_trip_and_start_zeroed") else {
         return;
     };
-    let data: Vec<u32> = (0..10_000u32).map(|i| i.wrapping_mul(2_654_435_761)).collect();
+    let data: Vec<u32> = (0..10_000u32)
+        .map(|i| i.wrapping_mul(2_654_435_761))
+        .collect();
     let buf = dev.upload("words", &data).unwrap();
     assert_eq!(buf.len(), 40_000);
     assert_eq!(buf.ptr().0 % 256, 0, "cuMemAlloc aligns to 256 bytes");
@@ -96,7 +98,9 @@ fn out_of_memory_names_the_buffer() {
         }
         other => panic!("expected out of memory, got {other:?}"),
     }
-    assert!(e.to_string().starts_with("out of device memory allocating `far too big`"));
+    assert!(e
+        .to_string()
+        .starts_with("out of device memory allocating `far too big`"));
     // Not sticky: the context still works.
     assert!(dev.alloc("small", 64).is_ok());
 }
@@ -174,7 +178,11 @@ fn pipeline_packs_on_the_device_and_traces() {
     let tree = build_sah_binned(&triangles(300), &SahOptions::default());
     let before = dev.stack_limit().unwrap();
     let packed = p.pack(&tree, tree.stats().depth).unwrap();
-    assert_eq!(dev.stack_limit().unwrap(), before, "the stack limit is restored");
+    assert_eq!(
+        dev.stack_limit().unwrap(),
+        before,
+        "the stack limit is restored"
+    );
     assert!(packed.pack_stack >= before);
     assert_eq!(packed.sizes, vec![300 * 40, 4]);
     let copied: Vec<Triangle> = packed.buffers[0].download(300).unwrap();
@@ -205,7 +213,9 @@ fn pipeline_packs_on_the_device_and_traces() {
     // The empty tree packs nothing; every ray misses.
     let empty = build_sah_binned(&[], &SahOptions::default());
     let packed = p.pack(&empty, 0).unwrap();
-    let t = p.trace(&packed, &p.upload_rays(&rays(10)).unwrap()).unwrap();
+    let t = p
+        .trace(&packed, &p.upload_rays(&rays(10)).unwrap())
+        .unwrap();
     assert_eq!(t.hits, vec![Hit::MISS; 10]);
 }
 

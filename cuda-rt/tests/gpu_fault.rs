@@ -24,5 +24,8 @@ fn a_faulting_kernel_is_a_launch_error_naming_it() {
         }
         other => panic!("expected a launch error, got {other:?}"),
     }
-    assert!(e.to_string().starts_with("kernel `fault_kernel` failed: "), "{e}");
+    assert!(
+        e.to_string().starts_with("kernel `fault_kernel` failed: "),
+        "{e}"
+    );
 }

@@ -97,8 +97,14 @@ impl JitModule {
             let tr = lm.add_function(&format!("{name}$entry"), ft, Some(Linkage::External));
             let bb = cx.append_basic_block(tr, "entry");
             builder.position_at_end(bb);
-            let args = tr.get_nth_param(0).ok_or_else(|| LlvmError("trampoline without params".into()))?.into_pointer_value();
-            let res = tr.get_nth_param(1).ok_or_else(|| LlvmError("trampoline without params".into()))?.into_pointer_value();
+            let args = tr
+                .get_nth_param(0)
+                .ok_or_else(|| LlvmError("trampoline without params".into()))?
+                .into_pointer_value();
+            let res = tr
+                .get_nth_param(1)
+                .ok_or_else(|| LlvmError("trampoline without params".into()))?
+                .into_pointer_value();
             let slot = |base, i: usize| -> Result<_, LlvmError> {
                 // SAFETY: a GEP over `i64` with one integer index is address arithmetic.
                 unsafe {
@@ -225,7 +231,9 @@ impl JitModule {
         let mut slots = Vec::with_capacity(args.len() + 1);
         for (a, t) in args.iter().zip(&e.params) {
             slots.push(to_slot(a, t).ok_or_else(|| {
-                LlvmError(format!("`@{name}`: argument {a:?} does not have type {t:?}"))
+                LlvmError(format!(
+                    "`@{name}`: argument {a:?} does not have type {t:?}"
+                ))
             })?);
         }
         slots.push(0);

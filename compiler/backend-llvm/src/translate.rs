@@ -229,9 +229,10 @@ impl<'c> Fn<'_, 'c> {
         // A branch back to the lo entry block needs a separate LLVM entry block (LLVM's entry
         // block has no predecessors): the parameters then flow in through the entry's phis.
         let entry_targeted = order.iter().any(|&b| {
-            m.blocks[b].ops.last().is_some_and(|&o| {
-                m.ops[o].successors.iter().any(|s| s.block == lo_entry)
-            })
+            m.blocks[b]
+                .ops
+                .last()
+                .is_some_and(|&o| m.ops[o].successors.iter().any(|s| s.block == lo_entry))
         });
         let prologue = entry_targeted.then(|| self.cx.append_basic_block(self.fv, "entry"));
         self.entry = prologue;
@@ -359,11 +360,8 @@ impl<'c> Fn<'_, 'c> {
         let OpKind::Lo(kind) = o.kind else {
             return Err(format!("`{}` is not a lo op", o.kind.name()));
         };
-        let args: Vec<BasicValueEnum<'c>> = o
-            .operands
-            .iter()
-            .map(|&x| self.v(x))
-            .collect::<R<_>>()?;
+        let args: Vec<BasicValueEnum<'c>> =
+            o.operands.iter().map(|&x| self.v(x)).collect::<R<_>>()?;
         let rty = match o.results.first() {
             Some(&r) => Some(llvm_type(self.cx, m, m.values[r].ty)?),
             None => None,
@@ -455,7 +453,11 @@ impl<'c> Fn<'_, 'c> {
                 let r = if kind == L::Popcount {
                     self.call_intr("llvm.ctpop", &[t], &args)?
                 } else {
-                    let name = if kind == L::Clz { "llvm.ctlz" } else { "llvm.cttz" };
+                    let name = if kind == L::Clz {
+                        "llvm.ctlz"
+                    } else {
+                        "llvm.cttz"
+                    };
                     let no_poison = self.cx.bool_type().const_int(0, false).into();
                     self.call_intr(name, &[t], &[args[0], no_poison])?
                 };
@@ -601,9 +603,7 @@ impl<'c> Fn<'_, 'c> {
                 match args.as_slice() {
                     [] => b.build_return(None),
                     [one] => b.build_return(Some(one)),
-                    many => {
-                        b.build_aggregate_return(many)
-                    }
+                    many => b.build_aggregate_return(many),
                 }
                 .map_err(be)?;
                 None
@@ -619,7 +619,10 @@ impl<'c> Fn<'_, 'c> {
     /// builder's current block) and returns the target.
     fn edge(&self, op: scion_ir::OpId, i: usize) -> R<BasicBlock<'c>> {
         let s = &self.m.ops[op].successors[i];
-        let target = *self.blocks.get(&s.block).ok_or("branch to a missing block")?;
+        let target = *self
+            .blocks
+            .get(&s.block)
+            .ok_or("branch to a missing block")?;
         let from = self.b.get_insert_block().ok_or("builder without a block")?;
         for (phi, &a) in self.phis[&s.block].iter().zip(&s.args) {
             let v = self.v(a)?;
@@ -679,7 +682,13 @@ impl<'c> Fn<'_, 'c> {
 
     /// Integer division without traps: `MIN / -1` wraps to `MIN` (and `MIN % -1` is 0);
     /// division by zero, undefined in the IR, divides by 1 (as `scion-clif` does).
-    fn int_div(&self, div: bool, signed: bool, x: IntValue<'c>, y: IntValue<'c>) -> R<IntValue<'c>> {
+    fn int_div(
+        &self,
+        div: bool,
+        signed: bool,
+        x: IntValue<'c>,
+        y: IntValue<'c>,
+    ) -> R<IntValue<'c>> {
         let b = self.b;
         let t = y.get_type();
         let one = t.const_int(1, false);
@@ -787,7 +796,9 @@ impl<'c> Fn<'_, 'c> {
             .build_float_compare(FloatPredicate::OEQ, x, zero, "")
             .map_err(be)?;
         let zs = it.const_int(zero_step, false);
-        let stepped = b.build_select(is_zero, zs.into(), stepped, "").map_err(be)?;
+        let stepped = b
+            .build_select(is_zero, zs.into(), stepped, "")
+            .map_err(be)?;
         let r = b.build_bit_cast(stepped, ft, "").map_err(be)?;
         let nan = b
             .build_float_compare(FloatPredicate::UNO, x, x, "")

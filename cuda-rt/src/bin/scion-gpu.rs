@@ -120,16 +120,29 @@ fn run(a: &Args) -> Result<bool, String> {
     let drop = a.runs.saturating_sub(1) / 4;
     let kernel = trimmed_mean(&times, drop, drop);
     println!("device       {device:?}");
-    println!("ptx          {} ({} {})", a.ptx.display(), kit.algorithm, kit.layout);
+    println!(
+        "ptx          {} ({} {})",
+        a.ptx.display(),
+        kit.algorithm,
+        kit.layout
+    );
     println!("module load  {:.6} s (PTX JIT)", load.as_secs_f64());
-    println!("scene        {} ({} triangles)", a.scene.display(), scene.len());
+    println!(
+        "scene        {} ({} triangles)",
+        a.scene.display(),
+        scene.len()
+    );
     println!("nodes        {} (depth {})", stats.nodes, stats.depth);
     println!(
         "pack time    {:.6} s (on the device, stack {} bytes)",
         packed.pack_time.as_secs_f64(),
         packed.pack_stack
     );
-    println!("rays         {} {}", rays.len(), if a.secondary { "secondary" } else { "primary" });
+    println!(
+        "rays         {} {}",
+        rays.len(),
+        if a.secondary { "secondary" } else { "primary" }
+    );
     let secs = kernel.as_secs_f64();
     println!(
         "kernel time  {secs:.6} s (mean of the middle {} of {} runs)",
@@ -139,7 +152,11 @@ fn run(a: &Args) -> Result<bool, String> {
     if secs > 0.0 {
         println!("throughput   {:.1} Mrays/s", rays.len() as f64 / secs / 1e6);
     }
-    println!("hits         {} of {} rays", hits.iter().filter(|h| h.is_hit()).count(), rays.len());
+    println!(
+        "hits         {} of {} rays",
+        hits.iter().filter(|h| h.is_hit()).count(),
+        rays.len()
+    );
     println!("check        {cmp}");
     Ok(cmp.identical())
 }
