@@ -48,10 +48,10 @@ impl<'d> Module<'d> {
         // The driver reads scalar option values from the pointer slots themselves.
         let mut values: [*mut c_void; 5] = [
             error_log.as_mut_ptr().cast(),
-            LOG_BYTES as *mut c_void,
+            std::ptr::without_provenance_mut(LOG_BYTES),
             info_log.as_mut_ptr().cast(),
-            LOG_BYTES as *mut c_void,
-            1usize as *mut c_void,
+            std::ptr::without_provenance_mut(LOG_BYTES),
+            std::ptr::without_provenance_mut(1),
         ];
         let mut module: sys::CUmodule = std::ptr::null_mut();
         // SAFETY: `image` is NUL-terminated PTX; the options and values arrays have the same

@@ -240,12 +240,17 @@ impl<'d> GpuPipeline<'d> {
         let root = check_kernels(&names, |k| {
             Ok(module.kernel(k)?.params().iter().map(|p| p.bytes).collect())
         })?;
-        let kernels = [&names.sizes, &names.build, &names.root, &names.batch];
+        let kernels = [
+            names.sizes.as_str(),
+            names.build.as_str(),
+            names.root.as_str(),
+            names.batch.as_str(),
+        ];
         let frames = stack_frames(&module.info_log);
         let frames = (!frames.is_empty()).then(|| {
             frames
                 .iter()
-                .filter(|(f, _)| !kernels.iter().any(|k| *k == f))
+                .filter(|(f, _)| !kernels.contains(&f.as_str()))
                 .map(|f| f.1)
                 .sum()
         });
