@@ -4,7 +4,10 @@
 //! driver (loaded at run time). Prints the same kind of report as `scion trace` and a final
 //! `check` line; exit status 0 when the hits are identical, 1 on a difference or an error.
 //!
+//! `scion-gpu --info` opens the device and describes it (or says why it cannot).
+//!
 //! ```text
+//! scion-gpu --info [--device 0]
 //! scion-gpu --ptx pbrt.ptx --scene ../shared/scenes/bunny.obj [--rays primary|secondary]
 //!           [--n 65536] [--seed 1] [--runs 9] [--device 0]
 //! ```
@@ -24,9 +27,10 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 const USAGE: &str = "usage: scion-gpu --ptx KIT.ptx --scene SCENE.obj [--rays primary|secondary] \
-                     [--n N] [--seed S] [--runs R] [--device D]";
+                     [--n N] [--seed S] [--runs R] [--device D]\n       scion-gpu --info [--device D]";
 
 struct Args {
+    info: bool,
     ptx: PathBuf,
     scene: PathBuf,
     secondary: bool,
@@ -40,6 +44,7 @@ fn parse_args() -> Result<Args, String> {
     let mut ptx = None;
     let mut scene = None;
     let mut a = Args {
+        info: false,
         ptx: PathBuf::new(),
         scene: PathBuf::new(),
         secondary: false,
@@ -52,6 +57,10 @@ fn parse_args() -> Result<Args, String> {
     while let Some(flag) = it.next() {
         if flag == "--help" || flag == "-h" {
             return Err(USAGE.to_string());
+        }
+        if flag == "--info" {
+            a.info = true;
+            continue;
         }
         let value = it
             .next()
@@ -77,6 +86,9 @@ fn parse_args() -> Result<Args, String> {
             f => return Err(format!("unknown flag `{f}`\n{USAGE}")),
         }
     }
+    if a.info {
+        return Ok(a);
+    }
     a.ptx = ptx.ok_or_else(|| format!("--ptx is required\n{USAGE}"))?;
     a.scene = scene.ok_or_else(|| format!("--scene is required\n{USAGE}"))?;
     if a.n == 0 {
@@ -85,7 +97,28 @@ fn parse_args() -> Result<Args, String> {
     Ok(a)
 }
 
+/// `--info`: the device, its driver and memory.
+fn info(ordinal: i32) -> Result<bool, String> {
+    let d = Device::open(ordinal).map_err(|e| e.to_string())?;
+    let (free, total) = d.memory().map_err(|e| e.to_string())?;
+    let stack = d.stack_limit().map_err(|e| e.to_string())?;
+    println!(
+        "device {ordinal}: {} (sm_{}{}), driver CUDA {}, {} of {} MiB free, stack limit {stack} \
+         bytes per thread",
+        d.name,
+        d.compute_capability.0,
+        d.compute_capability.1,
+        scion_cuda::error::version_text(d.driver.version),
+        free >> 20,
+        total >> 20
+    );
+    Ok(true)
+}
+
 fn run(a: &Args) -> Result<bool, String> {
+    if a.info {
+        return info(a.device);
+    }
     let text = std::fs::read_to_string(&a.ptx)
         .map_err(|e| format!("cannot read {}: {e}", a.ptx.display()))?;
     let kit = PtxKit::parse(&text).map_err(|e| format!("{}: {e}", a.ptx.display()))?;
