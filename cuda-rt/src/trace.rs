@@ -316,11 +316,11 @@ impl<'d> GpuPipeline<'d> {
         let addresses: Vec<u64> = buffers.iter().map(|b| b.ptr().0).collect();
         let table = dev.upload("buffer table", &addresses)?;
 
+        let status = dev.alloc("build status", 4)?;
+        let root = dev.alloc("root reference", 8)?;
         let previous = dev.stack_limit()?;
         let stack = packing_stack(depth, self.frames, previous);
         dev.set_stack_limit(stack)?;
-        let status = dev.alloc("build status", 4)?;
-        let root = dev.alloc("root reference", 8)?;
         let packed = (|| {
             self.kernel(&self.names.build)?.run(
                 Grid::SINGLE,
