@@ -14,7 +14,9 @@ use crate::{BackendArg, BuilderArg, CliError, DeviceArg, RaysArg, TraceArgs};
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::{build_median, build_sah_binned, LogicalNode, LogicalTree, SahOptions};
 use scion_runtime::geom::{Hit, Ray, Triangle};
-use scion_runtime::query::{axis_rays, primary_rays, read_rays, secondary_rays, write_hits};
+use scion_runtime::query::{
+    axis_rays, hits_checksum, primary_rays_n, read_rays, secondary_rays, write_hits,
+};
 use scion_runtime::scene::{load_obj, Scene};
 use scion_runtime::timing::{measure_with, Timing, TimingPlan};
 use scion_tests::backend::{Backend, BackendKind};
@@ -232,6 +234,8 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         timing.ns_per_query(rays.len())
     );
     println!("hits         {hit_count} of {} rays", rays.len());
+    // The same number as the C library's `scion_hits_checksum` (examples/cpp prints it too).
+    println!("checksum: {:016x}", hits_checksum(&hits));
     if let Some(path) = &args.output {
         write_hits(path, &hits)
             .map_err(|e| CliError::new(format!("cannot write the hits: {e}")))?;
@@ -344,23 +348,11 @@ pub(crate) fn rays(scene: &Scene, args: &TraceArgs) -> Result<Vec<Ray>, CliError
     }
     let n = usize::try_from(args.n).map_err(|_| CliError::new("--n: too many rays"))?;
     Ok(match args.rays {
-        RaysArg::Primary => {
-            // The smallest image of about n pixels: w = ceil(sqrt n) columns, enough rows,
-            // then the first n pixels in raster order.
-            let w = (n as f64).sqrt().ceil().max(1.0) as usize;
-            let h = n.div_ceil(w).max(1);
-            let (w, h) = (to_u32(w, "--n")?, to_u32(h, "--n")?);
-            let mut r = primary_rays(b, w, h, args.seed);
-            r.truncate(n);
-            r
-        }
+        RaysArg::Primary => primary_rays_n(b, n as u64, args.seed)
+            .ok_or_else(|| CliError::new(format!("--n: {n} is not a valid ray count")))?,
         RaysArg::Secondary => secondary_rays(b, n, args.seed),
         RaysArg::Axis => axis_rays(b, n, args.seed),
     })
-}
-
-fn to_u32(v: usize, what: &str) -> Result<u32, CliError> {
-    u32::try_from(v).map_err(|_| CliError::new(format!("{what}: {v} is too large")))
 }
 
 /// Traces once for the hits, then times by the plan of `runs` (the first trace is the

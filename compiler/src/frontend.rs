@@ -62,8 +62,8 @@ impl From<&Options> for PassOptions {
             layout: o.layout.clone(),
             stack_size: o.stack_size,
             entry: o.entry.clone(),
-            entry_target: match o.target {
-                Some(Target::Nvptx64) => EntryTarget::Gpu,
+            entry_target: match (o.target, o.emit) {
+                (Some(Target::Nvptx64), _) | (_, Emit::Ptx) => EntryTarget::Gpu,
                 _ => EntryTarget::Host,
             },
         }
@@ -79,6 +79,9 @@ pub struct CompileResult {
     pub internal_error: Option<InternalError>,
     /// The requested output (none for `--emit=check` or on error).
     pub output: Option<String>,
+    /// For `--emit=llvm|asm|obj|ptx`: the `lo` module the LLVM backend compiles (the driver
+    /// runs the backend with its target options; `output` stays empty).
+    pub lo_module: Option<Module>,
     /// IR dumps and timing reports asked for by the pass options (for standard error).
     pub dumps: String,
 }
@@ -184,6 +187,18 @@ pub fn compile(
         return out;
     }
     keep_reachable(&mut module, fe.inputs);
+    if matches!(emit, Emit::Llvm | Emit::Asm | Emit::Obj | Emit::Ptx) {
+        let entry = entry.as_ref().map(|s| (s, popts.entry_target));
+        match crate::driver::lower::lower_with_entries(&mut module, popts.stack_size, entry) {
+            Ok(warnings) => {
+                out.diagnostics.extend(warnings);
+                out.lo_module = Some(module);
+            }
+            Err(PassError::Diagnostics(d)) => out.diagnostics.extend(d),
+            Err(PassError::Internal(i)) => out.internal_error = Some(i),
+        }
+        return out;
+    }
     if matches!(emit, Emit::Lo | Emit::Clif | Emit::Header) {
         let entry = entry.as_ref().map(|s| (s, popts.entry_target));
         match crate::driver::lower::emit_low(&mut module, emit, popts.stack_size, entry) {

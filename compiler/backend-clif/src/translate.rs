@@ -55,14 +55,22 @@ pub fn signature<M: ClModule>(cl: &M, m: &Module, f: FuncId) -> Result<Signature
     Ok(sig)
 }
 
-/// Declares every function of `m` in `cl` (definitions exported, declarations imported), and
-/// the C library's `fmodf`/`fmod` for float `rem`.
+/// Declares every function of `m` in `cl` (declarations imported), and the C library's
+/// `fmodf`/`fmod` for float `rem`. Definitions are exported, except that when any function
+/// carries the attribute `export` (the C entry points of docs/design/backends.md §1) only
+/// those are, and every other definition is `Local`.
 pub fn declare_all<M: ClModule>(cl: &mut M, m: &Module) -> Result<Symbols, String> {
     let mut funcs = HashMap::new();
+    let exports_only = m
+        .func_order
+        .iter()
+        .any(|&f| m.funcs[f].attrs.get("export").is_some());
     for &f in &m.func_order {
         let sig = signature(cl, m, f)?;
         let linkage = if m.is_declaration(f) {
             Linkage::Import
+        } else if exports_only && m.funcs[f].attrs.get("export").is_none() {
+            Linkage::Local
         } else {
             Linkage::Export
         };
@@ -633,5 +641,48 @@ impl Fx<'_, '_> {
             (Type::Float(_), Type::Float(_)) => self.b.ins().fdemote(ct, x),
             _ => return Err("unsupported cast".into()),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use cranelift_jit::{JITBuilder, JITModule};
+
+    fn linkages(text: &str) -> HashMap<String, Linkage> {
+        let mut sources = scion_ir::diag::SourceMap::new();
+        let file = sources.add("<test>", text.to_string());
+        let m = scion_ir::parse_module(text, file).expect("parses");
+        let builder = JITBuilder::with_isa(
+            crate::host_isa().expect("host ISA"),
+            cranelift_module::default_libcall_names(),
+        );
+        let mut cl = JITModule::new(builder);
+        let syms = declare_all(&mut cl, &m).expect("declares");
+        syms.funcs
+            .iter()
+            .map(|(name, id)| {
+                let d = cl.declarations().get_function_decl(*id);
+                (name.clone(), d.linkage)
+            })
+            .collect()
+    }
+
+    const HELPER: &str = "func @helper(%0: i32) -> (i32) {\n  \"lo.return\"(%0) : (i32) -> ()\n}\n";
+
+    #[test]
+    fn only_export_functions_are_exported_when_there_are_any() {
+        let entry = "func @api(%0: i32) -> (i32) attributes {export} {\n  \
+                     %1 = \"lo.call\"(%0) {callee = @helper} : (i32) -> i32\n  \
+                     \"lo.return\"(%1) : (i32) -> ()\n}\n";
+        let l = linkages(&format!("{HELPER}{entry}"));
+        assert_eq!(l["api"], Linkage::Export);
+        assert_eq!(l["helper"], Linkage::Local);
+    }
+
+    #[test]
+    fn without_export_functions_every_definition_is_exported() {
+        let l = linkages(HELPER);
+        assert_eq!(l["helper"], Linkage::Export);
     }
 }

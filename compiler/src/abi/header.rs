@@ -166,6 +166,11 @@ pub fn render(sig: &EntrySig, root: &Type) -> String {
     s.push('\n');
     let query = format!("scion_{a}_query");
     let result = format!("scion_{a}_result");
+    // The records depend on the algorithm only: the headers of several layouts share them.
+    let _ = writeln!(
+        s,
+        "#ifndef SCION_{a}_RECORDS_DEFINED\n#define SCION_{a}_RECORDS_DEFINED"
+    );
     record(&mut s, &query, &format!("One query of `{a}`"), &sig.query);
     s.push('\n');
     record(
@@ -174,7 +179,7 @@ pub fn render(sig: &EntrySig, root: &Type) -> String {
         &format!("One result of `{a}` (read and written)"),
         &sig.result,
     );
-    s.push('\n');
+    s.push_str("#endif\n\n");
     let _ = writeln!(
         s,
         "/* The reference to a packed node of `{l}`. */\ntypedef {root_c} scion_{l}_ref;\n"

@@ -18,13 +18,13 @@ pub enum Emit {
     Lo,
     /// Cranelift IR.
     Clif,
-    /// LLVM IR.
+    /// LLVM IR (optimized at the -O level), for --target.
     Llvm,
-    /// Assembly for the target.
+    /// Assembly for --target (PTX for nvptx64).
     Asm,
-    /// An object file for the target.
+    /// An ELF object file for --target (binary: needs -o when standard output is a terminal).
     Obj,
-    /// NVPTX assembly.
+    /// PTX for NVIDIA GPUs (implies --target=nvptx64).
     Ptx,
     /// A C header for the generated entry points.
     Header,
@@ -33,6 +33,19 @@ pub enum Emit {
 }
 
 impl Emit {
+    /// True for the outputs made from the `lo` module (`lo`, `clif` and LLVM's).
+    pub fn lowers_to_lo(self) -> bool {
+        matches!(
+            self,
+            Emit::Lo | Emit::Clif | Emit::Llvm | Emit::Asm | Emit::Obj | Emit::Ptx
+        )
+    }
+
+    /// True for the outputs of the LLVM backend.
+    pub fn is_llvm(self) -> bool {
+        matches!(self, Emit::Llvm | Emit::Asm | Emit::Obj | Emit::Ptx)
+    }
+
     /// The flag value as written.
     pub fn as_str(self) -> &'static str {
         match self {
@@ -88,17 +101,28 @@ Examples:
     scionc -O2 --print-pipeline library/algorithms/closest_hit.scion
   Run one pass by name on tree IR and print every step:
     scionc --emit=tree --passes=const-fold,dce --print-after-all FILE.scion
-
-Exit status: 0 on success, 1 when the input has errors, 2 on a bad command line, 101 on an
-internal compiler error (a bug: please report it with the input).
-
+  Compile closest-hit for pbrt to an AArch64 object with LLVM at -O3:
+    scionc -O3 --emit=obj --target=aarch64 --layout=LinearBVH -o ch.o \
+      library/algorithms/closest_hit.scion library/layouts/pbrt.scion
+  The same as PTX for an sm_90 GPU (--cpu=sm_XX picks another):
+    scionc -O3 --emit=ptx --layout=LinearBVH library/algorithms/closest_hit.scion \
+      library/layouts/pbrt.scion
   Print the C header and the lo entry points of closest-hit over the pbrt layout:
     scionc --emit=header --layout LinearBVH --entry closest_hit \
       library/algorithms/closest_hit.scion library/layouts/pbrt.scion
     scionc --emit=lo --layout LinearBVH --entry closest_hit FILES...
 
+Code generation:
+  --emit=llvm|asm|obj|ptx go through LLVM 22: --target=x86_64|aarch64|nvptx64 (default: this
+  machine; --emit=ptx sets nvptx64), --cpu=native|<llvm cpu>|sm_XX (default: the
+  architecture's baseline, sm_90 on nvptx64), and -O0..-O3 also select LLVM's default<O0..O3>
+  pipeline.
+
+Exit status: 0 on success, 1 when the input has errors, 2 on a bad command line, 101 on an
+internal compiler error (a bug: please report it with the input).
+
 Not built yet (these say so with error E0901 instead of being ignored):
-  --emit=llvm|asm|obj|ptx, --target (except with --emit=lo|header), --cpu, --run.";
+  --run.";
 
 /// `scionc`: the Scion compiler.
 ///
@@ -134,7 +158,8 @@ pub struct Options {
     #[arg(long, value_name = "NAME")]
     pub entry: Option<String>,
 
-    /// Code generation target.
+    /// Code generation target of --emit=llvm|asm|obj|ptx (default: this machine); with
+    /// `--entry`, `nvptx64` also adds the GPU kernels to `--emit=lo`.
     #[arg(long, value_enum, value_name = "TARGET")]
     pub target: Option<Target>,
 
@@ -214,26 +239,16 @@ impl Options {
             | Emit::Mem
             | Emit::Lo
             | Emit::Clif
+            | Emit::Llvm
+            | Emit::Asm
+            | Emit::Obj
+            | Emit::Ptx
             | Emit::Header => None,
-            Emit::Llvm | Emit::Asm | Emit::Obj | Emit::Ptx => Some("the LLVM backend"),
         };
         if let Some(planned) = emit_plan {
             return Err(NotImplemented {
                 flag: format!("--emit={}", self.emit.as_str()),
                 planned,
-            });
-        }
-        // `--target` chooses the entry points (`nvptx64` adds kernels) for lo and the header.
-        let target_used = matches!(self.emit, Emit::Lo | Emit::Header);
-        if (self.target.is_some() && !target_used) || self.cpu.is_some() {
-            let flag = if self.cpu.is_some() {
-                "--cpu"
-            } else {
-                "--target"
-            };
-            return Err(NotImplemented {
-                flag: flag.into(),
-                planned: "the LLVM backend",
             });
         }
         if self.run.is_some() {

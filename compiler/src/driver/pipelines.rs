@@ -36,7 +36,7 @@ pub fn select(opts: &Options) -> Result<Vec<String>, Diagnostic> {
         None => {
             let mut names = Vec::new();
             let specialize = matches!(opts.emit, Emit::Mem | Emit::Header)
-                || (matches!(opts.emit, Emit::Lo | Emit::Clif) && opts.layout.is_some());
+                || (opts.emit.lowers_to_lo() && opts.layout.is_some());
             if specialize {
                 names.push("destructor-specialize".to_string());
                 names.push("constructor-specialize".to_string());

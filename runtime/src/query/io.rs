@@ -133,6 +133,28 @@ pub fn hits_to_bytes(hits: &[Hit]) -> Vec<u8> {
     out
 }
 
+/// The checksum of a list of hits that `scion trace`, the C library
+/// (`scion_hits_checksum`) and the C++ example print: 64-bit FNV-1a over the bytes of the hits
+/// file ([`hits_to_bytes`]: per hit the little-endian `f32` bits of `t`, then the `u32`
+/// primitive id), so two lists have the same checksum when they are bit-identical (with
+/// overwhelming probability only then).
+pub fn hits_checksum(hits: &[Hit]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for hit in hits {
+        for b in hit
+            .t
+            .to_bits()
+            .to_le_bytes()
+            .into_iter()
+            .chain(hit.prim.to_le_bytes())
+        {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+    h
+}
+
 /// Hits from the bytes of a hits file; `path` names the source in errors.
 pub fn hits_from_bytes(path: &Path, bytes: &[u8]) -> Result<Vec<Hit>, QueryFileError> {
     check_size(path, bytes.len(), "hit", HIT_RECORD)?;
@@ -184,6 +206,21 @@ pub fn read_hits(path: impl AsRef<Path>) -> Result<Vec<Hit>, QueryFileError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn checksum_is_fnv1a_of_the_hits_file_bytes() {
+        // FNV-1a 64 of no bytes is the offset basis.
+        assert_eq!(hits_checksum(&[]), 0xcbf2_9ce4_8422_2325);
+        let hits = [Hit { t: 1.5, prim: 7 }, Hit::MISS];
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        for b in hits_to_bytes(&hits) {
+            h = (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3);
+        }
+        assert_eq!(hits_checksum(&hits), h);
+        // One bit of one hit changes it.
+        let other = [Hit { t: 1.5, prim: 6 }, Hit::MISS];
+        assert_ne!(hits_checksum(&hits), hits_checksum(&other));
+    }
 
     #[test]
     fn byte_layout_is_little_endian_records() {

@@ -121,6 +121,20 @@ pub fn primary_rays(bounds: Aabb, width: u32, height: u32, seed: u64) -> Vec<Ray
     rays
 }
 
+/// `n` primary rays as `scion trace --rays primary --n N` makes them: the smallest image of
+/// about `n` pixels (`w = ceil(sqrt n)` columns, `ceil(n / w)` rows) from [`primary_rays`],
+/// then its first `n` pixels in raster order. `None` when `n` is 0 or above `2^32`.
+pub fn primary_rays_n(bounds: Aabb, n: u64, seed: u64) -> Option<Vec<Ray>> {
+    if n == 0 || n > 1 << 32 {
+        return None;
+    }
+    let w = (n as f64).sqrt().ceil().max(1.0) as u64;
+    let h = n.div_ceil(w).max(1);
+    let mut r = primary_rays(bounds, u32::try_from(w).ok()?, u32::try_from(h).ok()?, seed);
+    r.truncate(n as usize);
+    Some(r)
+}
+
 /// A point uniform in `bounds` (the unit cube around the origin when empty).
 fn point_in(bounds: Aabb, rng: &mut SplitMix64) -> Vec3 {
     let b = if bounds.is_empty() {
@@ -177,6 +191,18 @@ mod tests {
 
     fn unit_box() -> Aabb {
         Aabb::new(Vec3::new(-1.0, 2.0, 3.0), Vec3::new(1.0, 3.0, 7.0))
+    }
+
+    #[test]
+    fn primary_rays_n_are_the_first_pixels_of_the_smallest_image() {
+        let b = unit_box();
+        // 10 rays: a 4 x 3 image, its first 10 pixels.
+        let r = primary_rays_n(b, 10, 5).unwrap();
+        let full = primary_rays(b, 4, 3, 5);
+        assert_eq!(r.len(), 10);
+        assert!(r.iter().zip(&full).all(|(a, b)| a == b));
+        assert!(primary_rays_n(b, 0, 5).is_none());
+        assert!(primary_rays_n(b, (1 << 32) + 1, 5).is_none());
     }
 
     #[test]

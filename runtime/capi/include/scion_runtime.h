@@ -1,0 +1,135 @@
+/* The Scion runtime's C library (libscion_runtime.a, crate scion-runtime-c).
+ *
+ * Scenes (Wavefront OBJ), the logical BVH (binned SAH with the runtime's defaults, as
+ * `scion trace` builds it), the ScionTreeView that generated code packs from, the primary
+ * camera rays of `scion trace`, the reference closest hit, and the hits checksum that
+ * `scion trace` prints. See docs/c-abi.md.
+ *
+ * Every function that can fail returns a status (SCION_RT_OK or an SCION_RT_ERR_* code) and,
+ * when `err` is not NULL, writes a NUL-terminated message of at most `err_len` bytes there.
+ * No function unwinds into C: internal failures come back as SCION_RT_ERR_INTERNAL.
+ * Every handle has its free function; freeing NULL does nothing.
+ *
+ * Link with: -lscion_runtime -lpthread -ldl -lm
+ */
+#ifndef SCION_RUNTIME_H
+#define SCION_RUNTIME_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifndef SCION_STATIC_ASSERT
+#if defined(__cplusplus)
+#define SCION_STATIC_ASSERT(c, msg) static_assert(c, msg)
+#elif defined(__STDC_VERSION__) && __STDC_VERSION__ >= 201112L
+#define SCION_STATIC_ASSERT(c, msg) _Static_assert(c, msg)
+#else
+#define SCION_STATIC_ASSERT_CAT2(a, b) a##b
+#define SCION_STATIC_ASSERT_CAT(a, b) SCION_STATIC_ASSERT_CAT2(a, b)
+#define SCION_STATIC_ASSERT(c, msg) \
+    typedef char SCION_STATIC_ASSERT_CAT(scion_static_assert_, __LINE__)[(c) ? 1 : -1]
+#endif
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* The runtime contract's structs; the same definitions as in every header of
+ * `scionc --emit=header`, so both can be included together. */
+#ifndef SCION_ABI_TYPES_DEFINED
+#define SCION_ABI_TYPES_DEFINED
+/* One node of the logical tree (44 bytes). */
+typedef struct ScionLogicalNode {
+    uint32_t kind;        /* 0 interior, 1 leaf */
+    float bounds[6];      /* low x, y, z, high x, y, z */
+    uint32_t child[2];    /* interior: left and right child */
+    uint32_t prim_offset; /* leaf: first primitive */
+    uint32_t prim_count;  /* leaf: number of primitives */
+} ScionLogicalNode;
+/* A triangle (40 bytes), the same in the logical tree and in packed layouts. */
+typedef struct ScionTriangle {
+    float p0[3];
+    float p1[3];
+    float p2[3];
+    uint32_t id;
+} ScionTriangle;
+/* The logical tree as generated code reads it (32 bytes). */
+typedef struct ScionTreeView {
+    const ScionLogicalNode *nodes;
+    uint32_t node_count;
+    uint32_t root; /* UINT32_MAX for the empty tree */
+    const ScionTriangle *prims;
+    uint32_t prim_count;
+} ScionTreeView;
+SCION_STATIC_ASSERT(sizeof(ScionLogicalNode) == 44, "ScionLogicalNode is 44 bytes");
+SCION_STATIC_ASSERT(sizeof(ScionTriangle) == 40, "ScionTriangle is 40 bytes");
+SCION_STATIC_ASSERT(sizeof(ScionTreeView) == 32, "ScionTreeView is 32 bytes");
+SCION_STATIC_ASSERT(offsetof(ScionTreeView, root) == 12, "ScionTreeView.root at 12");
+SCION_STATIC_ASSERT(offsetof(ScionTreeView, prims) == 16, "ScionTreeView.prims at 16");
+#endif
+
+/* A ray (32 bytes): hits have tmin < t < tmax. The same bytes as the query record
+ * `scion_closest_hit_query` of the closest-hit entry points. */
+typedef struct ScionRay {
+    float origin[3];
+    float dir[3];
+    float tmin;
+    float tmax;
+} ScionRay;
+SCION_STATIC_ASSERT(sizeof(ScionRay) == 32, "ScionRay is 32 bytes");
+
+/* A closest hit (8 bytes): t = +inf and prim = UINT32_MAX on a miss. */
+typedef struct ScionHit {
+    float t;
+    uint32_t prim;
+} ScionHit;
+SCION_STATIC_ASSERT(sizeof(ScionHit) == 8, "ScionHit is 8 bytes");
+
+/* Status codes. */
+#define SCION_RT_OK 0
+#define SCION_RT_ERR_ARGUMENT 1 /* a NULL pointer or a value out of range */
+#define SCION_RT_ERR_SCENE 2    /* the scene could not be read or parsed */
+#define SCION_RT_ERR_EMPTY 3    /* the scene has no triangles: nothing to aim rays at */
+#define SCION_RT_ERR_INTERNAL 4 /* a bug in the runtime (reported, never unwound into C) */
+
+typedef struct ScionScene ScionScene; /* a loaded scene */
+typedef struct ScionTree ScionTree;   /* a logical BVH over a scene's triangles */
+
+/* Loads the OBJ scene at `path` (UTF-8) into *out. */
+int32_t scion_scene_load(const char *path, ScionScene **out, char *err, size_t err_len);
+/* The number of triangles of a scene (0 for NULL). */
+uint64_t scion_scene_triangle_count(const ScionScene *scene);
+void scion_scene_free(ScionScene *scene);
+
+/* Builds the logical tree of `scene` with binned SAH, leaves of up to `max_leaf` triangles
+ * (1..15; 0 means the default 15, as `scion trace`), into *out. */
+int32_t scion_tree_build(const ScionScene *scene, uint32_t max_leaf, ScionTree **out,
+                         char *err, size_t err_len);
+/* Fills *view with the tree's nodes and triangles; valid while the tree lives. */
+int32_t scion_tree_view(const ScionTree *tree, ScionTreeView *view, char *err, size_t err_len);
+void scion_tree_free(ScionTree *tree);
+
+/* Writes the `n` primary camera rays of `scion trace --rays primary --n N --seed S` for
+ * `scene` to rays[0..n) (1 <= n <= 2^32). */
+int32_t scion_primary_rays(const ScionScene *scene, uint64_t n, uint64_t seed, ScionRay *rays,
+                           char *err, size_t err_len);
+
+/* The runtime's reference closest hits of rays[0..n) against `tree`, on `threads` threads
+ * (0: one per core), into hits[0..n). */
+int32_t scion_reference_closest_hits(const ScionTree *tree, const ScionRay *rays, uint64_t n,
+                                     uint32_t threads, ScionHit *hits, char *err,
+                                     size_t err_len);
+
+/* The hit of a closest-hit result record (best t, best id): a miss when id is UINT32_MAX. */
+ScionHit scion_hit_from_best(float t, uint32_t prim);
+
+/* The checksum `scion trace` prints (`checksum: %016llx`): 64-bit FNV-1a over the hits file
+ * bytes of hits[0..n). */
+uint64_t scion_hits_checksum(const ScionHit *hits, uint64_t n);
+
+#ifdef __cplusplus
+} /* extern "C" */
+#endif
+
+#endif /* SCION_RUNTIME_H */

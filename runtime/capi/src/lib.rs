@@ -1,0 +1,30 @@
+//! The Scion runtime as a C library (`libscion_runtime.a`, header `include/scion_runtime.h`;
+//! docs/c-abi.md). Input: C callers; output: scenes, logical trees, their `ScionTreeView`,
+//! the rays of `scion trace`, the reference closest hits and the hits checksum.
+//!
+//! Every fallible function runs inside [`ffi::guard`] and [`ffi::report`]: errors become a status code and a
+//! NUL-terminated message in the caller's buffer, and a panic is caught
+//! (`SCION_RT_ERR_INTERNAL`) instead of unwinding into C. Handles are `Box`es handed out as
+//! raw pointers; each has its free function, and freeing NULL does nothing.
+
+#![allow(unsafe_code)]
+
+mod ffi;
+mod queries;
+mod scene;
+
+pub use ffi::{
+    Status, SCION_RT_ERR_ARGUMENT, SCION_RT_ERR_EMPTY, SCION_RT_ERR_INTERNAL, SCION_RT_ERR_SCENE,
+    SCION_RT_OK,
+};
+pub use queries::{
+    scion_hit_from_best, scion_hits_checksum, scion_primary_rays, scion_reference_closest_hits,
+    ScionHit, ScionRay,
+};
+pub use scene::{
+    scion_scene_free, scion_scene_load, scion_scene_triangle_count, scion_tree_build,
+    scion_tree_free, scion_tree_view, ScionScene, ScionTree, ScionTreeView,
+};
+
+#[cfg(test)]
+mod tests;

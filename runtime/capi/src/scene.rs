@@ -1,0 +1,188 @@
+//! Scenes and logical trees: `scion_scene_*`, `scion_tree_*`.
+
+use crate::ffi::{bad_arg, guard, report, Status, SCION_RT_ERR_EMPTY, SCION_RT_ERR_SCENE};
+use rt::bvh::{build_sah_binned, LogicalNode, LogicalTree, SahOptions};
+use rt::geom::Triangle;
+use rt::scene::{load_obj, Scene};
+use std::ffi::{c_char, CStr};
+
+/// A loaded scene (opaque to C).
+pub struct ScionScene {
+    pub(crate) scene: Scene,
+}
+
+/// A logical tree over a scene's triangles (opaque to C).
+pub struct ScionTree {
+    pub(crate) tree: LogicalTree,
+}
+
+/// The logical tree as generated code reads it (`ScionTreeView`, 32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct ScionTreeView {
+    /// The nodes (44-byte `ScionLogicalNode`s).
+    pub nodes: *const LogicalNode,
+    /// How many.
+    pub node_count: u32,
+    /// The root's index, `u32::MAX` for the empty tree.
+    pub root: u32,
+    /// The triangles (40-byte `ScionTriangle`s).
+    pub prims: *const Triangle,
+    /// How many.
+    pub prim_count: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<ScionTreeView>() == 32);
+const _: () = assert!(std::mem::size_of::<LogicalNode>() == 44);
+const _: () = assert!(std::mem::size_of::<Triangle>() == 40);
+
+/// `scion_scene_load`.
+///
+/// # Safety
+/// `path` is NULL or a NUL-terminated string; `out` is NULL or writable; `err` as
+/// `ffi::write_error`.
+#[no_mangle]
+pub unsafe extern "C" fn scion_scene_load(
+    path: *const c_char,
+    out: *mut *mut ScionScene,
+    err: *mut c_char,
+    err_len: usize,
+) -> Status {
+    let r = guard(|| {
+        if path.is_null() || out.is_null() {
+            return Err(bad_arg(
+                "scion_scene_load: `path` and `out` must not be NULL",
+            ));
+        }
+        // SAFETY: `path` is a NUL-terminated string (the caller's contract).
+        let p = unsafe { CStr::from_ptr(path) }
+            .to_str()
+            .map_err(|_| bad_arg("scion_scene_load: the path is not UTF-8"))?;
+        let scene =
+            load_obj(p).map_err(|e| (SCION_RT_ERR_SCENE, format!("cannot load the scene: {e}")))?;
+        let h = Box::into_raw(Box::new(ScionScene { scene }));
+        // SAFETY: `out` is writable.
+        unsafe { *out = h };
+        Ok(())
+    });
+    // SAFETY: `err` is NULL or has `err_len` writable bytes (the caller's contract).
+    unsafe { report(err, err_len, r) }
+}
+
+/// `scion_scene_triangle_count`.
+///
+/// # Safety
+/// `scene` is NULL or a live handle.
+#[no_mangle]
+pub unsafe extern "C" fn scion_scene_triangle_count(scene: *const ScionScene) -> u64 {
+    // SAFETY: NULL or a live handle from `scion_scene_load`.
+    match unsafe { scene.as_ref() } {
+        Some(s) => s.scene.len() as u64,
+        None => 0,
+    }
+}
+
+/// `scion_scene_free`.
+///
+/// # Safety
+/// `scene` is NULL or a handle from `scion_scene_load` not freed before.
+#[no_mangle]
+pub unsafe extern "C" fn scion_scene_free(scene: *mut ScionScene) {
+    if !scene.is_null() {
+        // SAFETY: made by `Box::into_raw` in `scion_scene_load`, freed once.
+        drop(unsafe { Box::from_raw(scene) });
+    }
+}
+
+/// `scion_tree_build`.
+///
+/// # Safety
+/// `scene` is NULL or a live handle; `out` is NULL or writable; `err` as
+/// `ffi::write_error`.
+#[no_mangle]
+pub unsafe extern "C" fn scion_tree_build(
+    scene: *const ScionScene,
+    max_leaf: u32,
+    out: *mut *mut ScionTree,
+    err: *mut c_char,
+    err_len: usize,
+) -> Status {
+    let r = guard(|| {
+        // SAFETY: NULL or a live handle.
+        let Some(s) = (unsafe { scene.as_ref() }) else {
+            return Err(bad_arg("scion_tree_build: `scene` must not be NULL"));
+        };
+        if out.is_null() {
+            return Err(bad_arg("scion_tree_build: `out` must not be NULL"));
+        }
+        if max_leaf > 15 {
+            return Err(bad_arg(format!(
+                "scion_tree_build: max_leaf {max_leaf} is above 15"
+            )));
+        }
+        if s.scene.triangles.len() >= u32::MAX as usize {
+            return Err((
+                SCION_RT_ERR_EMPTY,
+                "the scene has too many triangles".into(),
+            ));
+        }
+        let mut opts = SahOptions::default();
+        if max_leaf > 0 {
+            opts.max_leaf = max_leaf as usize;
+        }
+        let tree = build_sah_binned(&s.scene.triangles, &opts);
+        let h = Box::into_raw(Box::new(ScionTree { tree }));
+        // SAFETY: `out` is writable.
+        unsafe { *out = h };
+        Ok(())
+    });
+    // SAFETY: `err` is NULL or has `err_len` writable bytes (the caller's contract).
+    unsafe { report(err, err_len, r) }
+}
+
+/// `scion_tree_view`.
+///
+/// # Safety
+/// `tree` is NULL or a live handle; `view` is NULL or writable; `err` as
+/// `ffi::write_error`.
+#[no_mangle]
+pub unsafe extern "C" fn scion_tree_view(
+    tree: *const ScionTree,
+    view: *mut ScionTreeView,
+    err: *mut c_char,
+    err_len: usize,
+) -> Status {
+    let r = guard(|| {
+        // SAFETY: NULL or a live handle.
+        let Some(t) = (unsafe { tree.as_ref() }) else {
+            return Err(bad_arg("scion_tree_view: `tree` must not be NULL"));
+        };
+        if view.is_null() {
+            return Err(bad_arg("scion_tree_view: `view` must not be NULL"));
+        }
+        let v = ScionTreeView {
+            nodes: t.tree.nodes.as_ptr(),
+            node_count: t.tree.nodes.len() as u32,
+            root: t.tree.root,
+            prims: t.tree.primitives.as_ptr(),
+            prim_count: t.tree.primitives.len() as u32,
+        };
+        // SAFETY: `view` is writable.
+        unsafe { *view = v };
+        Ok(())
+    });
+    // SAFETY: `err` is NULL or has `err_len` writable bytes (the caller's contract).
+    unsafe { report(err, err_len, r) }
+}
+
+/// `scion_tree_free`.
+///
+/// # Safety
+/// `tree` is NULL or a handle from `scion_tree_build` not freed before.
+#[no_mangle]
+pub unsafe extern "C" fn scion_tree_free(tree: *mut ScionTree) {
+    if !tree.is_null() {
+        // SAFETY: made by `Box::into_raw` in `scion_tree_build`, freed once.
+        drop(unsafe { Box::from_raw(tree) });
+    }
+}

@@ -1,0 +1,157 @@
+//! The C functions called as C calls them, on a real scene (`teapot`; a generated OBJ file
+//! when `shared/scenes` is absent): the results equal the Rust runtime's, and every error is a
+//! status with a message.
+
+use super::*;
+use rt::batch::BatchDriver;
+use rt::bvh::{build_sah_binned, SahOptions};
+use rt::query::{hits_checksum, primary_rays_n};
+use rt::reference::closest_hits_tree;
+use rt::scene::{load_obj, manifest::scenes_dir};
+use std::ffi::{c_char, CStr, CString};
+use std::path::PathBuf;
+
+fn scene_path() -> PathBuf {
+    if let Some(d) = scenes_dir() {
+        return d.join("teapot.obj");
+    }
+    eprintln!("skip: no shared/scenes; using a generated OBJ file");
+    let p = std::env::temp_dir().join(format!("scion-capi-{}.obj", std::process::id()));
+    let mut text = String::new();
+    for i in 0..50 {
+        let x = i as f32 * 0.1;
+        text.push_str(&format!(
+            "v {x} 0 0\nv {x} 1 0\nv {x} 0 1\nf {} {} {}\n",
+            3 * i + 1,
+            3 * i + 2,
+            3 * i + 3
+        ));
+    }
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn msg(buf: &[c_char]) -> String {
+    // SAFETY: the library NUL-terminates its messages inside the buffer.
+    unsafe { CStr::from_ptr(buf.as_ptr()) }
+        .to_string_lossy()
+        .into_owned()
+}
+
+#[test]
+fn the_c_path_matches_the_rust_path() {
+    let path = scene_path();
+    let cpath = CString::new(path.to_str().unwrap()).unwrap();
+    let mut err = [0 as c_char; 256];
+    let mut scene: *mut ScionScene = std::ptr::null_mut();
+    // SAFETY: valid string, out pointer and buffer.
+    let s = unsafe { scion_scene_load(cpath.as_ptr(), &mut scene, err.as_mut_ptr(), err.len()) };
+    assert_eq!(s, SCION_RT_OK, "{}", msg(&err));
+    let rust_scene = load_obj(&path).unwrap();
+    // SAFETY: a live handle.
+    assert_eq!(
+        unsafe { scion_scene_triangle_count(scene) },
+        rust_scene.len() as u64
+    );
+
+    let mut tree: *mut ScionTree = std::ptr::null_mut();
+    // SAFETY: a live handle and an out pointer.
+    let s = unsafe { scion_tree_build(scene, 0, &mut tree, err.as_mut_ptr(), err.len()) };
+    assert_eq!(s, SCION_RT_OK, "{}", msg(&err));
+    let rust_tree = build_sah_binned(&rust_scene.triangles, &SahOptions::default());
+    let mut view = ScionTreeView {
+        nodes: std::ptr::null(),
+        node_count: 0,
+        root: 0,
+        prims: std::ptr::null(),
+        prim_count: 0,
+    };
+    // SAFETY: a live handle and an out pointer.
+    let s = unsafe { scion_tree_view(tree, &mut view, err.as_mut_ptr(), err.len()) };
+    assert_eq!(s, SCION_RT_OK);
+    assert_eq!(view.node_count as usize, rust_tree.nodes.len());
+    assert_eq!(view.prim_count as usize, rust_tree.primitives.len());
+    assert_eq!(view.root, rust_tree.root);
+    // SAFETY: the view points into the live tree.
+    let nodes = unsafe { std::slice::from_raw_parts(view.nodes, view.node_count as usize) };
+    assert_eq!(nodes, &rust_tree.nodes[..]);
+
+    let n = 3001u64;
+    let mut rays = vec![ScionRay::default(); n as usize];
+    // SAFETY: `rays` has room for `n`.
+    let s =
+        unsafe { scion_primary_rays(scene, n, 7, rays.as_mut_ptr(), err.as_mut_ptr(), err.len()) };
+    assert_eq!(s, SCION_RT_OK, "{}", msg(&err));
+    let rust_rays = primary_rays_n(rust_scene.bounds(), n, 7).unwrap();
+    assert!(rays
+        .iter()
+        .zip(&rust_rays)
+        .all(|(a, b)| *a == ScionRay::from(*b)));
+
+    let mut hits = vec![ScionHit::default(); n as usize];
+    // SAFETY: `rays` and `hits` hold `n` elements.
+    let s = unsafe {
+        scion_reference_closest_hits(
+            tree,
+            rays.as_ptr(),
+            n,
+            2,
+            hits.as_mut_ptr(),
+            err.as_mut_ptr(),
+            err.len(),
+        )
+    };
+    assert_eq!(s, SCION_RT_OK, "{}", msg(&err));
+    let want = closest_hits_tree(&rust_tree, &rust_rays, &BatchDriver::new(2).unwrap());
+    assert!(hits
+        .iter()
+        .zip(&want)
+        .all(|(h, w)| h.t.to_bits() == w.t.to_bits() && h.prim == w.prim));
+    assert!(hits.iter().any(|h| h.prim != u32::MAX), "no hits");
+    // SAFETY: `hits` holds `n` hits.
+    assert_eq!(
+        unsafe { scion_hits_checksum(hits.as_ptr(), n) },
+        hits_checksum(&want)
+    );
+
+    let miss = scion_hit_from_best(5.0, u32::MAX);
+    assert_eq!((miss.t, miss.prim), (f32::INFINITY, u32::MAX));
+    assert_eq!(scion_hit_from_best(2.5, 3), ScionHit { t: 2.5, prim: 3 });
+
+    // SAFETY: live handles, freed once; NULL is allowed.
+    unsafe {
+        scion_tree_free(tree);
+        scion_scene_free(scene);
+        scion_tree_free(std::ptr::null_mut());
+        scion_scene_free(std::ptr::null_mut());
+    }
+}
+
+#[test]
+fn errors_are_statuses_with_messages() {
+    let mut err = [0 as c_char; 256];
+    let mut scene: *mut ScionScene = std::ptr::null_mut();
+    let missing = CString::new("/nonexistent/scene.obj").unwrap();
+    // SAFETY: valid arguments; the file does not exist.
+    let s = unsafe { scion_scene_load(missing.as_ptr(), &mut scene, err.as_mut_ptr(), err.len()) };
+    assert_eq!(s, SCION_RT_ERR_SCENE);
+    assert!(
+        msg(&err).contains("/nonexistent/scene.obj"),
+        "{}",
+        msg(&err)
+    );
+    assert!(scene.is_null());
+    // SAFETY: NULL arguments are reported, never dereferenced.
+    let s = unsafe { scion_scene_load(std::ptr::null(), &mut scene, err.as_mut_ptr(), err.len()) };
+    assert_eq!(s, SCION_RT_ERR_ARGUMENT);
+    assert!(msg(&err).contains("NULL"));
+    let mut tree: *mut ScionTree = std::ptr::null_mut();
+    // SAFETY: as above.
+    let s = unsafe { scion_tree_build(std::ptr::null(), 0, &mut tree, std::ptr::null_mut(), 0) };
+    assert_eq!(s, SCION_RT_ERR_ARGUMENT);
+    // SAFETY: NULL hits are the empty list.
+    assert_eq!(
+        unsafe { scion_hits_checksum(std::ptr::null(), 5) },
+        hits_checksum(&[])
+    );
+}

@@ -1,0 +1,126 @@
+//! examples/cpp end to end: `make` builds the C++ program with g++ against the object of
+//! `scionc -O3 --emit=obj --layout L --entry closest_hit` and `libscion_runtime.a`, runs it on
+//! a real scene, and the checksum it prints must equal the Rust path's (the runtime's
+//! reference closest hits of the same tree and rays, `hits_checksum`, what `scion trace`
+//! prints), for pbrt and ptr. The program also checks every hit against the reference itself
+//! and exits nonzero on a mismatch.
+//!
+//! It builds `scionc` and the runtime's static library with the `cargo` that runs the test
+//! (release profile). Skips with a clear line when g++ or make is missing.
+
+use scion_runtime::batch::BatchDriver;
+use scion_runtime::bvh::{build_sah_binned, SahOptions};
+use scion_runtime::query::{hits_checksum, primary_rays_n};
+use scion_runtime::reference::closest_hits_tree;
+use scion_runtime::scene::{load_obj, manifest::scenes_dir};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const RAYS: u64 = 20_000;
+const SEED: u64 = 3;
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn have(tool: &str) -> bool {
+    Command::new(tool)
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success())
+}
+
+/// Builds `scionc` and `libscion_runtime.a` (release) and returns the target folder.
+fn build_tools() -> PathBuf {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
+    for args in [
+        &[
+            "build",
+            "--release",
+            "-p",
+            "scion-compiler",
+            "--bin",
+            "scionc",
+        ][..],
+        &["build", "--release", "-p", "scion-runtime-c", "--lib"][..],
+    ] {
+        let out = Command::new(&cargo)
+            .current_dir(repo())
+            .args(args)
+            .output()
+            .expect("runs cargo");
+        assert!(
+            out.status.success(),
+            "cargo {}: {}",
+            args.join(" "),
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    match std::env::var_os("CARGO_TARGET_DIR") {
+        Some(d) => PathBuf::from(d).join("release"),
+        None => repo().join("target").join("release"),
+    }
+}
+
+/// The checksum of the Rust path for `scene`: binned SAH with the defaults, the primary rays
+/// of `scion trace --n RAYS --seed SEED`, the reference closest hits.
+fn rust_checksum(scene: &Path) -> u64 {
+    let s = load_obj(scene).unwrap();
+    let tree = build_sah_binned(&s.triangles, &SahOptions::default());
+    let rays = primary_rays_n(s.bounds(), RAYS, SEED).unwrap();
+    let hits = closest_hits_tree(&tree, &rays, &BatchDriver::new(2).unwrap());
+    assert!(hits.iter().any(|h| h.is_hit()), "the rays miss the scene");
+    hits_checksum(&hits)
+}
+
+#[test]
+fn cpp_example_prints_the_rust_checksum() {
+    for tool in ["g++", "make"] {
+        if !have(tool) {
+            eprintln!("skip: `{tool}` not found; examples/cpp is not built");
+            return;
+        }
+    }
+    let Some(scenes) = scenes_dir() else {
+        eprintln!("skip: no shared/scenes (set SCION_SCENES); examples/cpp needs a real scene");
+        return;
+    };
+    let target = build_tools();
+    let build = std::env::temp_dir().join(format!("scion-cpp-example-{}", std::process::id()));
+    for (layout, file, scene) in [("LinearBVH", "pbrt", "teapot"), ("PtrBVH", "ptr", "pine")] {
+        let scene = scenes.join(format!("{scene}.obj"));
+        let out = Command::new("make")
+            .current_dir(repo().join("examples/cpp"))
+            .arg("run")
+            .arg(format!("BUILD={}", build.display()))
+            .arg(format!("SCIONC={}", target.join("scionc").display()))
+            .arg(format!("RUNTIME_LIB_DIR={}", target.display()))
+            .arg(format!("LAYOUT={layout}"))
+            .arg(format!("LAYOUT_FILE={file}"))
+            .arg(format!("SCENE={}", scene.display()))
+            .arg(format!("N={RAYS}"))
+            .arg(format!("SEED={SEED}"))
+            .arg("THREADS=3")
+            .arg("CXX=g++")
+            .output()
+            .expect("runs make");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            out.status.success(),
+            "{layout}: make run failed\n{stdout}\n{stderr}"
+        );
+        let printed = stdout
+            .lines()
+            .find_map(|l| l.strip_prefix("checksum: "))
+            .unwrap_or_else(|| panic!("{layout}: no checksum line in\n{stdout}"));
+        let printed = u64::from_str_radix(printed.trim(), 16).expect("a hex checksum");
+        assert_eq!(
+            printed,
+            rust_checksum(&scene),
+            "{layout}: the C++ checksum differs from the Rust path's\n{stdout}"
+        );
+        assert!(stdout.contains("mismatches: 0"), "{stdout}");
+    }
+    let _ = std::fs::remove_dir_all(&build);
+}
