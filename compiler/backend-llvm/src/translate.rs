@@ -15,8 +15,11 @@
 //! sequence: NVVM's directed-rounding intrinsics round an *operation*, they cannot step a
 //! given value, so they would not be bit-identical to the interpreters' `next_up`). Integer
 //! division never traps (by zero divides by 1, `MIN / -1` wraps) and shift amounts are taken
-//! modulo the width, as in `scion-clif`. Loads and stores assume no alignment (`align 1`):
-//! layouts may pack fields at any byte offset.
+//! modulo the width, as in `scion-clif`. Loads and stores: on CPUs `align 1` (x86-64 and
+//! AArch64 access unaligned scalars at full speed, so nothing is assumed); on NVPTX, where an
+//! unaligned access would be split into bytes, the scalar's natural alignment, which the
+//! layout model guarantees (members at their natural alignment, buffers aligned to the
+//! plan's largest alignment; query and result records likewise, `backends.md` §1).
 //!
 //! Blocks are translated in reverse post-order, block arguments become `phi`s; `lo.stack_slot`
 //! is an `alloca` in the entry block; `lo.global_id` reads `%ctaid.x * %ntid.x + %tid.x` and
@@ -310,6 +313,18 @@ impl<'c> Fn<'_, 'c> {
         }
     }
 
+    /// The alignment of a load or store of `t` (see the module docs).
+    fn mem_align(&self, t: BasicTypeEnum<'c>) -> u32 {
+        if self.target != Target::Nvptx64 {
+            return 1;
+        }
+        match t {
+            BasicTypeEnum::IntType(i) => i.get_bit_width().div_ceil(8),
+            BasicTypeEnum::FloatType(f) => f.get_bit_width() / 8,
+            _ => 8,
+        }
+    }
+
     /// `p + off` bytes.
     fn byte_offset(&self, p: PointerValue<'c>, off: IntValue<'c>) -> R<PointerValue<'c>> {
         #[allow(unsafe_code)]
@@ -501,7 +516,7 @@ impl<'c> Fn<'_, 'c> {
                 };
                 let v = b.build_load(lt, p, "").map_err(be)?;
                 if let Some(i) = v.as_instruction_value() {
-                    i.set_alignment(1).map_err(be)?;
+                    i.set_alignment(self.mem_align(lt)).map_err(be)?;
                 }
                 Some(if is_bool {
                     let zero = self.cx.i8_type().const_zero();
@@ -522,7 +537,7 @@ impl<'c> Fn<'_, 'c> {
                         .into();
                 }
                 let st = b.build_store(p, v).map_err(be)?;
-                st.set_alignment(1).map_err(be)?;
+                st.set_alignment(self.mem_align(v.get_type())).map_err(be)?;
                 None
             }
             L::PtrAdd => {
