@@ -291,6 +291,11 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
         hits.iter().filter(|h| h.is_hit()).count(),
         rays.len()
     );
+    // The same number as `scion trace` on the CPU and the C library print.
+    println!(
+        "checksum: {:016x}",
+        scion_runtime::query::hits_checksum(&hits)
+    );
     println!("check        {check}");
     if let Some(path) = &args.output {
         scion_runtime::query::write_hits(path, &hits)

@@ -18,7 +18,7 @@ use scion_cuda::trace::GpuPipeline;
 use scion_cuda::Device;
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::{build_sah_binned, SahOptions};
-use scion_runtime::query::{primary_rays, secondary_rays};
+use scion_runtime::query::{hits_checksum, primary_rays_n, secondary_rays};
 use scion_runtime::reference::closest_hit::closest_hits_tree;
 use scion_runtime::scene::load_obj;
 use scion_runtime::timing::trimmed_mean;
@@ -133,11 +133,8 @@ fn run(a: &Args) -> Result<bool, String> {
     let rays = if a.secondary {
         secondary_rays(b, a.n, a.seed)
     } else {
-        let w = (a.n as f64).sqrt().ceil().max(1.0) as u32;
-        let h = a.n.div_ceil(w as usize).max(1) as u32;
-        let mut r = primary_rays(b, w, h, a.seed);
-        r.truncate(a.n);
-        r
+        primary_rays_n(b, a.n as u64, a.seed)
+            .ok_or_else(|| format!("--n: {} is not a valid ray count", a.n))?
     };
     let t = Instant::now();
     let p = GpuPipeline::new(&device, &kit.ptx, &kit.layout, &kit.algorithm, kit.buffers)
@@ -190,6 +187,7 @@ fn run(a: &Args) -> Result<bool, String> {
         hits.iter().filter(|h| h.is_hit()).count(),
         rays.len()
     );
+    println!("checksum: {:016x}", hits_checksum(&hits));
     println!("check        {cmp}");
     Ok(cmp.identical())
 }
