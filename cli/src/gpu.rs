@@ -8,7 +8,7 @@
 //! (`scion_cuda::kit`) that `scion-gpu` runs on machines without LLVM.
 
 use crate::trace::{build, progress, rays, secs, significant, LAYOUTS};
-use crate::{CliError, PtxArgs, TraceArgs};
+use crate::{BackendArg, CliError, PtxArgs, TraceArgs};
 use scion_compiler::abi::EntryTarget;
 use scion_compiler::driver::cli::Emit;
 use scion_compiler::driver::pipelines::for_level;
@@ -176,6 +176,15 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
         CliError::new(e.to_string()).note("--device gpu needs an NVIDIA GPU and its driver")
     })?;
     let layout = args.layout.as_deref().unwrap_or("pbrt");
+    if args.backend != BackendArg::Reference {
+        eprintln!(
+            "scion: note: --backend is not used with --device gpu (the GPU runs closest hit \
+             for --layout, checked against the reference)"
+        );
+    }
+    if args.ptx.is_some() && args.layout.is_some() {
+        eprintln!("scion: note: --layout is not used with --ptx (the kit names its layout)");
+    }
     let (kit, compile_time) = match &args.ptx {
         Some(path) => {
             let text = std::fs::read_to_string(path)

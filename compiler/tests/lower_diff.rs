@@ -236,7 +236,7 @@ fn a_real_hit_is_found_by_every_engine() {
     args.iter().for_each(|a| flatten(a, &mut flat));
     let out = jit.call("t_hit", &flat).unwrap();
     assert!(matches!(out[0], Val::F32(t) if t == 1.0), "{out:?}");
-    check_all(&tree, &lo, &jit, &floats).unwrap();
+    check_all(&tree, &lo, &jit, &[], &floats).unwrap();
 }
 
 /// Integer intrinsics and conversions on every width: bit counts, shifts, division (including
