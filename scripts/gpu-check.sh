@@ -12,7 +12,8 @@
 #   GPU_CHECK_RUNS     timed runs after the warm-up (default 9)
 #   GPU_CHECK_MODE     scion (compile PTX in-process: needs libLLVM 22), kit (run the prebuilt
 #                      PTX kits with scion-gpu), or auto (scion when it starts, else kit)
-#   GPU_CHECK_TIMEOUT  seconds per run (default 120)
+#   GPU_CHECK_TIMEOUT  seconds per run (default 60)
+#   GPU_CHECK_BUDGET   seconds for all the traces (default 300): later ones are not started
 #   OUT                where logs and summary.txt go (default: <kit>/results)
 set -uo pipefail
 
@@ -21,7 +22,8 @@ if [ -x "$here/bin/scion-gpu" ]; then KIT=$here; else KIT=${GPU_KIT:-$here/../gp
 KIT=$(cd "$KIT" 2>/dev/null && pwd) || { echo "gpu-check: no kit at $KIT; run scripts/gpu-kit.sh first" >&2; exit 2; }
 N=${GPU_CHECK_N:-1048576}
 RUNS=${GPU_CHECK_RUNS:-9}
-TIMEOUT=${GPU_CHECK_TIMEOUT:-120}
+TIMEOUT=${GPU_CHECK_TIMEOUT:-60}
+BUDGET=${GPU_CHECK_BUDGET:-300}
 RESULTS=${OUT:-$KIT/results}
 mkdir -p "$RESULTS/logs"
 SUMMARY=$RESULTS/summary.txt
@@ -71,12 +73,19 @@ start=$(date +%s)
 failures=0
 table=$(printf '%-18s %-7s %-10s %10s %9s %12s  %s' scene layout rays triangles "pack s" "Mrays/s" check)
 rows=()
-for obj in "$scenes"/*.obj; do
+# Smallest scenes first, so a spent budget leaves out the largest.
+mapfile -t objs < <(ls -Sr "$scenes"/*.obj)
+for obj in "${objs[@]}"; do
   [ $no_device -eq 0 ] || break
   scene=$(basename "$obj" .obj)
   for layout in pbrt ptr; do
     for rays in primary secondary; do
       log=$RESULTS/logs/$scene-$layout-$rays.log
+      if [ $(( $(date +%s) - start )) -ge "$BUDGET" ]; then
+        row=$(printf '%-18s %-7s %-10s %10s %9s %12s  %s' "$scene" "$layout" "$rays" - - - "NOT RUN (GPU_CHECK_BUDGET ${BUDGET}s spent)")
+        rows+=("$row"); echo "$row"; failures=$((failures + 1))
+        continue
+      fi
       if [ "$mode" = scion ]; then
         cmd=("$KIT/bin/scion" trace --device gpu --scene "$obj" --layout "$layout" --rays "$rays"
              --n "$N" --runs "$RUNS")
