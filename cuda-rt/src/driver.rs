@@ -117,7 +117,28 @@ fn probe_uncached() -> Result<DriverInfo, CudaError> {
         (r == sys::CUresult::CUDA_SUCCESS).then_some(v)
     });
     let version = version.flatten();
-    if let Some(missing) = REQUIRED_SYMBOLS.iter().find(|s| !has(s)) {
+    let missing = REQUIRED_SYMBOLS.iter().copied().find(|s| !has(s));
+    let version = check_library(version, missing)?;
+    // SAFETY: `cuInit` exists (checked); flags must be 0.
+    let r = unsafe { sys::cuInit(0) };
+    if r != sys::CUresult::CUDA_SUCCESS {
+        return Err(init_error(driver_code(r), version));
+    }
+    let elapsed = if has("cuEventElapsedTime_v2") {
+        Some(ElapsedFn::V2)
+    } else if has("cuEventElapsedTime") {
+        Some(ElapsedFn::V1)
+    } else {
+        None
+    };
+    Ok(DriverInfo { version, elapsed })
+}
+
+/// The verdict on a loaded driver library: its version, or why it is too old (a function this
+/// crate calls is missing, the version cannot be read, or it is older than
+/// [`MIN_DRIVER_VERSION`]).
+pub fn check_library(version: Option<i32>, missing: Option<&str>) -> Result<i32, CudaError> {
+    if let Some(missing) = missing {
         return Err(CudaError::DriverTooOld {
             version,
             missing: format!("it has no `{missing}`"),
@@ -138,34 +159,27 @@ fn probe_uncached() -> Result<DriverInfo, CudaError> {
             ),
         });
     }
-    // SAFETY: `cuInit` exists (checked); flags must be 0.
-    let r = unsafe { sys::cuInit(0) };
-    if r != sys::CUresult::CUDA_SUCCESS {
-        let code = driver_code(r);
-        return Err(match code.code {
-            CUDA_ERROR_NO_DEVICE => CudaError::NoDevice {
-                count: 0,
-                ordinal: 0,
-                code: Some(code),
-            },
-            CUDA_ERROR_INSUFFICIENT_DRIVER => CudaError::DriverTooOld {
-                version: Some(version),
-                missing: format!("cuInit: {code}"),
-            },
-            _ => CudaError::Driver {
-                what: "cuInit".into(),
-                code,
-            },
-        });
+    Ok(version)
+}
+
+/// What a failed `cuInit` means: no device, a driver too old for the installed kernel
+/// module, or another driver error.
+pub fn init_error(code: DriverCode, version: i32) -> CudaError {
+    match code.code {
+        CUDA_ERROR_NO_DEVICE => CudaError::NoDevice {
+            count: 0,
+            ordinal: 0,
+            code: Some(code),
+        },
+        CUDA_ERROR_INSUFFICIENT_DRIVER => CudaError::DriverTooOld {
+            version: Some(version),
+            missing: format!("cuInit: {code}"),
+        },
+        _ => CudaError::Driver {
+            what: "cuInit".into(),
+            code,
+        },
     }
-    let elapsed = if has("cuEventElapsedTime_v2") {
-        Some(ElapsedFn::V2)
-    } else if has("cuEventElapsedTime") {
-        Some(ElapsedFn::V1)
-    } else {
-        None
-    };
-    Ok(DriverInfo { version, elapsed })
 }
 
 /// The driver's name and description of `r`.
@@ -197,4 +211,80 @@ pub fn check(r: sys::CUresult) -> Result<(), DriverCode> {
 /// `check` as a [`CudaError::Driver`] naming `what`.
 pub fn check_what(r: sys::CUresult, what: impl FnOnce() -> String) -> Result<(), CudaError> {
     check(r).map_err(|code| CudaError::Driver { what: what(), code })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn code(n: u32) -> DriverCode {
+        DriverCode {
+            code: n,
+            name: None,
+            description: None,
+        }
+    }
+
+    #[test]
+    fn old_or_incomplete_drivers_are_too_old() {
+        let e = check_library(Some(12080), Some("cuLaunchKernel")).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "the CUDA driver is too old (it supports CUDA 12.8): it has no `cuLaunchKernel`"
+        );
+        let e = check_library(Some(11040), None).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "the CUDA driver is too old (it supports CUDA 11.4): CUDA 11.8 or newer is required"
+        );
+        assert!(matches!(
+            check_library(None, None),
+            Err(CudaError::DriverTooOld { version: None, .. })
+        ));
+        assert_eq!(check_library(Some(13000), None).unwrap(), 13000);
+        assert_eq!(
+            check_library(Some(MIN_DRIVER_VERSION), None).unwrap(),
+            11080
+        );
+    }
+
+    #[test]
+    fn init_failures_are_classified() {
+        assert!(matches!(
+            init_error(code(CUDA_ERROR_NO_DEVICE), 13000),
+            CudaError::NoDevice { count: 0, .. }
+        ));
+        assert!(init_error(code(CUDA_ERROR_NO_DEVICE), 13000)
+            .to_string()
+            .starts_with("no CUDA device"));
+        assert!(matches!(
+            init_error(code(CUDA_ERROR_INSUFFICIENT_DRIVER), 12000),
+            CudaError::DriverTooOld { .. }
+        ));
+        assert_eq!(
+            init_error(code(999), 13000).to_string(),
+            "cuInit failed: CUDA error 999"
+        );
+    }
+
+    #[test]
+    fn every_needed_function_is_probed() {
+        // The functions `device` and `module` call through cudarc's lazy loader.
+        let sources = [include_str!("device.rs"), include_str!("module.rs")];
+        for src in sources {
+            for (i, _) in src.match_indices("sys::cu") {
+                let name: String = src[i + 5..]
+                    .chars()
+                    .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                    .collect();
+                if name.starts_with("cuEventElapsedTime") {
+                    continue; // probed separately: one of two versions
+                }
+                assert!(
+                    REQUIRED_SYMBOLS.contains(&name.as_str()),
+                    "`{name}` is not probed"
+                );
+            }
+        }
+    }
 }
