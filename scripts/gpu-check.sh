@@ -7,7 +7,8 @@
 # Runs from the kit made by scripts/gpu-kit.sh (no Rust toolchain needed):
 #   gpu-kit/gpu-check.sh                   # or: GPU_KIT=gpu-kit scripts/gpu-check.sh
 # Environment:
-#   SCION_SCENES       the scenes folder (default: shared/scenes or ../shared/scenes)
+#   SCION_SCENES       the scenes folder (default: shared/scenes or ../shared/scenes, else the
+#                      kit's gzipped copies, unpacked into $OUT/scenes)
 #   GPU_CHECK_N        rays per run (default 1048576)
 #   GPU_CHECK_RUNS     timed runs after the warm-up (default 9)
 #   GPU_CHECK_MODE     scion (compile PTX in-process: needs libLLVM 22), kit (run the prebuilt
@@ -36,6 +37,11 @@ if [ -z "$scenes" ]; then
   for d in "$PWD/shared/scenes" "$PWD/../shared/scenes" "$KIT/../shared/scenes" "$KIT/../../shared/scenes"; do
     if [ -f "$d/teapot.obj" ]; then scenes=$d; break; fi
   done
+fi
+if [ -z "$scenes" ] && ls "$KIT"/scenes/*.obj.gz >/dev/null 2>&1; then
+  scenes=$RESULTS/scenes
+  mkdir -p "$scenes"
+  for f in "$KIT"/scenes/*.obj.gz; do gzip -dc "$f" > "$scenes/$(basename "$f" .gz)"; done
 fi
 if [ -z "$scenes" ] || ! ls "$scenes"/*.obj >/dev/null 2>&1; then
   echo "gpu-check: no scenes found; set SCION_SCENES to the folder of the .obj files" >&2
