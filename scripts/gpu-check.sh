@@ -8,7 +8,7 @@
 #   gpu-kit/gpu-check.sh                   # or: GPU_KIT=gpu-kit scripts/gpu-check.sh
 # Environment:
 #   SCION_SCENES       the scenes folder (default: shared/scenes or ../shared/scenes, else the
-#                      kit's gzipped copies, unpacked into $OUT/scenes)
+#                      kit's gzipped copies, unpacked into a temporary folder)
 #   GPU_CHECK_N        rays per run (default 1048576)
 #   GPU_CHECK_RUNS     timed runs after the warm-up (default 9)
 #   GPU_CHECK_MODE     scion (compile PTX in-process: needs libLLVM 22), kit (run the prebuilt
@@ -39,8 +39,7 @@ if [ -z "$scenes" ]; then
   done
 fi
 if [ -z "$scenes" ] && ls "$KIT"/scenes/*.obj.gz >/dev/null 2>&1; then
-  scenes=$RESULTS/scenes
-  mkdir -p "$scenes"
+  scenes=$(mktemp -d "${TMPDIR:-/tmp}/scion-scenes.XXXXXX")
   for f in "$KIT"/scenes/*.obj.gz; do gzip -dc "$f" > "$scenes/$(basename "$f" .gz)"; done
 fi
 if [ -z "$scenes" ] || ! ls "$scenes"/*.obj >/dev/null 2>&1; then
