@@ -1,6 +1,6 @@
 //! `scionc --emit=header` output compiles as C99, C11 and C++17 (`gcc`/`g++ -fsyntax-only` with
-//! warnings as errors), alone and two headers in one translation unit (the contract's structs
-//! are shared under one guard). Skips with a clear line when gcc or g++ is missing.
+//! warnings as errors), two generated headers and the runtime's `scion_runtime.h` in one
+//! translation unit (the contract's structs are shared under one guard). Skips with a clear line when gcc or g++ is missing.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -46,6 +46,8 @@ fn generated_headers_compile_as_c_and_cpp() {
     std::fs::create_dir_all(&dir).unwrap();
     let pbrt = header("LinearBVH", "pbrt.scion", &dir);
     let ptr = header("PtrBVH", "ptr.scion", &dir);
+    // The runtime's hand-written header shares the contract's structs with the generated ones.
+    let runtime_h = repo().join("runtime/capi/include/scion_runtime.h");
     let mut ran = 0;
     for (tool, lang, std) in [
         ("gcc", "c", "-std=c99"),
@@ -60,13 +62,14 @@ fn generated_headers_compile_as_c_and_cpp() {
         std::fs::write(
             &src,
             format!(
-                "#include \"{}\"\n#include \"{}\"\n\
+                "#include \"{}\"\n#include \"{}\"\n#include \"{}\"\n\
                  int main(void) {{\n  \
                  scion_closest_hit_query q; scion_closest_hit_result r;\n  \
                  (void)q; (void)r;\n  \
                  return (int)sizeof(ScionTreeView) + SCION_LinearBVH_BUFFER_COUNT \
-                 + SCION_PtrBVH_BUFFER_ALIGN;\n}}\n",
+                 + SCION_PtrBVH_BUFFER_ALIGN + (int)sizeof(ScionRay) + SCION_RT_OK;\n}}\n",
                 pbrt.display(),
+                runtime_h.display(),
                 ptr.display()
             ),
         )

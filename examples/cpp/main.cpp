@@ -114,8 +114,9 @@ int main(int argc, char **argv) {
     }
     const auto *queries = reinterpret_cast<const scion_closest_hit_query *>(rays.data());
 
-    // Trace: the rays split into one contiguous range per thread.
-    const unsigned parts = threads == 0 ? 1 : threads;
+    // Trace: the rays split into one contiguous range per thread. An empty tree has no packed
+    // node to start from: every ray misses, and the results stay as initialized.
+    const unsigned parts = view.node_count == 0 ? 0 : (threads == 0 ? 1 : threads);
     std::vector<std::int32_t> statuses(parts, SCION_OK);
     std::vector<std::thread> pool;
     for (unsigned p = 0; p < parts; ++p) {

@@ -217,3 +217,51 @@ fn non_exported_functions_are_local_but_the_entries_are_callable() {
         assert!(code.function_ptr(name).is_some(), "{name}");
     }
 }
+
+#[test]
+fn the_root_of_an_empty_tree_is_zero() {
+    use scion_ir::interp::Val;
+    use scion_ir::types::IntTy;
+    let tree = build_sah_binned(&gen::empty().triangles, &SahOptions::default());
+    assert!(tree.is_empty());
+    let view = LogicalTreeView::new(&tree).unwrap();
+    let addr = |p: *const u8| Val::Int(p as usize as i128, IntTy::U64);
+    for (stem, layout) in [("pbrt", "LinearBVH"), ("ptr", "PtrBVH")] {
+        let code = jit(&entries_lo(stem, layout));
+        let mut sizes = [0u64; 16];
+        let sizes_ptr = sizes.as_mut_ptr() as *const u8;
+        let view_ptr = &view as *const LogicalTreeView as *const u8;
+        code.call(
+            &format!("scion_{layout}_sizes"),
+            &[addr(view_ptr), addr(sizes_ptr)],
+        )
+        .unwrap();
+        let mut bufs: Vec<Aligned> = sizes
+            .iter()
+            .map(|&s| Aligned::new(s as usize, 64))
+            .collect();
+        let table: Vec<*mut u8> = bufs.iter_mut().map(Aligned::ptr).collect();
+        let table_ptr = table.as_ptr() as *const u8;
+        let build = code
+            .call(
+                &format!("scion_{layout}_build"),
+                &[addr(view_ptr), addr(table_ptr)],
+            )
+            .unwrap();
+        assert!(
+            matches!(build.as_slice(), [Val::Int(0, IntTy::I32)]),
+            "{layout}: build status {build:?}"
+        );
+        let root = code
+            .call(
+                &format!("scion_{layout}_root"),
+                &[addr(view_ptr), addr(table_ptr)],
+            )
+            .unwrap();
+        let zero = match root.first() {
+            Some(Val::Int(v, _)) => *v == 0,
+            other => panic!("{layout}: root {other:?}"),
+        };
+        assert!(zero, "{layout}: the empty tree's root is {root:?}, not 0");
+    }
+}

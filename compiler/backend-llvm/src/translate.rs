@@ -15,7 +15,8 @@
 //! flags (so LLVM never contracts `a*b+c`; `llvm.fma` only for `lo.fma`); a NaN produced by
 //! `add sub mul div rem` is replaced by the canonical quiet NaN; `min`/`max` are
 //! compare-and-select (minNum/maxNum, first operand on ties, never `llvm.minnum`, whose zero
-//! and NaN-payload cases are looser); `rem` is `frem` (C `fmod`); float-to-int casts are the
+//! and NaN-payload cases are looser); `rem` is `frem` (C `fmod`; an error on NVPTX, whose
+//! `frem` is not exact); float-to-int casts are the
 //! saturating `llvm.fpto[su]i.sat`; `next_up`/`next_down` step the bit pattern (the portable
 //! sequence: NVVM's directed-rounding intrinsics round an *operation*, they cannot step a
 //! given value, so they would not be bit-identical to the interpreters' `next_up`). Integer
@@ -460,6 +461,15 @@ impl<'c> Fn<'_, 'c> {
                     }
                     _ => return Err("bad constant".into()),
                 })
+            }
+            L::Rem if is_float && self.target == Target::Nvptx64 => {
+                // NVPTX lowers `frem` to `x - trunc(x / y) * y`, which is not C `fmod` (it
+                // rounds the quotient): rejected rather than silently inexact.
+                return Err(
+                    "float `lo.rem` (C fmod) has no exact lowering on nvptx64 (LLVM's frem \
+                     rounds the quotient)"
+                        .into(),
+                );
             }
             L::Add | L::Sub | L::Mul | L::Div | L::Rem if is_float => {
                 let (x, y) = (flt(0), flt(1));

@@ -123,6 +123,22 @@ fn global_id_and_objects_are_rejected_where_they_mean_nothing() {
 }
 
 #[test]
+fn float_rem_is_rejected_on_nvptx_only() {
+    let m = parse(
+        r#"
+func @r(%a: f64, %b: f64) -> (f64) {
+  %r = "lo.rem"(%a, %b) : (f64, f64) -> f64
+  "lo.return"(%r) : (f64) -> ()
+}
+"#,
+    );
+    let e = emit(&m, &Options::new(Target::Nvptx64), Output::Asm).unwrap_err();
+    assert!(e.0.contains("no exact lowering on nvptx64"), "{e}");
+    let asm = text(&m, Target::X86_64, Output::Asm, 2);
+    assert!(asm.contains("fmod"), "{asm}");
+}
+
+#[test]
 fn a_kernel_with_results_is_an_error() {
     let m = parse(
         r#"

@@ -199,7 +199,8 @@ pub fn render(sig: &EntrySig, root: &Type) -> String {
     );
     let _ = writeln!(
         s,
-        "/* The root reference of the tree packed by {} (0 for an empty tree). */\n\
+        "/* The root reference of the tree packed by {} (0 for an empty tree, which has no\n \
+         * packed node: do not run queries on it, they all miss). */\n\
          scion_{l}_ref {}(const ScionTreeView *tree, void *const *B);",
         sig.layout_fn("build"),
         sig.layout_fn("root")
@@ -212,17 +213,20 @@ pub fn render(sig: &EntrySig, root: &Type) -> String {
          uint64_t begin, uint64_t end, scion_{l}_ref root);",
         sig.batch_fn()
     );
+    let (batch, sizes, build, root) = (
+        sig.batch_fn(),
+        sig.layout_fn("sizes"),
+        sig.layout_fn("build"),
+        sig.layout_fn("root"),
+    );
     let _ = writeln!(
         s,
         "/* The kernels of `scionc --target nvptx64` live in the PTX, not in this object\n \
-         * (docs/design/backends.md section 1; the batch kernel with 256 threads per block, the others one thread):\n \
-         * {k}(B, queries, results, uint64_t n, scion_{l}_ref root, int32_t *status);\n \
-         * {sk}(tree, sizes); {bk}(tree, B, int32_t *status);\n \
-         * {rk}(tree, B, scion_{l}_ref *root). */",
-        k = format!("{}_kernel", sig.batch_fn()),
-        sk = format!("{}_kernel", sig.layout_fn("sizes")),
-        bk = format!("{}_kernel", sig.layout_fn("build")),
-        rk = format!("{}_kernel", sig.layout_fn("root")),
+         * (docs/design/backends.md section 1; the batch kernel with 256 threads per block,\n \
+         * the others one thread):\n \
+         * {batch}_kernel(B, queries, results, uint64_t n, scion_{l}_ref root, int32_t *status);\n \
+         * {sizes}_kernel(tree, sizes); {build}_kernel(tree, B, int32_t *status);\n \
+         * {root}_kernel(tree, B, scion_{l}_ref *root). */"
     );
     s.push_str("\n#ifdef __cplusplus\n} /* extern \"C\" */\n#endif\n\n");
     let _ = writeln!(s, "#endif /* {guard} */");

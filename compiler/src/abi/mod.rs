@@ -270,7 +270,7 @@ pub fn signature(
     })
 }
 
-/// The diagnostic for an entry request on a layout given by span-less driver flags.
+/// E0910: `--entry` without `--layout`.
 pub fn needs_layout(algorithm: &str) -> Diagnostic {
     Diagnostic::error("E0910", format!("`--entry {algorithm}` needs a layout"))
         .with_note("entry points are specialized to one layout: add `--layout NAME`")

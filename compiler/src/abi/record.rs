@@ -151,3 +151,56 @@ pub fn c_type(ty: &Type) -> &'static str {
         _ => "void *",
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parameters_follow_each_other_at_their_alignment() {
+        let mut m = Module::new();
+        let b = m.types.bool();
+        let f64t = m.types.float(FloatTy::F64);
+        let f32t = m.types.f32();
+        let v3 = m.types.vector(f32t, 3);
+        let u8t = m.types.int(IntTy::U8);
+        let pair = m.types.tuple(vec![u8t, f64t]);
+        let mut r = Record::new();
+        assert_eq!(r.push(&m, "flag", b).unwrap(), (0, 0..1));
+        assert_eq!(r.push(&m, "w", f64t).unwrap(), (8, 1..2));
+        assert_eq!(r.push(&m, "v", v3).unwrap(), (16, 2..5));
+        // A tuple is laid out as a whole (16 bytes, align 8), after the vector's 12 bytes.
+        assert_eq!(r.push(&m, "p", pair).unwrap(), (32, 5..7));
+        let names: Vec<(&str, u64)> = r
+            .fields
+            .iter()
+            .map(|f| (f.name.as_str(), f.offset))
+            .collect();
+        assert_eq!(
+            names,
+            [
+                ("flag", 0),
+                ("w", 8),
+                ("v_x", 16),
+                ("v_y", 20),
+                ("v_z", 24),
+                ("p_0", 32),
+                ("p_1", 40)
+            ]
+        );
+        assert_eq!((r.size, r.align), (48, 8));
+        assert_eq!(c_type(&r.fields[0].ty), "uint8_t");
+        assert_eq!(c_type(&r.fields[1].ty), "double");
+        assert_eq!(c_type(&r.fields[2].ty), "float");
+    }
+
+    #[test]
+    fn values_without_a_c_form_are_refused() {
+        let mut m = Module::new();
+        let f32t = m.types.f32();
+        let set = m.types.intern(Type::Set(f32t));
+        let mut r = Record::new();
+        assert!(r.push(&m, "s", set).is_err());
+        assert!(r.fields.is_empty());
+    }
+}
