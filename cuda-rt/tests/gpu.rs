@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{device_or_skip, PROBE_PTX};
+use common::{device_or_skip, stack_limit_lock, PROBE_PTX};
 use scion_cuda::error::STATUS_STACK_OVERFLOW;
 use scion_cuda::trace::{GpuPipeline, RootRef};
 use scion_cuda::{CudaError, DevicePtr, Grid, KernelArg, Module};
@@ -110,6 +110,7 @@ fn stack_limit_can_be_set_and_read() {
     let Some(dev) = device_or_skip("stack_limit_can_be_set_and_read") else {
         return;
     };
+    let _lock = stack_limit_lock();
     let before = dev.stack_limit().unwrap();
     dev.set_stack_limit(8192).unwrap();
     assert!(dev.stack_limit().unwrap() >= 8192);
@@ -176,6 +177,7 @@ fn pipeline_packs_on_the_device_and_traces() {
     let p = GpuPipeline::new(&dev, PROBE_PTX, "Fixture", "probe", names).unwrap();
     assert_eq!(p.root_ref(), RootRef::U32);
     let tree = build_sah_binned(&triangles(300), &SahOptions::default());
+    let lock = stack_limit_lock();
     let before = dev.stack_limit().unwrap();
     let packed = p.pack(&tree, tree.stats().depth).unwrap();
     assert_eq!(
@@ -184,6 +186,7 @@ fn pipeline_packs_on_the_device_and_traces() {
         "the stack limit is restored"
     );
     assert!(packed.pack_stack >= before);
+    drop(lock);
     assert_eq!(packed.sizes, vec![300 * 40, 4]);
     let copied: Vec<Triangle> = packed.buffers[0].download(300).unwrap();
     assert_eq!(copied, tree.primitives);

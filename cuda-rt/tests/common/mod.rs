@@ -3,6 +3,16 @@
 #![allow(dead_code)]
 
 use scion_cuda::Device;
+use std::sync::{Mutex, MutexGuard};
+
+/// Held by the tests that change or check the context's stack limit (one per process, shared
+/// by the test threads).
+static STACK_LIMIT: Mutex<()> = Mutex::new(());
+
+/// Serializes the tests that touch the stack limit.
+pub fn stack_limit_lock() -> MutexGuard<'static, ()> {
+    STACK_LIMIT.lock().unwrap_or_else(|p| p.into_inner())
+}
 
 /// The stand-in kernels of `fixtures/probe.ll` (layout `Fixture`, algorithm `probe`).
 pub const PROBE_PTX: &str = include_str!("../fixtures/probe.ptx");
