@@ -39,7 +39,10 @@ fn the_fixture_ptx_is_llc_output_of_probe_ll() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
     if !dir.join("probe.ll").exists() {
         // A test binary carried to another machine (gpu-kit) has no sources beside it.
-        println!("skip: no {} (a test binary away from its sources)", dir.display());
+        println!(
+            "skip: no {} (a test binary away from its sources)",
+            dir.display()
+        );
         return;
     }
     let out = Command::new(&llc)
