@@ -7,6 +7,7 @@
 //! (docs/formats.md). Progress goes to standard error. User errors (a missing scene, a NaN in an
 //! OBJ file, a bad flag) are `error:` lines and exit status 1; clap's usage errors exit 2.
 
+mod gpu;
 mod trace;
 
 use clap::{Parser, Subcommand, ValueEnum};
@@ -25,6 +26,37 @@ struct Cli {
 enum Command {
     /// Trace closest-hit rays through a scene and report sizes, times and hits.
     Trace(TraceArgs),
+    /// Compile closest hit for a layout to PTX for NVIDIA GPUs (a "PTX kit": the PTX with
+    /// comment lines naming the layout and its buffers), to run with `scion trace --device gpu
+    /// --ptx` or `scion-gpu` (docs/gpu.md).
+    Ptx(PtxArgs),
+}
+
+/// Where `scion trace` runs the traversal.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum DeviceArg {
+    /// This machine's CPU, with `--backend`.
+    Cpu,
+    /// An NVIDIA GPU: closest hit for `--layout` compiled to PTX by LLVM and run through CUDA,
+    /// each hit compared with the reference (`--backend` is not used).
+    Gpu,
+}
+
+/// Arguments of `scion ptx`.
+#[derive(clap::Args, Debug)]
+pub struct PtxArgs {
+    /// The layout (a name from library/layouts: pbrt, ptr, ...).
+    #[arg(long, default_value = "pbrt")]
+    pub layout: String,
+    /// Where to write the PTX kit.
+    #[arg(short = 'o', long = "output", value_name = "KIT.ptx")]
+    pub output: PathBuf,
+    /// The GPU architecture (`sm_XX`; default sm_90).
+    #[arg(long, value_name = "sm_XX")]
+    pub cpu: Option<String>,
+    /// Entries of the generated traversal's explicit stack (default 64).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
+    pub stack_size: Option<u32>,
 }
 
 /// The backends of `scion trace`.
@@ -113,12 +145,29 @@ pub struct TraceArgs {
     /// the first ray that overflowed.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
     pub stack_size: Option<u32>,
+    /// Where to trace: the CPU (`--backend`) or an NVIDIA GPU (`--layout` compiled to PTX,
+    /// checked against the reference).
+    #[arg(long, value_enum, default_value = "cpu")]
+    pub device: DeviceArg,
+    /// The CUDA device ordinal for `--device gpu`.
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub gpu: i32,
+    /// `--device gpu`: run this PTX kit (from `scion ptx` or `--emit-ptx`) instead of compiling.
+    #[arg(long, value_name = "KIT.ptx")]
+    pub ptx: Option<PathBuf>,
+    /// `--device gpu`: also write the PTX kit that runs to this file.
+    #[arg(long, value_name = "KIT.ptx")]
+    pub emit_ptx: Option<PathBuf>,
+    /// `--device gpu`: the GPU architecture to compile for (`sm_XX`; default sm_90).
+    #[arg(long, value_name = "sm_XX")]
+    pub cpu: Option<String>,
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Trace(args) => trace::run(args),
+        Command::Ptx(args) => gpu::run_ptx(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -11,7 +11,7 @@
 //! layout, lowered to `lo` at `-O2` and compiled by Cranelift; the compile time is printed).
 //! `--backend llvm` is the same with the machine code from LLVM's JIT at `-O3` (`scion-llvm`).
 
-use crate::{BackendArg, BuilderArg, CliError, RaysArg, TraceArgs};
+use crate::{BackendArg, BuilderArg, CliError, DeviceArg, RaysArg, TraceArgs};
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::{build_median, build_sah_binned, LogicalNode, LogicalTree, SahOptions};
 use scion_runtime::geom::{Hit, Ray, Triangle};
@@ -37,6 +37,18 @@ pub const LAYOUTS: &[(&str, &str)] = &[
 
 /// Runs `scion trace`.
 pub fn run(args: &TraceArgs) -> Result<(), CliError> {
+    if args.device == DeviceArg::Gpu {
+        return crate::gpu::run_trace(args);
+    }
+    for (flag, given) in [
+        ("--ptx", args.ptx.is_some()),
+        ("--emit-ptx", args.emit_ptx.is_some()),
+        ("--cpu", args.cpu.is_some()),
+    ] {
+        if given {
+            eprintln!("scion: note: {flag} is used by --device gpu only");
+        }
+    }
     // Decide the backend before the (possibly long) load, so that a backend that cannot run
     // fails at once.
     let layout = args.layout.as_deref().unwrap_or("pbrt");
@@ -322,7 +334,7 @@ fn jit_code(
     Ok(Box::new(code))
 }
 
-fn build(scene: &Scene, args: &TraceArgs) -> LogicalTree {
+pub(crate) fn build(scene: &Scene, args: &TraceArgs) -> LogicalTree {
     match args.builder {
         BuilderArg::Sah => build_sah_binned(
             &scene.triangles,
@@ -335,7 +347,7 @@ fn build(scene: &Scene, args: &TraceArgs) -> LogicalTree {
     }
 }
 
-fn rays(scene: &Scene, args: &TraceArgs) -> Result<Vec<Ray>, CliError> {
+pub(crate) fn rays(scene: &Scene, args: &TraceArgs) -> Result<Vec<Ray>, CliError> {
     if let Some(path) = &args.rays_file {
         progress(&format!("reading rays from {}", path.display()));
         return read_rays(path).map_err(|e| CliError::new(format!("cannot read the rays: {e}")));
@@ -406,7 +418,7 @@ fn plan_text(runs: u32) -> String {
 }
 
 /// `x` with four significant digits (throughputs span 0.001 to 1000 Mrays/s).
-fn significant(x: f64) -> String {
+pub(crate) fn significant(x: f64) -> String {
     let digits = if x > 0.0 && x.is_finite() {
         (3 - x.log10().floor() as i32).clamp(0, 9) as usize
     } else {
@@ -415,10 +427,10 @@ fn significant(x: f64) -> String {
     format!("{x:.digits$}")
 }
 
-fn secs(d: Duration) -> String {
+pub(crate) fn secs(d: Duration) -> String {
     format!("{:.6} s", d.as_secs_f64())
 }
 
-fn progress(what: &str) {
+pub(crate) fn progress(what: &str) {
     eprintln!("scion: {what}...");
 }

@@ -5,9 +5,8 @@
 //! ADT before destructor specialization exists for the input, are left out) and then
 //! `recursion-to-stack` with `--stack-size`, then `lo-inline`, then (with `--entry`) adds the
 //! exported entry points of `abi::entries` last, and prints the `lo` module, its Cranelift IR
-//! or (`--emit=header`) the C header of the entries.
-//! `--emit=llvm|asm|obj|ptx` use [`lower_to_lo`] the same way and hand the module to the LLVM
-//! backend (`driver::codegen`).
+//! or (`--emit=header`) the C header of the entries. `--emit=llvm|asm|obj|ptx` use
+//! [`lower_to_lo`] the same way and hand the module to the LLVM backend (`driver::codegen`).
 
 use super::cli::Emit;
 use crate::abi::{self, EntrySig, EntryTarget};

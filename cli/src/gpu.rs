@@ -1,0 +1,339 @@
+//! `scion trace --device gpu` and `scion ptx`: closest hit specialized to a library layout,
+//! compiled in-process to PTX (front end with the layout and `--entry closest_hit` for
+//! `nvptx64`, then `scion-llvm` at `-O3`, `sm_90` by default) and run on an NVIDIA GPU through
+//! `scion-cuda` (docs/gpu.md): the tree is packed on the device by the generated kernels, the
+//! rays traced with one thread per ray, and every hit compared bit for bit with the runtime's
+//! reference traversal of the same logical tree. Input: the trace arguments; output: the
+//! report of `scion trace` with the kernel's Mrays/s and a `check` line, or the PTX kit
+//! (`scion_cuda::kit`) that `scion-gpu` runs on machines without LLVM.
+
+use crate::trace::{build, progress, rays, secs, significant, LAYOUTS};
+use crate::{BackendArg, CliError, PtxArgs, TraceArgs};
+use scion_compiler::abi::EntryTarget;
+use scion_compiler::driver::cli::Emit;
+use scion_compiler::driver::pipelines::for_level;
+use scion_compiler::driver::session::{PRELUDE, PRELUDE_NAME};
+use scion_compiler::frontend::{self, Frontend, PassOptions};
+use scion_cuda::compare::Comparison;
+use scion_cuda::kit::PtxKit;
+use scion_cuda::trace::GpuPipeline;
+use scion_cuda::Device;
+use scion_ir::diag::SourceMap;
+use scion_runtime::batch::BatchDriver;
+use scion_runtime::reference::closest_hit::closest_hits_tree;
+use scion_runtime::scene::load_obj;
+use scion_runtime::timing::trimmed_mean;
+use scion_tests::mem_interp::{layout_source, LIBRARY_LAYOUTS};
+use scion_tests::oracle::{CLOSEST_HIT, CLOSEST_HIT_NAME};
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+/// The algorithm the GPU path runs.
+const ALGORITHM: &str = "closest_hit";
+
+/// The `-O` level of the tree/mem passes and of LLVM for PTX.
+const OPT_LEVEL: u8 = 3;
+
+/// Compiles closest hit for the library layout `layout` (a `--layout` name) to a PTX kit for
+/// `cpu` (`sm_XX`; `None`: scion-llvm's default, sm_90).
+pub fn compile_kit(
+    layout: &str,
+    stack_size: Option<u32>,
+    cpu: Option<&str>,
+) -> Result<(PtxKit, Duration), CliError> {
+    let start = Instant::now();
+    let stem = layout.replace('-', "_");
+    let Some(&(stem, name, _)) = LIBRARY_LAYOUTS.iter().find(|l| l.0 == stem) else {
+        let names: Vec<&str> = LAYOUTS.iter().map(|(n, _)| *n).collect();
+        return Err(
+            CliError::new(format!("unknown layout `{layout}` for the GPU"))
+                .note(format!("library layouts: {}", names.join(", "))),
+        );
+    };
+    let text =
+        layout_source(stem).ok_or_else(|| CliError::new(format!("no library layout `{stem}`")))?;
+    let mut sources = SourceMap::new();
+    let prelude = [sources.add(PRELUDE_NAME, PRELUDE)];
+    let inputs = [
+        sources.add(CLOSEST_HIT_NAME, CLOSEST_HIT),
+        sources.add(format!("library/layouts/{stem}.scion"), text),
+    ];
+    let fe = Frontend {
+        sources: &sources,
+        prelude: &prelude,
+        inputs: &inputs,
+    };
+    let mut pipeline = vec![
+        "destructor-specialize".to_string(),
+        "constructor-specialize".to_string(),
+    ];
+    pipeline.extend(for_level(OPT_LEVEL));
+    let popts = PassOptions {
+        layout: Some(name.to_string()),
+        stack_size,
+        entry: Some(ALGORITHM.to_string()),
+        entry_target: EntryTarget::Gpu,
+        ..PassOptions::default()
+    };
+    let fail = |what: &str, detail: String| {
+        CliError::new(format!(
+            "cannot compile closest hit for `{layout}` ({what}): {detail}"
+        ))
+    };
+    let front = |emit: Emit| -> Result<String, CliError> {
+        let r = frontend::compile(&fe, emit, &pipeline, &popts);
+        if let Some(ice) = r.internal_error {
+            return Err(fail("internal compiler error", ice.to_string()));
+        }
+        if r.diagnostics.has_errors() {
+            return Err(fail("front end", r.diagnostics.render(&sources)));
+        }
+        r.output
+            .ok_or_else(|| fail("front end", format!("no {} output", emit.as_str())))
+    };
+    let lo = front(Emit::Lo)?;
+    let buffers = buffer_names(&front(Emit::Header)?, name).map_err(|e| fail("header", e))?;
+    let file = sources.add("<lo IR>", lo.clone());
+    let m = scion_ir::parse_module(&lo, file).map_err(|d| {
+        fail(
+            "lo",
+            format!("printed lo does not parse back: {}", d.render(&sources)),
+        )
+    })?;
+    let opts = scion_llvm::Options {
+        target: scion_llvm::Target::Nvptx64,
+        cpu: cpu.map(String::from),
+        opt_level: OPT_LEVEL,
+    };
+    let ptx = scion_llvm::emit(&m, &opts, scion_llvm::Output::Asm)
+        .map_err(|e| fail("LLVM", e.to_string()))?;
+    let ptx = String::from_utf8(ptx).map_err(|_| fail("LLVM", "PTX is not UTF-8".into()))?;
+    Ok((PtxKit::new(name, ALGORITHM, buffers, &ptx), start.elapsed()))
+}
+
+/// The buffer names of layout `layout` from its C header (`--emit=header`): the count from
+/// `SCION_<L>_BUFFER_COUNT`, the names from the `/* buffer i: name (...) */` lines.
+pub fn buffer_names(header: &str, layout: &str) -> Result<Vec<String>, String> {
+    // The macro spells the layout as it is or in capitals.
+    let count: usize = header
+        .lines()
+        .find_map(|l| {
+            let (name, n) = l
+                .strip_prefix("#define SCION_")?
+                .split_once("_BUFFER_COUNT ")?;
+            name.eq_ignore_ascii_case(layout)
+                .then(|| n.trim().parse().ok())?
+        })
+        .ok_or_else(|| format!("the header has no `#define SCION_{layout}_BUFFER_COUNT N`"))?;
+    let mut names: Vec<String> = (0..count).map(|i| format!("buffer {i}")).collect();
+    for line in header.lines() {
+        let Some(rest) = line.strip_prefix("/* buffer ") else {
+            continue;
+        };
+        let Some((i, rest)) = rest.split_once(": ") else {
+            continue;
+        };
+        let (Ok(i), Some(name)) = (i.parse::<usize>(), rest.split(" (").next()) else {
+            continue;
+        };
+        if let Some(slot) = names.get_mut(i) {
+            *slot = name.trim().to_string();
+        }
+    }
+    Ok(names)
+}
+
+/// `scion ptx`: writes the PTX kit of `--layout`.
+pub fn run_ptx(args: &PtxArgs) -> Result<(), CliError> {
+    progress(&format!(
+        "compiling closest hit for layout `{}` to PTX",
+        args.layout
+    ));
+    let (kit, time) = compile_kit(&args.layout, args.stack_size, args.cpu.as_deref())?;
+    write_kit(&kit, &args.output)?;
+    eprintln!("scion: compiled in {:.3} s", time.as_secs_f64());
+    Ok(())
+}
+
+fn write_kit(kit: &PtxKit, path: &Path) -> Result<(), CliError> {
+    std::fs::write(path, &kit.ptx)
+        .map_err(|e| CliError::new(format!("cannot write {}: {e}", path.display())))?;
+    println!(
+        "ptx          {} ({} bytes, {} {}, buffers {})",
+        path.display(),
+        kit.ptx.len(),
+        kit.algorithm,
+        kit.layout,
+        kit.buffers.join(", ")
+    );
+    Ok(())
+}
+
+/// `scion trace --device gpu`.
+pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
+    // The device first: without one there is nothing to compile for.
+    let device = Device::open(args.gpu).map_err(|e| {
+        CliError::new(e.to_string()).note("--device gpu needs an NVIDIA GPU and its driver")
+    })?;
+    let layout = args.layout.as_deref().unwrap_or("pbrt");
+    if args.backend != BackendArg::Reference {
+        eprintln!(
+            "scion: note: --backend is not used with --device gpu (the GPU runs closest hit \
+             for --layout, checked against the reference)"
+        );
+    }
+    if args.ptx.is_some() && args.layout.is_some() {
+        eprintln!("scion: note: --layout is not used with --ptx (the kit names its layout)");
+    }
+    let (kit, compile_time) = match &args.ptx {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .map_err(|e| CliError::new(format!("cannot read {}: {e}", path.display())))?;
+            let kit = PtxKit::parse(&text)
+                .map_err(|e| CliError::new(format!("{}: {e}", path.display())))?;
+            (kit, None)
+        }
+        None => {
+            progress(&format!(
+                "compiling closest hit for layout `{layout}` to PTX"
+            ));
+            let (kit, t) = compile_kit(layout, args.stack_size, args.cpu.as_deref())?;
+            (kit, Some(t))
+        }
+    };
+    if let Some(path) = &args.emit_ptx {
+        write_kit(&kit, path)?;
+    }
+    progress(&format!("loading {}", args.scene.display()));
+    let scene =
+        load_obj(&args.scene).map_err(|e| CliError::new(format!("cannot load the scene: {e}")))?;
+    let tree = build(&scene, args);
+    let stats = tree.stats();
+    let rays = rays(&scene, args)?;
+
+    progress(&format!("loading the PTX on {}", device.name));
+    let gpu_err = |e: scion_cuda::CudaError| CliError::new(format!("GPU: {e}"));
+    let t = Instant::now();
+    let pipeline = GpuPipeline::new(
+        &device,
+        &kit.ptx,
+        &kit.layout,
+        &kit.algorithm,
+        kit.buffers.clone(),
+    )
+    .map_err(gpu_err)?;
+    let module_time = t.elapsed();
+    progress(&format!(
+        "packing the tree into layout `{}` on the GPU",
+        kit.layout
+    ));
+    let packed = pipeline.pack(&tree, stats.depth).map_err(gpu_err)?;
+    let on_device = pipeline.upload_rays(&rays).map_err(gpu_err)?;
+    progress(&format!("tracing {} rays on the GPU", rays.len()));
+    let runs = args.runs as usize;
+    let (hits, times) = pipeline
+        .trace_runs(&packed, &on_device, runs)
+        .map_err(|e| {
+            gpu_err(e).note(
+                "trees deeper than the generated traversal's stack cannot be traced with this \
+                 layout; try a larger --stack-size",
+            )
+        })?;
+    progress("tracing the same rays with the reference for the check");
+    let driver = BatchDriver::new(args.threads).map_err(CliError::new)?;
+    let reference = closest_hits_tree(&tree, &rays, &driver);
+    let check = Comparison::of(&hits, &reference);
+
+    let drop = (runs - 1) / 4;
+    let kernel = trimmed_mean(&times, drop, drop);
+    let bytes: u64 = packed.sizes.iter().sum();
+    let parts: Vec<String> = kit
+        .buffers
+        .iter()
+        .zip(&packed.sizes)
+        .map(|(n, s)| format!("{n} {s} B"))
+        .collect();
+    println!("scene        {}", args.scene.display());
+    println!("triangles    {}", scene.len());
+    println!(
+        "nodes        {} ({} interior, {} leaves, depth {}, SAH cost {:.2})",
+        stats.nodes, stats.interior, stats.leaves, stats.depth, stats.sah_cost
+    );
+    println!(
+        "device       {} (sm_{}{}, driver CUDA {})",
+        device.name,
+        device.compute_capability.0,
+        device.compute_capability.1,
+        scion_cuda::error::version_text(device.driver.version)
+    );
+    match compile_time {
+        Some(t) => println!("compile time {} (front end + LLVM -O3 to PTX)", secs(t)),
+        None => println!("compile time none (PTX kit read from a file)"),
+    }
+    println!("module load  {} (PTX JIT by the driver)", secs(module_time));
+    println!(
+        "pack time    {} (on the GPU: upload, sizes, allocation, build, root)",
+        secs(packed.pack_time)
+    );
+    println!("layout       {}: {}", kit.layout, parts.join(", "));
+    println!(
+        "structure    {bytes} bytes, {:.1} bytes/node",
+        bytes as f64 / stats.nodes.max(1) as f64
+    );
+    println!("rays         {}", rays.len());
+    println!("backend      gpu ({} {})", kit.algorithm, kit.layout);
+    println!(
+        "trace time   {} (batch kernel, CUDA events; mean of the middle {} of {} runs after 1 \
+         warm-up)",
+        secs(kernel),
+        times.len() - 2 * drop,
+        times.len()
+    );
+    let mrays = if kernel.is_zero() {
+        0.0
+    } else {
+        rays.len() as f64 / kernel.as_secs_f64() / 1e6
+    };
+    println!("throughput   {} Mrays/s", significant(mrays));
+    println!(
+        "hits         {} of {} rays",
+        hits.iter().filter(|h| h.is_hit()).count(),
+        rays.len()
+    );
+    // The same number as `scion trace` on the CPU and the C library print.
+    println!(
+        "checksum: {:016x}",
+        scion_runtime::query::hits_checksum(&hits)
+    );
+    println!("check        {check}");
+    if let Some(path) = &args.output {
+        scion_runtime::query::write_hits(path, &hits)
+            .map_err(|e| CliError::new(format!("cannot write the hits: {e}")))?;
+        println!("output       {} ({} bytes)", path.display(), hits.len() * 8);
+    }
+    if !check.identical() {
+        return Err(CliError::new(format!(
+            "GPU hits differ from the reference: {check}"
+        )));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn buffer_names_come_from_the_header() {
+        let h = "#define SCION_LinearBVH_BUFFER_COUNT 3\n\
+                 /* buffer 0: nodes (element 32 bytes, stride 32, align 32) */\n\
+                 /* buffer 2: globals (element 8 bytes, stride 8, align 8) */\n";
+        assert_eq!(
+            buffer_names(h, "LinearBVH").unwrap(),
+            ["nodes", "buffer 1", "globals"]
+        );
+        assert!(buffer_names("", "LinearBVH").is_err());
+        let caps = "#define SCION_LINEARBVH_BUFFER_COUNT 1\n";
+        assert_eq!(buffer_names(caps, "LinearBVH").unwrap(), ["buffer 0"]);
+    }
+}

@@ -1,0 +1,174 @@
+//! `scion ptx` and `scion trace --device gpu`: the PTX of closest hit for pbrt and ptr has the
+//! kernels of docs/design/backends.md §1 with the parameters the CUDA runtime passes (the
+//! reference a `u32` for pbrt, a 64-bit address for ptr), no FMA contraction, and the asked
+//! architecture; without a GPU, `--device gpu` is one clear error line and exit status 1; with
+//! one, the GPU's hits are the reference's for both layouts (else one `skip:` line).
+
+use scion_cuda::kit::PtxKit;
+use scion_cuda::ptx;
+use scion_cuda::trace::{check_kernels, KernelNames, RootRef};
+use scion_cuda::CudaError;
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn scratch(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("scion-gpu-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create scratch folder");
+    dir
+}
+
+fn scion(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_scion"))
+        .args(args)
+        .output()
+        .expect("run scion")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+/// A unit cube's six faces as 12 triangles.
+const CUBE: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n\
+f 1 2 3 4\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+
+fn kernel_shapes(kit: &PtxKit) -> Result<RootRef, CudaError> {
+    let entries = ptx::entries(&kit.ptx).map_err(CudaError::Host)?;
+    check_kernels(&KernelNames::new(&kit.layout, &kit.algorithm), |k| {
+        entries
+            .iter()
+            .find(|e| e.name == k)
+            .map(|e| e.params.iter().map(|p| p.bytes).collect())
+            .ok_or_else(|| CudaError::MissingKernel {
+                kernel: k.into(),
+                available: entries.iter().map(|e| e.name.clone()).collect(),
+            })
+    })
+}
+
+#[test]
+fn ptx_kits_have_the_contract_kernels() {
+    let dir = scratch("kits");
+    for (layout, name, root) in [
+        ("pbrt", "LinearBVH", RootRef::U32),
+        ("ptr", "PtrBVH", RootRef::U64),
+    ] {
+        let path = dir.join(format!("{layout}.ptx"));
+        let o = scion(&["ptx", "--layout", layout, "-o", path.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        let kit = PtxKit::parse(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        assert_eq!(
+            (kit.layout.as_str(), kit.algorithm.as_str()),
+            (name, "closest_hit")
+        );
+        assert_eq!(kit.buffers, ["globals", "primitives", "nodes"], "{layout}");
+        assert_eq!(kernel_shapes(&kit).unwrap(), root, "{layout}");
+        assert_eq!(ptx::directive(&kit.ptx, ".target"), Some("sm_90"));
+        // The reference's arithmetic: one rounding per operation, no contraction.
+        assert!(!kit.ptx.contains("fma."), "{layout}: FMA in the PTX");
+        assert!(kit.ptx.contains("mul.rn.f32"), "{layout}");
+    }
+    let path = dir.join("sm80.ptx");
+    let o = scion(&[
+        "ptx",
+        "--layout",
+        "pbrt",
+        "--cpu",
+        "sm_80",
+        "-o",
+        path.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let kit = PtxKit::parse(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    assert_eq!(ptx::directive(&kit.ptx, ".target"), Some("sm_80"));
+}
+
+#[test]
+fn unknown_layouts_are_errors() {
+    let dir = scratch("unknown");
+    let o = scion(&[
+        "ptx",
+        "--layout",
+        "nope",
+        "-o",
+        dir.join("x.ptx").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = text(&o.stderr);
+    assert!(
+        err.contains("error: unknown layout `nope` for the GPU"),
+        "{err}"
+    );
+    assert!(err.contains("library layouts: pbrt, ptr"), "{err}");
+}
+
+#[test]
+fn device_gpu_traces_like_the_reference_or_says_why_not() {
+    let dir = scratch("trace");
+    let scene = dir.join("cube.obj");
+    std::fs::write(&scene, CUBE).unwrap();
+    let scene = scene.to_str().unwrap();
+    for layout in ["pbrt", "ptr"] {
+        let kit = dir.join(format!("{layout}.ptx"));
+        let hits = dir.join(format!("{layout}.hits"));
+        let o = scion(&[
+            "trace",
+            "--device",
+            "gpu",
+            "--scene",
+            scene,
+            "--layout",
+            layout,
+            "--rays",
+            "secondary",
+            "--n",
+            "1000",
+            "--runs",
+            "3",
+            "--emit-ptx",
+            kit.to_str().unwrap(),
+            "-o",
+            hits.to_str().unwrap(),
+        ]);
+        let (out, err) = (text(&o.stdout), text(&o.stderr));
+        assert!(!err.contains("panicked"), "{err}");
+        if o.status.success() {
+            assert!(
+                out.contains("check        identical to the reference on all 1000 rays"),
+                "{out}"
+            );
+            assert!(out.contains("Mrays/s"), "{out}");
+            assert!(kit.exists() && hits.exists());
+            // The kit written runs again, read from the file.
+            let o = scion(&[
+                "trace",
+                "--device",
+                "gpu",
+                "--scene",
+                scene,
+                "--ptx",
+                kit.to_str().unwrap(),
+                "--rays",
+                "secondary",
+                "--n",
+                "1000",
+                "--runs",
+                "1",
+            ]);
+            assert!(o.status.success(), "{}", text(&o.stderr));
+            continue;
+        }
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error: ")).collect();
+        assert_eq!(errors.len(), 1, "{err}");
+        let reason = errors[0].trim_start_matches("error: ");
+        assert!(
+            reason.starts_with("no CUDA driver")
+                || reason.starts_with("no CUDA device")
+                || reason.starts_with("the CUDA driver is too old"),
+            "{err}"
+        );
+        println!("skip: {reason} [scion trace --device gpu --layout {layout}]");
+    }
+}

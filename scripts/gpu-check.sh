@@ -1,0 +1,149 @@
+#!/usr/bin/env bash
+# The GPU check (issue 4 part 5, docs/gpu.md): on a machine with an NVIDIA GPU, trace every
+# scene of the scenes folder with closest hit for layouts pbrt and ptr on the GPU, primary and
+# secondary rays, each hit compared bit for bit with the CPU reference; then run the GPU tests
+# of scion-cuda. Prints one summary table and exits 0 only when everything passed.
+#
+# Runs from the kit made by scripts/gpu-kit.sh (no Rust toolchain needed):
+#   gpu-kit/gpu-check.sh                   # or: GPU_KIT=gpu-kit scripts/gpu-check.sh
+# Environment:
+#   SCION_SCENES       the scenes folder (default: shared/scenes or ../shared/scenes, else the
+#                      kit's gzipped copies, unpacked into a temporary folder)
+#   GPU_CHECK_N        rays per run (default 1048576)
+#   GPU_CHECK_RUNS     timed runs after the warm-up (default 9)
+#   GPU_CHECK_MODE     scion (compile PTX in-process: needs libLLVM 22), kit (run the prebuilt
+#                      PTX kits with scion-gpu), or auto (scion when it starts, else kit)
+#   GPU_CHECK_TIMEOUT  seconds per run (default 60)
+#   GPU_CHECK_BUDGET   seconds for all the traces (default 300): later ones are not started
+#   OUT                where logs and summary.txt go (default: <kit>/results)
+set -uo pipefail
+
+here=$(cd "$(dirname "$0")" && pwd)
+if [ -x "$here/bin/scion-gpu" ]; then KIT=$here; else KIT=${GPU_KIT:-$here/../gpu-kit}; fi
+KIT=$(cd "$KIT" 2>/dev/null && pwd) || { echo "gpu-check: no kit at $KIT; run scripts/gpu-kit.sh first" >&2; exit 2; }
+N=${GPU_CHECK_N:-1048576}
+RUNS=${GPU_CHECK_RUNS:-9}
+TIMEOUT=${GPU_CHECK_TIMEOUT:-60}
+BUDGET=${GPU_CHECK_BUDGET:-300}
+RESULTS=${OUT:-$KIT/results}
+mkdir -p "$RESULTS/logs"
+SUMMARY=$RESULTS/summary.txt
+: > "$SUMMARY"
+
+say() { echo "$@" | tee -a "$SUMMARY"; }
+
+scenes=${SCION_SCENES:-}
+if [ -z "$scenes" ]; then
+  for d in "$PWD/shared/scenes" "$PWD/../shared/scenes" "$KIT/../shared/scenes" "$KIT/../../shared/scenes"; do
+    if [ -f "$d/teapot.obj" ]; then scenes=$d; break; fi
+  done
+fi
+if [ -z "$scenes" ] && ls "$KIT"/scenes/*.obj.gz >/dev/null 2>&1; then
+  scenes=$(mktemp -d "${TMPDIR:-/tmp}/scion-scenes.XXXXXX")
+  for f in "$KIT"/scenes/*.obj.gz; do gzip -dc "$f" > "$scenes/$(basename "$f" .gz)"; done
+fi
+if [ -z "$scenes" ] || ! ls "$scenes"/*.obj >/dev/null 2>&1; then
+  echo "gpu-check: no scenes found; set SCION_SCENES to the folder of the .obj files" >&2
+  exit 2
+fi
+
+say "gpu-check: kit $KIT (commit $(cat "$KIT/COMMIT" 2>/dev/null || echo unknown))"
+if command -v nvidia-smi >/dev/null 2>&1; then
+  say "gpu-check: $(nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader 2>&1 | head -1)"
+else
+  say "gpu-check: nvidia-smi not found"
+fi
+
+mode=${GPU_CHECK_MODE:-auto}
+if [ "$mode" = auto ]; then
+  if "$KIT/bin/scion" --version >/dev/null 2>&1; then mode=scion; else mode=kit; fi
+fi
+case $mode in
+  scion) say "gpu-check: mode scion (scion trace --device gpu: PTX compiled in-process by LLVM)";;
+  kit) say "gpu-check: mode kit (scion-gpu with the prebuilt PTX kits; scion does not start here: $("$KIT/bin/scion" --version 2>&1 | head -1))";;
+  *) echo "gpu-check: GPU_CHECK_MODE must be scion, kit or auto" >&2; exit 2;;
+esac
+say "gpu-check: scenes $scenes, $N rays per run, $RUNS timed runs"
+if ! info=$("$KIT/bin/scion-gpu" --info 2>&1); then
+  say "gpu-check: FAILED: the GPU cannot be opened: $info"
+  say "gpu-check: (the tests below then only print skip lines)"
+  no_device=1
+else
+  say "gpu-check: $info"
+  no_device=0
+fi
+say ""
+
+start=$(date +%s)
+failures=0
+table=$(printf '%-18s %-7s %-10s %10s %9s %12s  %s' scene layout rays triangles "pack s" "Mrays/s" check)
+rows=()
+# Smallest scenes first, so a spent budget leaves out the largest.
+mapfile -t objs < <(ls -Sr "$scenes"/*.obj)
+for obj in "${objs[@]}"; do
+  [ $no_device -eq 0 ] || break
+  scene=$(basename "$obj" .obj)
+  for layout in pbrt ptr; do
+    for rays in primary secondary; do
+      log=$RESULTS/logs/$scene-$layout-$rays.log
+      if [ $(( $(date +%s) - start )) -ge "$BUDGET" ]; then
+        row=$(printf '%-18s %-7s %-10s %10s %9s %12s  %s' "$scene" "$layout" "$rays" - - - "NOT RUN (GPU_CHECK_BUDGET ${BUDGET}s spent)")
+        rows+=("$row"); echo "$row"; failures=$((failures + 1))
+        continue
+      fi
+      if [ "$mode" = scion ]; then
+        cmd=("$KIT/bin/scion" trace --device gpu --scene "$obj" --layout "$layout" --rays "$rays"
+             --n "$N" --runs "$RUNS")
+      else
+        cmd=("$KIT/bin/scion-gpu" --ptx "$KIT/ptx/$layout.ptx" --scene "$obj" --rays "$rays"
+             --n "$N" --runs "$RUNS")
+      fi
+      echo "\$ ${cmd[*]}" > "$log"
+      timeout "$TIMEOUT" "${cmd[@]}" >> "$log" 2>&1
+      rc=$?
+      tris=$(awk '/^triangles/ {print $2} /^scene .*triangles\)/ {gsub(/[()]/,""); print $(NF-1)}' "$log" | head -1)
+      mrays=$(awk '/^throughput/ {print $2}' "$log" | head -1)
+      pack=$(awk '/^pack time/ {print $3}' "$log" | head -1)
+      check=$(sed -n 's/^check *//p' "$log" | head -1)
+      if [ $rc -eq 0 ] && [[ "$check" == identical* ]]; then
+        verdict="ok"
+      elif [ $rc -eq 124 ]; then
+        verdict="TIMEOUT after ${TIMEOUT}s"; failures=$((failures + 1))
+      elif [ -n "$check" ]; then
+        verdict="DIFFERS: $check"; failures=$((failures + 1))
+      else
+        verdict="ERROR (rc $rc): $(grep -m1 '^error' "$log" || tail -1 "$log")"; failures=$((failures + 1))
+      fi
+      row=$(printf '%-18s %-7s %-10s %10s %9s %12s  %s' "$scene" "$layout" "$rays" "${tris:--}" "${pack:--}" "${mrays:--}" "$verdict")
+      rows+=("$row")
+      echo "$row"
+    done
+  done
+done
+trace_secs=$(( $(date +%s) - start ))
+
+say ""
+say "== GPU tests of scion-cuda =="
+tests_failed=0
+for t in "$KIT"/tests/*; do
+  [ -x "$t" ] || continue
+  name=$(basename "$t")
+  log=$RESULTS/logs/test-$name.log
+  timeout "$TIMEOUT" "$t" --nocapture --test-threads=1 > "$log" 2>&1
+  rc=$?
+  result=$(grep -m1 '^test result' "$log" || echo "no result line")
+  skips=$(grep -c 'skip:' "$log")
+  if [ $rc -eq 0 ]; then v=ok; else v="FAILED (rc $rc)"; tests_failed=$((tests_failed + 1)); fi
+  say "$(printf '%-22s %-14s %s; %s skip lines' "$name" "$v" "$result" "$skips")"
+  if [ $rc -ne 0 ]; then grep -E "panicked|^---- |error" "$log" | head -8 | sed 's/^/    /' | tee -a "$SUMMARY"; fi
+done
+
+say ""
+say "== GPU traces ($trace_secs s) =="
+say "$table"
+for r in "${rows[@]}"; do say "$r"; done
+say ""
+total=${#rows[@]}
+say "gpu-check: $((total - failures)) of $total traces identical to the reference; $tests_failed test binaries failed"
+say "gpu-check: logs in $RESULTS/logs, this summary in $SUMMARY"
+[ $no_device -eq 0 ] && [ $total -gt 0 ] && [ $failures -eq 0 ] && [ $tests_failed -eq 0 ]

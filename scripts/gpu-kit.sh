@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# Prepares gpu-kit/: everything scripts/gpu-check.sh runs on a GPU machine that has the NVIDIA
+# driver but no Rust toolchain (and maybe no LLVM 22): release binaries, the GPU test binaries
+# of scion-cuda, PTX kits for pbrt and ptr (so the check also runs where `scion` cannot start
+# for lack of libLLVM) and the scenes, gzipped. Run it here, from the repository root; carry
+# `gpu-kit` (about 31 MB, git-ignored) to the GPU machine. See docs/gpu.md.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+KIT=${GPU_KIT:-gpu-kit}
+rm -rf "$KIT"
+mkdir -p "$KIT/bin" "$KIT/tests" "$KIT/ptx"
+
+cargo build --release -p scion-cli -p scion-cuda --bins
+cp target/release/scion target/release/scion-gpu "$KIT/bin/"
+
+# The test binaries of scion-cuda (unit tests and tests/*.rs), under their target names.
+cargo test --release -p scion-cuda --no-run --message-format=json 2>/dev/null |
+  python3 -c '
+import json, shutil, sys
+kit = sys.argv[1]
+for line in sys.stdin:
+    try:
+        m = json.loads(line)
+    except ValueError:
+        continue
+    exe = m.get("executable")
+    if m.get("reason") == "compiler-artifact" and exe and m.get("profile", {}).get("test"):
+        name = m["target"]["name"].replace("-", "_")
+        kind = m["target"]["kind"][0]
+        dest = f"{kit}/tests/{name}" if kind == "test" else f"{kit}/tests/{name}_unit"
+        shutil.copy(exe, dest)
+        print("test binary", dest)
+' "$KIT"
+
+for layout in pbrt ptr; do
+  target/release/scion ptx --layout "$layout" -o "$KIT/ptx/$layout.ptx"
+done
+cp scripts/gpu-check.sh "$KIT/"
+
+# The scenes, gzipped (51 MB of OBJ become 13 MB); gpu-check.sh unpacks them when it finds no
+# scenes folder.
+scenes=${SCION_SCENES:-}
+for d in shared/scenes ../shared/scenes; do
+  if [ -z "$scenes" ] && [ -f "$d/teapot.obj" ]; then scenes=$d; fi
+done
+if [ -n "$scenes" ]; then
+  mkdir -p "$KIT/scenes"
+  for f in "$scenes"/*.obj; do gzip -6 -c "$f" > "$KIT/scenes/$(basename "$f").gz"; done
+else
+  echo "gpu-kit: no scenes found (set SCION_SCENES); the kit has none" >&2
+fi
+git rev-parse HEAD > "$KIT/COMMIT" 2>/dev/null || true
+du -sh "$KIT"
+echo "gpu-kit ready: carry $KIT, then run: $KIT/gpu-check.sh"
