@@ -111,6 +111,13 @@ pub struct TraceArgs {
     /// the first ray that overflowed.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
     pub stack_size: Option<u32>,
+    /// The compiler's -O level for `--backend jit` (scionc -O0..-O3; default 3).
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(0..=3))]
+    pub opt_level: u8,
+    /// `--backend jit`: leave out the tree/mem (DSL) optimizations of the -O level
+    /// (scionc --no-dsl-opt: mem-inline, const-fold, mem-cse, dce), to measure what they gain.
+    #[arg(long)]
+    pub no_dsl_opt: bool,
 }
 
 fn main() -> ExitCode {

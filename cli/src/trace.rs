@@ -41,6 +41,9 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     if args.stack_size.is_some() && args.backend != BackendArg::Jit {
         eprintln!("scion: note: --stack-size is used by --backend jit only");
     }
+    if (args.no_dsl_opt || args.opt_level != 3) && args.backend != BackendArg::Jit {
+        eprintln!("scion: note: --opt-level and --no-dsl-opt are used by --backend jit only");
+    }
     if args.layout.is_some() && !uses_layout {
         eprintln!("scion: note: --layout is used by --backend jit only; this backend traces the logical tree");
     }
@@ -50,7 +53,7 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         BackendArg::Interp => Engine::Free(instantiate(BackendKind::Interp(1), args)?),
         BackendArg::MemInterp => Engine::Mem(Box::new(mem_backend(layout, args.threads)?)),
         BackendArg::Jit => Engine::Layout {
-            code: jit_code(layout, args.stack_size)?,
+            code: jit_code(layout, args)?,
             driver: BatchDriver::new(args.threads).map_err(CliError::new)?,
         },
     };
@@ -280,9 +283,10 @@ fn instantiate(kind: BackendKind, args: &TraceArgs) -> Result<Box<dyn Backend>, 
 }
 
 /// The closest-hit code specialized to the library layout `layout` (a `--layout` name) and
-/// compiled by the JIT, with a traversal stack of `stack_size` entries. The layout name is
+/// compiled by the JIT at `args.opt_level` (without the DSL optimizations with
+/// `--no-dsl-opt`), with a traversal stack of `args.stack_size` entries. The layout name is
 /// checked first, so a typo is reported as such.
-fn jit_code(layout: &str, stack_size: Option<u32>) -> Result<Box<dyn LayoutCode>, CliError> {
+fn jit_code(layout: &str, args: &TraceArgs) -> Result<Box<dyn LayoutCode>, CliError> {
     let stem = layout.replace('-', "_");
     let Some(&(stem, name, _)) = LIBRARY_LAYOUTS.iter().find(|l| l.0 == stem) else {
         let names: Vec<&str> = LAYOUTS.iter().map(|(n, _)| *n).collect();
@@ -295,8 +299,14 @@ fn jit_code(layout: &str, stack_size: Option<u32>) -> Result<Box<dyn LayoutCode>
         });
     };
     progress(&format!("compiling closest hit for layout `{name}`"));
-    let code = JitClosestHit::compile(stem, name, stack_size)
-        .map_err(|e| CliError::new(format!("cannot compile closest hit for `{layout}`: {e}")))?;
+    let code = JitClosestHit::compile_with(
+        stem,
+        name,
+        args.stack_size,
+        args.opt_level,
+        !args.no_dsl_opt,
+    )
+    .map_err(|e| CliError::new(format!("cannot compile closest hit for `{layout}`: {e}")))?;
     eprintln!(
         "scion: compiled in {:.3} s",
         code.compile_time.as_secs_f64()

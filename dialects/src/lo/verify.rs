@@ -200,10 +200,9 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
         }
         Op::GlobalId => {
             counts(0, 1)?;
-            require(
-                matches!(t.get(rt[0]), Type::Int(IntTy::U64)),
-                || format!("`{name}` gives a u64"),
-            )
+            require(matches!(t.get(rt[0]), Type::Int(IntTy::U64)), || {
+                format!("`{name}` gives a u64")
+            })
         }
         Op::Call => {
             let callee = o.attr("callee").and_then(Attr::as_sym);
