@@ -30,6 +30,8 @@ const BACKENDS: &[BackendKind] = &[
     BackendKind::Reference,
     BackendKind::Interp(0),
     BackendKind::Interp(1),
+    // The full DSL pipeline (mem-inline, const-fold, mem-cse, dce) at the tree level.
+    BackendKind::Interp(3),
 ];
 
 /// The backends of [`BACKENDS`] and the layouts run through the runtime contract: the
