@@ -42,6 +42,8 @@ pub enum BackendArg {
     MemInterp,
     /// Generated code for `--layout`, compiled by Cranelift.
     Jit,
+    /// Generated code for `--layout`, compiled by LLVM's JIT at -O3 for this machine's CPU.
+    Llvm,
 }
 
 /// Ray generators.
@@ -70,8 +72,8 @@ pub struct TraceArgs {
     /// The scene: an OBJ file.
     #[arg(long, value_name = "PATH.obj")]
     pub scene: PathBuf,
-    /// The layout for `--backend jit` (a name from library/layouts, e.g. pbrt, ptr,
-    /// pbrt-align16, pbrt-soaos, pbrt-q16; default pbrt). Layout-free
+    /// The layout for `--backend jit|llvm|mem-interp` (a name from library/layouts, e.g. pbrt,
+    /// ptr, pbrt-align16, pbrt-soaos, pbrt-q16; default pbrt). Layout-free
     /// backends trace the logical tree and ignore it.
     #[arg(long)]
     pub layout: Option<String>,
@@ -106,15 +108,16 @@ pub struct TraceArgs {
     /// single untimed-warm-up run for quick use; other counts drop (runs - 1) / 4 at each end.
     #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub runs: u32,
-    /// Entries of the generated traversal's explicit stack (`--backend jit`; the compiler's
+    /// Entries of the generated traversal's explicit stack (`--backend jit|llvm`; the compiler's
     /// `recursion-to-stack:stack-size`, default 64). A tree too deep for it is an error naming
     /// the first ray that overflowed.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
     pub stack_size: Option<u32>,
-    /// The compiler's -O level for `--backend jit` (scionc -O0..-O3; default 3).
+    /// The compiler's tree/mem -O level for `--backend jit|llvm` (scionc -O0..-O3; default 3;
+    /// LLVM's own pipeline stays at -O3).
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(0..=3))]
     pub opt_level: u8,
-    /// `--backend jit`: leave out the tree/mem (DSL) optimizations of the -O level
+    /// `--backend jit|llvm`: leave out the tree/mem (DSL) optimizations of the -O level
     /// (scionc --no-dsl-opt: mem-inline, const-fold, mem-cse, dce), to measure what they gain.
     #[arg(long)]
     pub no_dsl_opt: bool,

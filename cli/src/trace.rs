@@ -8,7 +8,8 @@
 //! through `scion_tests::contract` (`@L.sizes`, one aligned allocation per buffer, `@L.build`
 //! timed as the pack time, the batch entry over blocks of 64, a nonzero status reported with
 //! the failing ray), with the code of `scion_tests::jit` (closest hit specialized to the
-//! layout, lowered to `lo` at `-O1` and compiled by Cranelift; the compile time is printed).
+//! layout, lowered to `lo` at `-O2` and compiled by Cranelift; the compile time is printed).
+//! `--backend llvm` is the same with the machine code from LLVM's JIT at `-O3` (`scion-llvm`).
 
 use crate::{BackendArg, BuilderArg, CliError, RaysArg, TraceArgs};
 use scion_runtime::batch::BatchDriver;
@@ -19,7 +20,7 @@ use scion_runtime::scene::{load_obj, Scene};
 use scion_runtime::timing::{measure_with, Timing, TimingPlan};
 use scion_tests::backend::{Backend, BackendKind};
 use scion_tests::contract::{LayoutCode, Packed};
-use scion_tests::jit::JitClosestHit;
+use scion_tests::jit::{Codegen, JitClosestHit};
 use scion_tests::mem_interp::{MemInterpBackend, LIBRARY_LAYOUTS};
 use std::time::{Duration, Instant};
 
@@ -37,15 +38,16 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     // Decide the backend before the (possibly long) load, so that a backend that cannot run
     // fails at once.
     let layout = args.layout.as_deref().unwrap_or("pbrt");
-    let uses_layout = matches!(args.backend, BackendArg::Jit | BackendArg::MemInterp);
-    if args.stack_size.is_some() && args.backend != BackendArg::Jit {
-        eprintln!("scion: note: --stack-size is used by --backend jit only");
+    let compiled = matches!(args.backend, BackendArg::Jit | BackendArg::Llvm);
+    let uses_layout = compiled || args.backend == BackendArg::MemInterp;
+    if args.stack_size.is_some() && !compiled {
+        eprintln!("scion: note: --stack-size is used by --backend jit|llvm only");
     }
-    if (args.no_dsl_opt || args.opt_level != 3) && args.backend != BackendArg::Jit {
-        eprintln!("scion: note: --opt-level and --no-dsl-opt are used by --backend jit only");
+    if (args.no_dsl_opt || args.opt_level != 3) && !compiled {
+        eprintln!("scion: note: --opt-level and --no-dsl-opt are used by --backend jit|llvm only");
     }
     if args.layout.is_some() && !uses_layout {
-        eprintln!("scion: note: --layout is used by --backend jit only; this backend traces the logical tree");
+        eprintln!("scion: note: --layout is used by --backend jit|llvm|mem-interp only; this backend traces the logical tree");
     }
     let engine = match args.backend {
         BackendArg::Reference => Engine::Free(instantiate(BackendKind::Reference, args)?),
@@ -53,8 +55,14 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         BackendArg::Interp => Engine::Free(instantiate(BackendKind::Interp(1), args)?),
         BackendArg::MemInterp => Engine::Mem(Box::new(mem_backend(layout, args.threads)?)),
         BackendArg::Jit => Engine::Layout {
-            code: jit_code(layout, args)?,
+            code: jit_code(layout, args, Codegen::Cranelift)?,
             driver: BatchDriver::new(args.threads).map_err(CliError::new)?,
+            engine: "jit",
+        },
+        BackendArg::Llvm => Engine::Layout {
+            code: jit_code(layout, args, Codegen::Llvm(3))?,
+            driver: BatchDriver::new(args.threads).map_err(CliError::new)?,
+            engine: "llvm -O3",
         },
     };
 
@@ -131,7 +139,7 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
                 }),
             )
         }
-        Engine::Layout { code, driver } => {
+        Engine::Layout { code, driver, .. } => {
             progress(&format!("packing the tree into layout `{}`", code.layout()));
             let packed = Packed::new(code.as_ref(), &tree).map_err(CliError::new)?;
             tracing();
@@ -239,6 +247,8 @@ enum Engine {
     Layout {
         code: Box<dyn LayoutCode>,
         driver: BatchDriver,
+        /// `jit` (Cranelift) or `llvm -O3`.
+        engine: &'static str,
     },
 }
 
@@ -247,7 +257,7 @@ impl Engine {
         match self {
             Engine::Free(b) => b.name(),
             Engine::Mem(b) => b.name(),
-            Engine::Layout { code, .. } => format!("jit ({})", code.layout()),
+            Engine::Layout { code, engine, .. } => format!("{engine} ({})", code.layout()),
         }
     }
 }
@@ -283,28 +293,33 @@ fn instantiate(kind: BackendKind, args: &TraceArgs) -> Result<Box<dyn Backend>, 
 }
 
 /// The closest-hit code specialized to the library layout `layout` (a `--layout` name) and
-/// compiled by the JIT at `args.opt_level` (without the DSL optimizations with
-/// `--no-dsl-opt`), with a traversal stack of `args.stack_size` entries. The layout name is
-/// checked first, so a typo is reported as such.
-fn jit_code(layout: &str, args: &TraceArgs) -> Result<Box<dyn LayoutCode>, CliError> {
+/// compiled by `codegen`, after the tree/mem passes of `args.opt_level` (without the DSL
+/// optimizations with `--no-dsl-opt`), with a traversal stack of `args.stack_size` entries.
+/// The layout name is checked first, so a typo is reported as such.
+fn jit_code(
+    layout: &str,
+    args: &TraceArgs,
+    codegen: Codegen,
+) -> Result<Box<dyn LayoutCode>, CliError> {
     let stem = layout.replace('-', "_");
     let Some(&(stem, name, _)) = LIBRARY_LAYOUTS.iter().find(|l| l.0 == stem) else {
         let names: Vec<&str> = LAYOUTS.iter().map(|(n, _)| *n).collect();
-        let err = CliError::new(format!("unknown layout `{layout}` for --backend jit"))
+        let err = CliError::new(format!("unknown layout `{layout}` for --backend jit|llvm"))
             .note(format!("library layouts: {}", names.join(", ")));
         return Err(if layout.ends_with(".scion") {
-            err.note("--backend jit compiles the library's layouts only")
+            err.note("--backend jit|llvm compile the library's layouts only")
         } else {
             err
         });
     };
     progress(&format!("compiling closest hit for layout `{name}`"));
-    let code = JitClosestHit::compile_with(
+    let code = JitClosestHit::compile_full(
         stem,
         name,
         args.stack_size,
         args.opt_level,
         !args.no_dsl_opt,
+        codegen,
     )
     .map_err(|e| CliError::new(format!("cannot compile closest hit for `{layout}`: {e}")))?;
     eprintln!(

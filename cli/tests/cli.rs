@@ -241,6 +241,10 @@ fn the_jit_writes_the_reference_hits_for_pbrt_and_ptr() {
             assert_eq!(got, want, "jit {layout} {rays} differs from reference");
             assert!(stdout.contains(per_node), "{stdout}");
             assert!(stdout.contains("backend      jit ("), "{stdout}");
+            let (stdout, got) = run("llvm", layout, rays);
+            assert_eq!(got, want, "llvm {layout} {rays} differs from reference");
+            assert!(stdout.contains(per_node), "{stdout}");
+            assert!(stdout.contains("backend      llvm -O3 ("), "{stdout}");
             assert!(stdout.contains("pack time    0."), "{stdout}");
             assert!(stdout.contains("Mrays/s"), "{stdout}");
         }

@@ -69,6 +69,9 @@ pub struct CompileResult {
     pub internal_error: Option<InternalError>,
     /// The requested output (none for `--emit=check` or on error).
     pub output: Option<String>,
+    /// For `--emit=llvm|asm|obj|ptx`: the `lo` module the LLVM backend compiles (the driver
+    /// runs the backend with its target options; `output` stays empty).
+    pub lo_module: Option<Module>,
     /// IR dumps and timing reports asked for by the pass options (for standard error).
     pub dumps: String,
 }
@@ -159,6 +162,17 @@ pub fn compile(
         return out;
     }
     keep_reachable(&mut module, fe.inputs);
+    if matches!(emit, Emit::Llvm | Emit::Asm | Emit::Obj | Emit::Ptx) {
+        match crate::driver::lower::lower_to_lo(&mut module, popts.stack_size) {
+            Ok(warnings) => {
+                out.diagnostics.extend(warnings);
+                out.lo_module = Some(module);
+            }
+            Err(PassError::Diagnostics(d)) => out.diagnostics.extend(d),
+            Err(PassError::Internal(i)) => out.internal_error = Some(i),
+        }
+        return out;
+    }
     if matches!(emit, Emit::Lo | Emit::Clif) {
         match crate::driver::lower::emit_low(&mut module, emit, popts.stack_size) {
             Ok((text, warnings)) => {

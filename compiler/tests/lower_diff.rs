@@ -292,9 +292,9 @@ func @ints_{t}(%a: {t}, %b: {t}, %f: f32) -> ({t}, {t}, {t}, {t}, {t}, {t}, {t},
     }
 }
 
-/// The JIT canonicalizes an arithmetic NaN only where its bits can be observed
-/// (lit-tests/clif/nan-canonical.lo shows where); the lo interpreter canonicalizes after every
-/// op. On NaN payloads of both signs, quiet and signalling, every result bit agrees: the
+/// The JITs (Cranelift, LLVM at -O0 and -O3) canonicalize an arithmetic NaN only where its
+/// bits can be observed (`scion_ir::lo::nan`; lit-tests/clif/nan-canonical.lo shows where); the
+/// lo interpreter canonicalizes after every op. On NaN payloads of both signs, quiet and signalling, every result bit agrees: the
 /// payload-blind chains and each kind of observing use (return, neg, min, bitcast, select,
 /// cast, call, branch argument).
 #[test]
@@ -303,6 +303,8 @@ fn nan_canonicalization_only_where_observable_keeps_every_bit() {
     let lo = scion_ir::parse_module(text, FileId(0)).expect("parses");
     scion_ir::verify(&lo).expect("verifies");
     let jit = JitModule::compile(&lo).expect("compiles");
+    let llvm0 = scion_llvm::JitModule::compile(&lo, 0).expect("LLVM -O0 compiles");
+    let llvm3 = scion_llvm::JitModule::compile(&lo, 3).expect("LLVM -O3 compiles");
     let specials = [
         0.0f32,
         -0.0,
@@ -326,14 +328,28 @@ fn nan_canonicalization_only_where_observable_keeps_every_bit() {
                     let want = LoInterp::new(&lo)
                         .call(name, args.to_vec())
                         .unwrap_or_else(|e| panic!("{name}: lo interpreter: {e}"));
-                    let got = jit
-                        .call(name, &args)
-                        .unwrap_or_else(|e| panic!("{name}: jit: {e}"));
-                    assert_eq!(
-                        keys(&want),
-                        keys(&got),
-                        "{name}({a:?}, {b:?}, {c:?}): lo interpreter {want:?}, JIT {got:?}"
-                    );
+                    let engines = [
+                        (
+                            "Cranelift",
+                            jit.call(name, &args).map_err(|e| e.to_string()),
+                        ),
+                        (
+                            "LLVM -O0",
+                            llvm0.call(name, &args).map_err(|e| e.to_string()),
+                        ),
+                        (
+                            "LLVM -O3",
+                            llvm3.call(name, &args).map_err(|e| e.to_string()),
+                        ),
+                    ];
+                    for (engine, got) in engines {
+                        let got = got.unwrap_or_else(|e| panic!("{name}: {engine}: {e}"));
+                        assert_eq!(
+                            keys(&want),
+                            keys(&got),
+                            "{name}({a:?}, {b:?}, {c:?}): lo interpreter {want:?}, {engine} {got:?}"
+                        );
+                    }
                     nan_results += want
                         .iter()
                         .filter(|v| matches!(v, Val::F32(x) if x.is_nan()))

@@ -6,6 +6,9 @@
 //! backend (the JIT of one layout) is one more variant and one more arm of
 //! [`BackendKind::instantiate`].
 
+use crate::contract::LayoutBackend;
+use crate::jit::{Codegen, JitClosestHit, JIT_OPT_LEVEL};
+use crate::mem_interp::LIBRARY_LAYOUTS;
 use crate::oracle::ClosestHit;
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::LogicalTree;
@@ -45,6 +48,15 @@ pub enum BackendKind {
     Brute,
     /// The `tree` interpreter running `closest_hit.scion` compiled at this `-O` level.
     Interp(u8),
+    /// Closest hit specialized to the library layout in file `stem` (`pbrt`, `ptr`, ...),
+    /// lowered to `lo` and compiled by LLVM's JIT at `-O3` (`scion-llvm`), with a traversal
+    /// stack of `stack` entries, run through the runtime contract.
+    Llvm {
+        /// The layout's file stem in `library/layouts`.
+        stem: &'static str,
+        /// Entries of the traversal stack.
+        stack: u32,
+    },
 }
 
 impl BackendKind {
@@ -66,7 +78,50 @@ impl BackendKind {
                     threads
                 },
             }),
+            BackendKind::Llvm { stem, stack } => {
+                let &(_, layout, _) = LIBRARY_LAYOUTS
+                    .iter()
+                    .find(|l| l.0 == stem)
+                    .ok_or_else(|| format!("no library layout `{stem}`"))?;
+                let code = JitClosestHit::compile_with(
+                    stem,
+                    layout,
+                    Some(stack),
+                    JIT_OPT_LEVEL,
+                    Codegen::Llvm(3),
+                )?;
+                Box::new(Compiled {
+                    name: format!("llvm-O3-{layout}"),
+                    inner: LayoutBackend::new(Box::new(code), threads)?,
+                })
+            }
         })
+    }
+}
+
+/// [`BackendKind::Llvm`]: a layout's compiled code under the name of its code generator.
+pub struct Compiled {
+    name: String,
+    inner: LayoutBackend,
+}
+
+impl Backend for Compiled {
+    fn name(&self) -> String {
+        self.name.clone()
+    }
+    fn trace(
+        &self,
+        tris: &[Triangle],
+        tree: &LogicalTree,
+        rays: &[Ray],
+    ) -> Result<Vec<Hit>, String> {
+        self.inner.trace(tris, tree, rays)
+    }
+    fn stack_limit(&self) -> Option<usize> {
+        self.inner.stack_limit()
+    }
+    fn max_triangles(&self) -> Option<usize> {
+        self.inner.max_triangles()
     }
 }
 

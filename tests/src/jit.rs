@@ -1,7 +1,8 @@
 //! The JIT of a layout: `closest_hit.scion` specialized to a library layout by the normal
 //! pipeline (`destructor-specialize`, `constructor-specialize`, the `-O3` passes, `mem-to-lo`,
-//! `recursion-to-stack`, `lo-inline`), compiled by Cranelift (`scion-clif`) and run through the
-//! runtime contract of docs/design/specialization.md §3 as a [`LayoutCode`]. Input: a library
+//! `recursion-to-stack`, `lo-inline`), compiled by Cranelift (`scion-clif`) or LLVM
+//! (`scion-llvm`, [`Codegen`]) and run through the runtime contract of
+//! docs/design/specialization.md §3 as a [`LayoutCode`]. Input: a library
 //! layout (file stem and layout name) and a stack size; output: native `@L.sizes`, `@L.build`
 //! and the batch entry.
 //!
@@ -22,7 +23,6 @@
 use crate::contract::{BufferSpec, LayoutCode, LogicalTreeView, STATUS_OK};
 use crate::mem_interp::layout_source;
 use crate::oracle::{CLOSEST_HIT, CLOSEST_HIT_NAME};
-use scion_clif::JitModule;
 use scion_compiler::driver::cli::Emit;
 use scion_compiler::driver::pipelines::for_level_with;
 use scion_compiler::driver::session::{PRELUDE, PRELUDE_NAME};
@@ -89,9 +89,39 @@ enum Root {
     Pointer(usize, usize),
 }
 
+/// The code generator that turns the `lo` module into machine code in this process.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Codegen {
+    /// Cranelift (`scion-clif`).
+    Cranelift,
+    /// LLVM's JIT (`scion-llvm`) at this `-O` level of LLVM's pipeline.
+    Llvm(u8),
+}
+
 /// The compiled module: keeps the machine code alive.
-struct Code {
-    _jit: JitModule,
+enum Code {
+    Cranelift(scion_clif::JitModule),
+    Llvm(scion_llvm::JitModule),
+}
+
+impl Code {
+    fn compile(m: &Module, codegen: Codegen) -> Result<Code, String> {
+        Ok(match codegen {
+            Codegen::Cranelift => {
+                Code::Cranelift(scion_clif::JitModule::compile(m).map_err(|e| e.to_string())?)
+            }
+            Codegen::Llvm(level) => {
+                Code::Llvm(scion_llvm::JitModule::compile(m, level).map_err(|e| e.to_string())?)
+            }
+        })
+    }
+
+    fn function_ptr(&self, name: &str) -> Option<*const u8> {
+        match self {
+            Code::Cranelift(j) => j.function_ptr(name),
+            Code::Llvm(j) => j.function_ptr(name),
+        }
+    }
 }
 
 // SAFETY: after `JitModule::compile` returns, the module's code and data are finalized and never
@@ -148,17 +178,29 @@ impl JitClosestHit {
         stack_size: Option<u32>,
         opt_level: u8,
     ) -> Result<JitClosestHit, String> {
-        JitClosestHit::compile_with(stem, layout, stack_size, opt_level, true)
+        JitClosestHit::compile_with(stem, layout, stack_size, opt_level, Codegen::Cranelift)
     }
 
-    /// As [`JitClosestHit::compile_at`]; `dsl_opt: false` leaves out the DSL optimizations of
-    /// the level (`scionc --no-dsl-opt`), the baseline of `scripts/bench-dslopt.sh`.
+    /// As [`JitClosestHit::compile_at`], with the machine code from `codegen`.
     pub fn compile_with(
         stem: &str,
         layout: &str,
         stack_size: Option<u32>,
         opt_level: u8,
+        codegen: Codegen,
+    ) -> Result<JitClosestHit, String> {
+        JitClosestHit::compile_full(stem, layout, stack_size, opt_level, true, codegen)
+    }
+
+    /// As [`JitClosestHit::compile_with`]; `dsl_opt: false` leaves out the DSL optimizations of
+    /// the level (`scionc --no-dsl-opt`), the baseline of `scripts/bench-dslopt.sh`.
+    pub fn compile_full(
+        stem: &str,
+        layout: &str,
+        stack_size: Option<u32>,
+        opt_level: u8,
         dsl_opt: bool,
+        codegen: Codegen,
     ) -> Result<JitClosestHit, String> {
         let start = Instant::now();
         let text = layout_source(stem).ok_or_else(|| format!("no library layout `{stem}`"))?;
@@ -206,7 +248,7 @@ impl JitClosestHit {
             )
         })?;
         scion_ir::verify(&m).map_err(|e| format!("the generated batch entry: {e:?}"))?;
-        let jit = JitModule::compile(&m).map_err(|e| e.to_string())?;
+        let jit = Code::compile(&m, codegen)?;
         let get = |name: &str| {
             jit.function_ptr(name)
                 .ok_or_else(|| format!("the JIT has no `@{name}`"))
@@ -225,7 +267,7 @@ impl JitClosestHit {
             )
         };
         Ok(JitClosestHit {
-            _code: Code { _jit: jit },
+            _code: jit,
             layout: layout.to_string(),
             buffers,
             refs,

@@ -4,7 +4,8 @@
 //!
 //! The test is a table: one row per (scene, tree, ray kind, backend). [`BACKENDS`] lists the
 //! backends; a new backend (the JIT of a layout) is one more entry there and one more
-//! `BackendKind` variant. Scenes: the generated hard cases (always) and the real scenes of
+//! `BackendKind` variant. The LLVM rows (`BackendKind::Llvm`, -O3) cover the same exact
+//! layouts, scenes and hard cases as the Cranelift rows. Scenes: the generated hard cases (always) and the real scenes of
 //! `shared/scenes` (skipped with a printed line when missing; those over 20 k triangles only
 //! in release builds). The interpreter is slow, so real scenes get few rays (release: 128
 //! primary and 64 secondary, plus 64 axis and 64 feature rays on scenes under 50 k triangles;
@@ -32,6 +33,23 @@ const BACKENDS: &[BackendKind] = &[
     BackendKind::Interp(1),
     // The full DSL pipeline (mem-inline, const-fold, mem-cse, dce) at the tree level.
     BackendKind::Interp(3),
+    // LLVM's JIT at -O3, on the layouts of the Cranelift rows below (the same stack).
+    BackendKind::Llvm {
+        stem: "pbrt",
+        stack: JIT_STACK,
+    },
+    BackendKind::Llvm {
+        stem: "ptr",
+        stack: JIT_STACK,
+    },
+    BackendKind::Llvm {
+        stem: "pbrt_align16",
+        stack: JIT_STACK,
+    },
+    BackendKind::Llvm {
+        stem: "pbrt_soaos",
+        stack: JIT_STACK,
+    },
 ];
 
 /// The backends of [`BACKENDS`] and the layouts run through the runtime contract: the

@@ -5,7 +5,7 @@
 //! type. Float semantics match the interpreters bit for bit: arithmetic rounds to nearest in
 //! the value's own precision; a NaN produced by `add sub mul div rem` is replaced by the
 //! canonical quiet NaN (as [`scion_ir::tree::scalar`] does) wherever its bits can be observed
-//! ([`payload_blind`]: not when every use is another such op or a compare, which see only
+//! ([`scion_ir::lo::nan`]: not when every use is another such op or a compare, which see only
 //! whether it is a NaN); Cranelift never contracts `a*b+c`,
 //! and `fma` is emitted only for `lo.fma`; `min`/`max` are compare-and-select (Cranelift's
 //! `fmin`/`fmax` propagate NaN, `lo` wants the non-NaN operand); `rem` calls the C library's
@@ -142,7 +142,7 @@ pub fn translate_func<M: ClModule>(
     let order = rpo(m, body);
     let mut blocks = HashMap::new();
     let mut vals: HashMap<ValueId, ir::Value> = HashMap::new();
-    let blind = payload_blind(m, body);
+    let blind = scion_ir::lo::nan::payload_blind_results(m, body);
     for (i, &lb) in order.iter().enumerate() {
         let cb = b.create_block();
         if i == 0 {
@@ -177,63 +177,13 @@ pub fn translate_func<M: ClModule>(
     Ok(())
 }
 
-/// True for the float ops whose result is a NaN exactly when an operand is (or the operation
-/// is invalid), whatever the operands' NaN payloads: `add sub mul div rem` (whose own NaN
-/// results are canonicalized or again only seen by such ops) and compares.
-fn payload_blind_use(m: &Module, op: scion_ir::OpId) -> bool {
-    let o = &m.ops[op];
-    let float_result = || {
-        o.results
-            .first()
-            .is_some_and(|&r| matches!(m.types.get(m.values[r].ty), Type::Float(_)))
-    };
-    match o.kind {
-        OpKind::Lo(L::Add | L::Sub | L::Mul | L::Div | L::Rem) => float_result(),
-        OpKind::Lo(L::Cmp) => true,
-        _ => false,
-    }
-}
-
-/// The results of float `add sub mul div rem` in `blocks` whose NaN needs no canonicalization:
-/// every use is a [`payload_blind_use`] (none is a store, return, call or branch argument,
-/// bitcast, conversion, `select`, `min`/`max`, `neg`/`abs`, `sqrt`, `fma` or the like, which
-/// could pass the payload on). The interpreters canonicalize after every such op; the two
-/// agree bit for bit because a payload-blind use makes the same NaN-or-not decision either way
-/// and its own result is canonicalized before anything observes it.
-fn payload_blind(m: &Module, blocks: &[BlockId]) -> std::collections::HashSet<ValueId> {
-    let mut seen = std::collections::HashSet::new();
-    let mut observed = std::collections::HashSet::new();
-    for &b in blocks {
-        for &op in &m.blocks[b].ops {
-            let o = &m.ops[op];
-            if matches!(
-                o.kind,
-                OpKind::Lo(L::Add | L::Sub | L::Mul | L::Div | L::Rem)
-            ) {
-                seen.extend(o.results.iter().copied());
-            }
-            let blind = payload_blind_use(m, op);
-            for &x in &o.operands {
-                if !blind {
-                    observed.insert(x);
-                }
-            }
-            for s in &o.successors {
-                observed.extend(s.args.iter().copied());
-            }
-        }
-    }
-    seen.retain(|v| !observed.contains(v));
-    seen
-}
-
 struct Fx<'a, 'b> {
     b: &'a mut FunctionBuilder<'b>,
     m: &'a Module,
     ptr: ir::Type,
     vals: &'a mut HashMap<ValueId, ir::Value>,
-    /// Float results whose NaN payload nothing observes (see [`payload_blind`]).
-    blind: &'a std::collections::HashSet<ValueId>,
+    /// Float results whose NaN payload nothing observes ([`scion_ir::lo::nan`]).
+    blind: &'a scion_ir::lo::nan::ValueSet,
 }
 
 impl Fx<'_, '_> {

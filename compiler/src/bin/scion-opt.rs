@@ -37,9 +37,14 @@ struct Args {
     /// List the passes and stop.
     #[arg(long)]
     help_passes: bool,
-    /// What to print: the IR (`ir`, default) or, for a `lo` module, its Cranelift IR (`clif`).
-    #[arg(long, value_name = "ir|clif", default_value = "ir")]
+    /// What to print: the IR (`ir`, default) or, for a `lo` module, its Cranelift IR (`clif`),
+    /// its LLVM IR as translated, before LLVM optimizes (`llvm`), or its assembly (`asm`, PTX
+    /// for nvptx64; LLVM -O2).
+    #[arg(long, value_name = "ir|clif|llvm|asm", default_value = "ir")]
     emit: String,
+    /// The LLVM target of `--emit=llvm|asm`: x86_64, aarch64 or nvptx64 (default: this machine).
+    #[arg(long, value_name = "TARGET")]
+    target: Option<String>,
     /// A pass option `pass:key=value` (repeatable), e.g. `recursion-to-stack:stack-size=8`.
     #[arg(long = "pass-option", value_name = "PASS:KEY=VALUE")]
     pass_options: Vec<String>,
@@ -52,13 +57,21 @@ fn main() {
 
 fn run(args: &Args) -> i32 {
     let registry = passes::registry();
-    if args.emit != "ir" && args.emit != "clif" {
+    if !["ir", "clif", "llvm", "asm"].contains(&args.emit.as_str()) {
         eprintln!(
-            "error[E0907]: --emit={}: expected `ir` or `clif`",
+            "error[E0907]: --emit={}: expected `ir`, `clif`, `llvm` or `asm`",
             args.emit
         );
         return 1;
     }
+    let target = match args.target.as_deref() {
+        None => scion_llvm::Target::host(),
+        Some(t) => scion_llvm::Target::from_name(t),
+    };
+    let Some(target) = target else {
+        eprintln!("error[E0907]: --target: expected x86_64, aarch64 or nvptx64");
+        return 1;
+    };
     if args.help_passes {
         println!("{}", registry.help().trim_end());
         return 0;
@@ -122,6 +135,24 @@ fn run(args: &Args) -> i32 {
                     status = 1;
                 }
             },
+            Ok(_) if args.emit == "llvm" || args.emit == "asm" => {
+                let text = if args.emit == "llvm" {
+                    scion_llvm::translate_to_ir(&module, target)
+                } else {
+                    let opts = scion_llvm::Options::new(target);
+                    scion_llvm::emit(&module, &opts, scion_llvm::Output::Asm)
+                        .map(|b| String::from_utf8_lossy(&b).into_owned())
+                };
+                match text {
+                    Ok(text) => {
+                        let _ = write!(out, "{text}");
+                    }
+                    Err(e) => {
+                        eprintln!("error[E0907]: {e}");
+                        status = 1;
+                    }
+                }
+            }
             Ok(_) => {
                 let _ = write!(out, "{}", scion_ir::print::print_module(&module));
             }

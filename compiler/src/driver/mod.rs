@@ -5,6 +5,7 @@
 //! here panics on user input.
 
 pub mod cli;
+pub mod codegen;
 pub mod lower;
 pub mod pipelines;
 pub mod session;

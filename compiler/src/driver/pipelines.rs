@@ -50,8 +50,8 @@ pub fn select(opts: &Options) -> Result<Vec<String>, Diagnostic> {
             .collect(),
         None => {
             let mut names = Vec::new();
-            let specialize = opts.emit == Emit::Mem
-                || (matches!(opts.emit, Emit::Lo | Emit::Clif) && opts.layout.is_some());
+            let specialize =
+                opts.emit == Emit::Mem || (opts.emit.lowers_to_lo() && opts.layout.is_some());
             if specialize {
                 names.push("destructor-specialize".to_string());
                 names.push("constructor-specialize".to_string());

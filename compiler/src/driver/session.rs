@@ -4,11 +4,11 @@
 //! Input: [`Options`]. Output: text on standard output (or `-o`), diagnostics on standard
 //! error, and an exit status (0 ok, 1 user errors, 101 internal error).
 
-use super::cli::Options;
+use super::cli::{Emit, Options};
 use super::pipelines;
 use crate::frontend::{self, Frontend};
 use scion_ir::diag::{Diagnostic, Diagnostics, SourceMap};
-use std::io::Write;
+use std::io::{IsTerminal, Write};
 
 /// The prelude shipped inside the compiler, so `scionc` works from any directory.
 pub const PRELUDE: &str = include_str!("../../../library/prelude.scion");
@@ -31,6 +31,23 @@ pub fn run(opts: &Options) -> i32 {
         let d = Diagnostic::error("E0901", format!("`{}` is not implemented yet", ni.flag))
             .with_note(format!("it comes with {}", ni.planned))
             .with_note("see `scionc --help` for what works today");
+        let _ = write!(err, "{}", d.render(&SourceMap::new()));
+        return EXIT_USER_ERROR;
+    }
+    let early = super::codegen::check_flags(opts).and_then(|()| {
+        if opts.emit.is_llvm() {
+            super::codegen::select_target(opts).map(|_| ())
+        } else {
+            Ok(())
+        }
+    });
+    if let Err(d) = early {
+        let _ = write!(err, "{}", d.render(&SourceMap::new()));
+        return EXIT_USER_ERROR;
+    }
+    if opts.emit == Emit::Obj && opts.output.is_none() && std::io::stdout().is_terminal() {
+        let d = Diagnostic::error("E0920", "`--emit=obj` writes a binary object file")
+            .with_note("give the output file with -o PATH, or redirect standard output");
         let _ = write!(err, "{}", d.render(&SourceMap::new()));
         return EXIT_USER_ERROR;
     }
@@ -104,15 +121,25 @@ pub fn run(opts: &Options) -> i32 {
     if result.diagnostics.has_errors() {
         return EXIT_USER_ERROR;
     }
-    if let Some(text) = result.output {
+    let bytes = match (&result.lo_module, result.output) {
+        (Some(m), _) => match super::codegen::emit(m, opts) {
+            Ok(b) => Some(b),
+            Err(d) => {
+                let _ = write!(err, "{}", d.render(&sources));
+                return EXIT_USER_ERROR;
+            }
+        },
+        (None, text) => text.map(String::into_bytes),
+    };
+    if let Some(bytes) = bytes {
         match &opts.output {
             Some(path) => {
-                if let Err(e) = std::fs::write(path, text) {
-                    return io_error(&mut err, &path.display().to_string(), &e);
+                if let Err(e) = std::fs::write(path, bytes) {
+                    return write_error(&mut err, &path.display().to_string(), &e);
                 }
             }
             None => {
-                let _ = std::io::stdout().lock().write_all(text.as_bytes());
+                let _ = std::io::stdout().lock().write_all(&bytes);
             }
         }
     }
@@ -124,6 +151,12 @@ pub fn run(opts: &Options) -> i32 {
 
 fn io_error(err: &mut impl Write, path: &str, e: &std::io::Error) -> i32 {
     let d = Diagnostic::error("E0902", format!("cannot read `{path}`: {e}"));
+    let _ = write!(err, "{}", d.render(&SourceMap::new()));
+    EXIT_USER_ERROR
+}
+
+fn write_error(err: &mut impl Write, path: &str, e: &std::io::Error) -> i32 {
+    let d = Diagnostic::error("E0902", format!("cannot write `{path}`: {e}"));
     let _ = write!(err, "{}", d.render(&SourceMap::new()));
     EXIT_USER_ERROR
 }

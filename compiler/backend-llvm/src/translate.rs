@@ -1,0 +1,915 @@
+//! `lo` to LLVM IR: one `lo` function to one LLVM function, one op to one instruction or a short
+//! fixed sequence. Input: a verified `lo` module; output: an LLVM module (not yet optimized).
+//!
+//! Types: `i1` is LLVM `i1` (a byte holding 0 or 1 in memory); integers keep their width and
+//! their signedness picks `sdiv`/`udiv`, `ashr`/`lshr`, signed or unsigned compares and
+//! extensions; `ptr` is the opaque `ptr` of address space 0 (on NVPTX the generic space, which
+//! covers global, local and shared memory). Several results are returned as a literal struct.
+//!
+//! Float semantics are those of `scion-clif` and the interpreters, bit for bit: no fast-math
+//! flags (so LLVM never contracts `a*b+c`; `llvm.fma` only for `lo.fma`); a NaN produced by
+//! `add sub mul div rem` is replaced by the canonical quiet NaN wherever its bits can be
+//! observed ([`scion_ir::lo::nan`]: not when its only uses are such ops or compares, which see
+//! only whether it is a NaN); `min`/`max` are
+//! compare-and-select (minNum/maxNum, first operand on ties, never `llvm.minnum`, whose zero
+//! and NaN-payload cases are looser); `rem` is `frem` (C `fmod`); float-to-int casts are the
+//! saturating `llvm.fpto[su]i.sat`; `next_up`/`next_down` step the bit pattern (the portable
+//! sequence: NVVM's directed-rounding intrinsics round an *operation*, they cannot step a
+//! given value, so they would not be bit-identical to the interpreters' `next_up`). Integer
+//! division never traps (by zero divides by 1, `MIN / -1` wraps) and shift amounts are taken
+//! modulo the width, as in `scion-clif`. Loads and stores: on CPUs `align 1` (x86-64 and
+//! AArch64 access unaligned scalars at full speed, so nothing is assumed); on NVPTX, where an
+//! unaligned access would be split into bytes, the scalar's natural alignment, which the
+//! layout model guarantees (members at their natural alignment, buffers aligned to the
+//! plan's largest alignment; query and result records likewise, `backends.md` §1).
+//!
+//! Blocks are translated in reverse post-order, block arguments become `phi`s; `lo.stack_slot`
+//! is an `alloca` in the entry block; `lo.global_id` reads `%ctaid.x * %ntid.x + %tid.x` and
+//! exists only on NVPTX.
+
+use crate::target::Target;
+use inkwell::basic_block::BasicBlock;
+use inkwell::builder::Builder;
+use inkwell::context::Context;
+use inkwell::intrinsics::Intrinsic;
+use inkwell::module::{Linkage, Module as LModule};
+use inkwell::types::{BasicMetadataTypeEnum, BasicType, BasicTypeEnum};
+use inkwell::values::{
+    BasicMetadataValueEnum, BasicValue, BasicValueEnum, FloatValue, FunctionValue, IntValue,
+    PhiValue, PointerValue,
+};
+use inkwell::{FloatPredicate, IntPredicate};
+use scion_ir::entity::{BlockId, FuncId, TypeId, ValueId};
+use scion_ir::lo::Op as L;
+use scion_ir::op::OpKind;
+use scion_ir::tree::CmpPred;
+use scion_ir::types::{FloatTy, Type};
+use scion_ir::Module;
+use std::collections::HashMap;
+
+/// The PTX kernel calling convention (`ptx_kernel`).
+const PTX_KERNEL_CC: u32 = 71;
+
+type R<T> = Result<T, String>;
+
+fn be<E: std::fmt::Display>(e: E) -> String {
+    format!("LLVM builder: {e}")
+}
+
+/// The LLVM type of a `lo` scalar type.
+pub fn llvm_type<'c>(cx: &'c Context, m: &Module, ty: TypeId) -> R<BasicTypeEnum<'c>> {
+    Ok(match m.types.get(ty) {
+        Type::Bool => cx.bool_type().into(),
+        Type::Int(t) => int_type(cx, t.bits()).into(),
+        Type::Float(FloatTy::F32) => cx.f32_type().into(),
+        Type::Float(FloatTy::F64) => cx.f64_type().into(),
+        Type::Ptr => cx.ptr_type(Default::default()).into(),
+        _ => return Err(format!("{} is not a lo type", m.types.display(ty))),
+    })
+}
+
+/// The LLVM integer type of `bits` (1, 8, 16, 32 or 64) bits.
+pub fn int_type(cx: &Context, bits: u32) -> inkwell::types::IntType<'_> {
+    match bits {
+        1 => cx.bool_type(),
+        8 => cx.i8_type(),
+        16 => cx.i16_type(),
+        32 => cx.i32_type(),
+        _ => cx.i64_type(),
+    }
+}
+
+/// True when some function of `m` carries the `export` attribute: then every other function
+/// gets internal linkage (design note `backends.md` §1).
+pub fn has_exports(m: &Module) -> bool {
+    m.func_order
+        .iter()
+        .any(|&f| m.funcs[f].attrs.get("export").is_some())
+}
+
+/// The symbol of `lo` function `f` on `target`: its name, except that on NVPTX a name that is
+/// not a PTX identifier (`intersects(Ray,AABB)`) of a non-exported function is spelled with
+/// `_` for each other character and `_<index>` appended to keep it unique.
+pub fn symbol(m: &Module, f: FuncId, index: usize, target: Target) -> String {
+    let name = &m.funcs[f].name;
+    let valid = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '$';
+    if target != Target::Nvptx64
+        || m.funcs[f].attrs.get("export").is_some()
+        || (name.chars().all(valid) && !name.starts_with(|c: char| c.is_ascii_digit()))
+    {
+        return name.clone();
+    }
+    let mut s: String = name
+        .chars()
+        .map(|c| if valid(c) { c } else { '_' })
+        .collect();
+    s.push_str(&format!("_{index}"));
+    s
+}
+
+/// Translates the verified `lo` module `m` into a fresh LLVM module named `name` for `target`.
+/// Returns the module and each `lo` function's LLVM function, by `lo` name. `internalize`
+/// applies the `export` rule (the JIT turns it off to reach every function).
+pub fn translate<'c>(
+    cx: &'c Context,
+    m: &Module,
+    name: &str,
+    target: Target,
+    internalize: bool,
+) -> R<(LModule<'c>, HashMap<String, FunctionValue<'c>>)> {
+    let lm = cx.create_module(name);
+    let exports = internalize && has_exports(m);
+    let mut funcs = HashMap::new();
+    for (i, &f) in m.func_order.iter().enumerate() {
+        let func = &m.funcs[f];
+        let params = func
+            .params
+            .iter()
+            .map(|&p| llvm_type(cx, m, p).map(BasicMetadataTypeEnum::from))
+            .collect::<R<Vec<_>>>()?;
+        let results = func
+            .results
+            .iter()
+            .map(|&r| llvm_type(cx, m, r))
+            .collect::<R<Vec<_>>>()?;
+        let fty = match results.as_slice() {
+            [] => cx.void_type().fn_type(&params, false),
+            [one] => one.fn_type(&params, false),
+            many => cx.struct_type(many, false).fn_type(&params, false),
+        };
+        let linkage = if exports && !m.is_declaration(f) && func.attrs.get("export").is_none() {
+            Linkage::Internal
+        } else {
+            Linkage::External
+        };
+        let fv = lm.add_function(&symbol(m, f, i, target), fty, Some(linkage));
+        if target == Target::Nvptx64 && func.attrs.get("kernel").is_some() {
+            if !func.results.is_empty() {
+                return Err(format!(
+                    "kernel @{} returns values; a PTX kernel returns nothing",
+                    func.name
+                ));
+            }
+            fv.set_call_conventions(PTX_KERNEL_CC);
+        }
+        funcs.insert(func.name.clone(), fv);
+    }
+    let builder = cx.create_builder();
+    for &f in &m.func_order {
+        if m.is_declaration(f) {
+            continue;
+        }
+        let fv = funcs[&m.funcs[f].name];
+        let mut t = Fn {
+            cx,
+            lm: &lm,
+            b: &builder,
+            m,
+            target,
+            fv,
+            funcs: &funcs,
+            vals: HashMap::new(),
+            blocks: HashMap::new(),
+            phis: HashMap::new(),
+            entry: None,
+            blind: scion_ir::lo::nan::payload_blind_results(m, &m.regions[m.funcs[f].body].blocks),
+        };
+        t.body(f)
+            .map_err(|e| format!("@{}: {e}", m.funcs[f].name))?;
+    }
+    Ok((lm, funcs))
+}
+
+/// Blocks reachable from the entry, in reverse post-order.
+fn rpo(m: &Module, blocks: &[BlockId]) -> Vec<BlockId> {
+    let mut seen = std::collections::HashSet::new();
+    let mut post = Vec::new();
+    let Some(&entry) = blocks.first() else {
+        return post;
+    };
+    let mut stack = vec![(entry, 0usize)];
+    seen.insert(entry);
+    while let Some(&mut (b, ref mut i)) = stack.last_mut() {
+        let succs: Vec<BlockId> = m.blocks[b]
+            .ops
+            .last()
+            .map(|&o| m.ops[o].successors.iter().map(|s| s.block).collect())
+            .unwrap_or_default();
+        if let Some(&s) = succs.get(*i) {
+            *i += 1;
+            if seen.insert(s) {
+                stack.push((s, 0));
+            }
+        } else {
+            post.push(b);
+            stack.pop();
+        }
+    }
+    post.reverse();
+    post
+}
+
+/// The translation state of one function.
+struct Fn<'a, 'c> {
+    cx: &'c Context,
+    lm: &'a LModule<'c>,
+    b: &'a Builder<'c>,
+    m: &'a Module,
+    target: Target,
+    fv: FunctionValue<'c>,
+    funcs: &'a HashMap<String, FunctionValue<'c>>,
+    vals: HashMap<ValueId, BasicValueEnum<'c>>,
+    blocks: HashMap<BlockId, BasicBlock<'c>>,
+    phis: HashMap<BlockId, Vec<PhiValue<'c>>>,
+    /// The LLVM entry block (allocas go to its start).
+    entry: Option<BasicBlock<'c>>,
+    /// Float results whose NaN payload nothing observes ([`scion_ir::lo::nan`]).
+    blind: scion_ir::lo::nan::ValueSet,
+}
+
+impl<'c> Fn<'_, 'c> {
+    fn body(&mut self, f: FuncId) -> R<()> {
+        let m = self.m;
+        let order = rpo(m, &m.regions[m.funcs[f].body].blocks);
+        let Some(&lo_entry) = order.first() else {
+            return Err("function without blocks".into());
+        };
+        // A branch back to the lo entry block needs a separate LLVM entry block (LLVM's entry
+        // block has no predecessors): the parameters then flow in through the entry's phis.
+        let entry_targeted = order.iter().any(|&b| {
+            m.blocks[b]
+                .ops
+                .last()
+                .is_some_and(|&o| m.ops[o].successors.iter().any(|s| s.block == lo_entry))
+        });
+        let prologue = entry_targeted.then(|| self.cx.append_basic_block(self.fv, "entry"));
+        self.entry = prologue;
+        for (i, &lb) in order.iter().enumerate() {
+            let bb = self.cx.append_basic_block(self.fv, &format!("bb{i}"));
+            self.blocks.insert(lb, bb);
+            if self.entry.is_none() {
+                self.entry = Some(bb);
+            }
+            let mut phis = Vec::new();
+            if i > 0 || entry_targeted {
+                self.b.position_at_end(bb);
+                for &a in &m.blocks[lb].args {
+                    let ty = llvm_type(self.cx, m, m.values[a].ty)?;
+                    let phi = self.b.build_phi(ty, "").map_err(be)?;
+                    self.vals.insert(a, phi.as_basic_value());
+                    phis.push(phi);
+                }
+            } else {
+                for (&a, p) in m.blocks[lb].args.iter().zip(self.fv.get_param_iter()) {
+                    self.vals.insert(a, p);
+                }
+            }
+            self.phis.insert(lb, phis);
+        }
+        if let Some(pro) = prologue {
+            self.b.position_at_end(pro);
+            let target = self.blocks[&lo_entry];
+            for (phi, p) in self.phis[&lo_entry].iter().zip(self.fv.get_param_iter()) {
+                phi.add_incoming(&[(&p, pro)]);
+            }
+            self.b.build_unconditional_branch(target).map_err(be)?;
+        }
+        for &lb in &order {
+            self.b.position_at_end(self.blocks[&lb]);
+            for &op in &m.blocks[lb].ops {
+                self.op(op)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn v(&self, x: ValueId) -> R<BasicValueEnum<'c>> {
+        self.vals
+            .get(&x)
+            .copied()
+            .ok_or_else(|| "a value is used before its definition is translated".to_string())
+    }
+
+    fn signed(&self, x: ValueId) -> bool {
+        self.m
+            .types
+            .as_int(self.m.values[x].ty)
+            .is_some_and(|t| t.is_signed())
+    }
+
+    fn intrinsic(&self, name: &str, tys: &[BasicTypeEnum<'c>]) -> R<FunctionValue<'c>> {
+        Intrinsic::find(name)
+            .and_then(|i| i.get_declaration(self.lm, tys))
+            .ok_or_else(|| format!("LLVM has no intrinsic {name}"))
+    }
+
+    fn call_intr(
+        &self,
+        name: &str,
+        tys: &[BasicTypeEnum<'c>],
+        args: &[BasicValueEnum<'c>],
+    ) -> R<BasicValueEnum<'c>> {
+        let f = self.intrinsic(name, tys)?;
+        let args: Vec<BasicMetadataValueEnum> = args.iter().map(|&a| a.into()).collect();
+        let call = self.b.build_call(f, &args, "").map_err(be)?;
+        match call.try_as_basic_value() {
+            inkwell::values::ValueKind::Basic(v) => Ok(v),
+            inkwell::values::ValueKind::Instruction(_) => Err(format!("{name} returns nothing")),
+        }
+    }
+
+    /// The alignment of a load or store of `t` (see the module docs).
+    fn mem_align(&self, t: BasicTypeEnum<'c>) -> u32 {
+        if self.target != Target::Nvptx64 {
+            return 1;
+        }
+        match t {
+            BasicTypeEnum::IntType(i) => i.get_bit_width().div_ceil(8),
+            BasicTypeEnum::FloatType(f) => f.get_bit_width() / 8,
+            _ => 8,
+        }
+    }
+
+    /// `p + off` bytes.
+    fn byte_offset(&self, p: PointerValue<'c>, off: IntValue<'c>) -> R<PointerValue<'c>> {
+        #[allow(unsafe_code)]
+        // SAFETY: a `getelementptr` without `inbounds` over `i8` is plain address arithmetic;
+        // it is well defined for every pointer and offset (inkwell marks every GEP `unsafe`
+        // because wrong index lists for aggregate types can crash LLVM, which cannot happen
+        // with one integer index over `i8`).
+        let q = unsafe { self.b.build_gep(self.cx.i8_type(), p, &[off], "") };
+        q.map_err(be)
+    }
+
+    fn offset_ptr(&self, p: BasicValueEnum<'c>, off: i128) -> R<PointerValue<'c>> {
+        let p = p.into_pointer_value();
+        if off == 0 {
+            return Ok(p);
+        }
+        self.byte_offset(p, self.cx.i64_type().const_int(off as i64 as u64, true))
+    }
+
+    fn fconst(&self, ty: BasicTypeEnum<'c>, bits: u64) -> R<FloatValue<'c>> {
+        // Through the integer bits, so NaN payloads and signed zeros are exact.
+        let ity = int_type(self.cx, ty.into_float_type().get_bit_width());
+        let v = self
+            .b
+            .build_bit_cast(ity.const_int(bits, false), ty, "")
+            .map_err(be)?;
+        Ok(v.into_float_value())
+    }
+
+    /// The canonical quiet NaN in place of any NaN `v`.
+    fn canon(&self, v: FloatValue<'c>) -> R<BasicValueEnum<'c>> {
+        let ty = v.get_type().as_basic_type_enum();
+        let nan = if v.get_type().get_bit_width() == 32 {
+            self.fconst(ty, 0x7fc0_0000)?
+        } else {
+            self.fconst(ty, scion_ir::attr::CANONICAL_NAN_BITS)?
+        };
+        let uno = self
+            .b
+            .build_float_compare(FloatPredicate::UNO, v, v, "")
+            .map_err(be)?;
+        self.b.build_select(uno, nan, v, "").map_err(be)
+    }
+
+    fn op(&mut self, op: scion_ir::OpId) -> R<()> {
+        let m = self.m;
+        let o = &m.ops[op];
+        let OpKind::Lo(kind) = o.kind else {
+            return Err(format!("`{}` is not a lo op", o.kind.name()));
+        };
+        let args: Vec<BasicValueEnum<'c>> =
+            o.operands.iter().map(|&x| self.v(x)).collect::<R<_>>()?;
+        let rty = match o.results.first() {
+            Some(&r) => Some(llvm_type(self.cx, m, m.values[r].ty)?),
+            None => None,
+        };
+        let ty = || rty.ok_or_else(|| "op without a result".to_string());
+        let is_float = rty.is_some_and(|t| t.is_float_type());
+        let signed = o.operands.first().is_some_and(|&x| self.signed(x));
+        let b = self.b;
+        let int = |i: usize| args[i].into_int_value();
+        let flt = |i: usize| args[i].into_float_value();
+        let out: Option<BasicValueEnum<'c>> = match kind {
+            L::Const => {
+                let t = ty()?;
+                let a = o.attr("value").ok_or("constant without value")?;
+                Some(match (a, t) {
+                    (scion_ir::attr::Attr::Bool(x), BasicTypeEnum::IntType(it)) => {
+                        it.const_int(u64::from(*x), false).into()
+                    }
+                    (scion_ir::attr::Attr::Int(v), BasicTypeEnum::IntType(it)) => {
+                        it.const_int(*v as u64, false).into()
+                    }
+                    (scion_ir::attr::Attr::Int(v), BasicTypeEnum::PointerType(pt)) => b
+                        .build_int_to_ptr(self.cx.i64_type().const_int(*v as u64, false), pt, "")
+                        .map_err(be)?
+                        .into(),
+                    (scion_ir::attr::Attr::Float(bits), BasicTypeEnum::FloatType(ft)) => {
+                        let raw = if ft.get_bit_width() == 32 {
+                            u64::from((f64::from_bits(*bits) as f32).to_bits())
+                        } else {
+                            *bits
+                        };
+                        self.fconst(t, raw)?.into()
+                    }
+                    _ => return Err("bad constant".into()),
+                })
+            }
+            L::Add | L::Sub | L::Mul | L::Div | L::Rem if is_float => {
+                let (x, y) = (flt(0), flt(1));
+                let r = match kind {
+                    L::Add => b.build_float_add(x, y, ""),
+                    L::Sub => b.build_float_sub(x, y, ""),
+                    L::Mul => b.build_float_mul(x, y, ""),
+                    L::Div => b.build_float_div(x, y, ""),
+                    _ => b.build_float_rem(x, y, ""),
+                }
+                .map_err(be)?;
+                if self.blind.contains(&o.results[0]) {
+                    Some(r.into())
+                } else {
+                    Some(self.canon(r)?)
+                }
+            }
+            L::Add => Some(b.build_int_add(int(0), int(1), "").map_err(be)?.into()),
+            L::Sub => Some(b.build_int_sub(int(0), int(1), "").map_err(be)?.into()),
+            L::Mul => Some(b.build_int_mul(int(0), int(1), "").map_err(be)?.into()),
+            L::Div | L::Rem => Some(self.int_div(kind == L::Div, signed, int(0), int(1))?.into()),
+            L::And => Some(b.build_and(int(0), int(1), "").map_err(be)?.into()),
+            L::Or => Some(b.build_or(int(0), int(1), "").map_err(be)?.into()),
+            L::Xor => Some(b.build_xor(int(0), int(1), "").map_err(be)?.into()),
+            L::Shl | L::Shr => {
+                let x = int(0);
+                let t = x.get_type();
+                let amt = b
+                    .build_int_cast_sign_flag(int(1), t, false, "")
+                    .map_err(be)?;
+                let mask = t.const_int(u64::from(t.get_bit_width() - 1), false);
+                let amt = b.build_and(amt, mask, "").map_err(be)?;
+                Some(
+                    match kind {
+                        L::Shl => b.build_left_shift(x, amt, ""),
+                        _ => b.build_right_shift(x, amt, signed, ""),
+                    }
+                    .map_err(be)?
+                    .into(),
+                )
+            }
+            L::BitNot | L::Not => Some(b.build_not(int(0), "").map_err(be)?.into()),
+            L::Neg if is_float => Some(b.build_float_neg(flt(0), "").map_err(be)?.into()),
+            L::Neg => Some(b.build_int_neg(int(0), "").map_err(be)?.into()),
+            L::Abs if is_float => Some(self.call_intr("llvm.fabs", &[ty()?], &args)?),
+            L::Abs if signed => {
+                let no_poison = self.cx.bool_type().const_int(0, false).into();
+                Some(self.call_intr("llvm.abs", &[ty()?], &[args[0], no_poison])?)
+            }
+            L::Abs => Some(args[0]),
+            L::Sqrt => Some(self.call_intr("llvm.sqrt", &[ty()?], &args)?),
+            L::Floor => Some(self.call_intr("llvm.floor", &[ty()?], &args)?),
+            L::Ceil => Some(self.call_intr("llvm.ceil", &[ty()?], &args)?),
+            L::Trunc => Some(self.call_intr("llvm.trunc", &[ty()?], &args)?),
+            L::Fma => Some(self.call_intr("llvm.fma", &[ty()?], &args)?),
+            L::Popcount | L::Clz | L::Ctz => {
+                let t = args[0].get_type();
+                let r = if kind == L::Popcount {
+                    self.call_intr("llvm.ctpop", &[t], &args)?
+                } else {
+                    let name = if kind == L::Clz {
+                        "llvm.ctlz"
+                    } else {
+                        "llvm.cttz"
+                    };
+                    let no_poison = self.cx.bool_type().const_int(0, false).into();
+                    self.call_intr(name, &[t], &[args[0], no_poison])?
+                };
+                let rt = ty()?.into_int_type();
+                Some(
+                    b.build_int_cast_sign_flag(r.into_int_value(), rt, false, "")
+                        .map_err(be)?
+                        .into(),
+                )
+            }
+            L::Min | L::Max => Some(self.min_max(kind == L::Max, args[0], args[1], signed)?),
+            L::NextUp | L::NextDown => Some(self.next(kind == L::NextUp, flt(0))?),
+            L::Cmp => {
+                let pred = o
+                    .str_attr("pred")
+                    .and_then(CmpPred::from_name)
+                    .ok_or("bad predicate")?;
+                Some(self.compare(pred, args[0], args[1], signed)?.into())
+            }
+            L::Select => Some(b.build_select(int(0), args[1], args[2], "").map_err(be)?),
+            L::Cast => {
+                let from = m.values[o.operands[0]].ty;
+                let to = m.values[o.results[0]].ty;
+                Some(self.cast(args[0], from, to)?)
+            }
+            L::Bitcast => {
+                let t = ty()?;
+                Some(if args[0].get_type() == t {
+                    args[0]
+                } else {
+                    b.build_bit_cast(args[0], t, "").map_err(be)?
+                })
+            }
+            L::Load => {
+                let p = self.offset_ptr(args[0], o.int_attr("offset").unwrap_or(0))?;
+                let is_bool = matches!(m.types.get(m.values[o.results[0]].ty), Type::Bool);
+                let lt: BasicTypeEnum = if is_bool {
+                    self.cx.i8_type().into()
+                } else {
+                    ty()?
+                };
+                let v = b.build_load(lt, p, "").map_err(be)?;
+                if let Some(i) = v.as_instruction_value() {
+                    i.set_alignment(self.mem_align(lt)).map_err(be)?;
+                }
+                Some(if is_bool {
+                    let zero = self.cx.i8_type().const_zero();
+                    b.build_int_compare(IntPredicate::NE, v.into_int_value(), zero, "")
+                        .map_err(be)?
+                        .into()
+                } else {
+                    v
+                })
+            }
+            L::Store => {
+                let p = self.offset_ptr(args[0], o.int_attr("offset").unwrap_or(0))?;
+                let mut v = args[1];
+                if matches!(m.types.get(m.values[o.operands[1]].ty), Type::Bool) {
+                    v = b
+                        .build_int_z_extend(v.into_int_value(), self.cx.i8_type(), "")
+                        .map_err(be)?
+                        .into();
+                }
+                let st = b.build_store(p, v).map_err(be)?;
+                st.set_alignment(self.mem_align(v.get_type())).map_err(be)?;
+                None
+            }
+            L::PtrAdd => {
+                let off_signed = self.signed(o.operands[1]);
+                let off = b
+                    .build_int_cast_sign_flag(int(1), self.cx.i64_type(), off_signed, "")
+                    .map_err(be)?;
+                Some(self.byte_offset(args[0].into_pointer_value(), off)?.into())
+            }
+            L::GlobalId => Some(self.global_id()?.into()),
+            L::StackSlot => {
+                let size = o.int_attr("size").unwrap_or(1).max(1) as u32;
+                let align = o.int_attr("align").unwrap_or(8).max(1) as u32;
+                let entry = self.entry.ok_or("no entry block")?;
+                let at = self.cx.create_builder();
+                match entry.get_first_instruction() {
+                    Some(i) => at.position_before(&i),
+                    None => at.position_at_end(entry),
+                }
+                let slot = at
+                    .build_alloca(self.cx.i8_type().array_type(size), "slot")
+                    .map_err(be)?;
+                if let Some(i) = slot.as_instruction_value() {
+                    i.set_alignment(align).map_err(be)?;
+                }
+                Some(slot.into())
+            }
+            L::Call => {
+                let callee = o
+                    .attr("callee")
+                    .and_then(|a| a.as_sym())
+                    .ok_or("call without callee")?;
+                let f = *self
+                    .funcs
+                    .get(callee)
+                    .ok_or_else(|| format!("unknown callee @{callee}"))?;
+                let cargs: Vec<BasicMetadataValueEnum> = args.iter().map(|&a| a.into()).collect();
+                let call = b.build_call(f, &cargs, "").map_err(be)?;
+                call.set_call_convention(f.get_call_conventions());
+                if let inkwell::values::ValueKind::Basic(v) = call.try_as_basic_value() {
+                    if o.results.len() == 1 {
+                        self.vals.insert(o.results[0], v);
+                    } else {
+                        for (i, &r) in o.results.iter().enumerate() {
+                            let e = b
+                                .build_extract_value(v.into_struct_value(), i as u32, "")
+                                .map_err(be)?;
+                            self.vals.insert(r, e);
+                        }
+                    }
+                }
+                None
+            }
+            L::Br => {
+                let t = self.edge(op, 0)?;
+                b.build_unconditional_branch(t).map_err(be)?;
+                None
+            }
+            L::CondBr => {
+                let t = self.edge(op, 0)?;
+                let e = if o.successors[0].block == o.successors[1].block {
+                    // Two edges to one block would need two phi entries from one predecessor:
+                    // the else edge goes through a block of its own.
+                    let from = b.get_insert_block().ok_or("builder without a block")?;
+                    let split = self.cx.append_basic_block(self.fv, "split");
+                    b.position_at_end(split);
+                    let e = self.edge(op, 1)?;
+                    b.build_unconditional_branch(e).map_err(be)?;
+                    b.position_at_end(from);
+                    split
+                } else {
+                    self.edge(op, 1)?
+                };
+                b.build_conditional_branch(int(0), t, e).map_err(be)?;
+                None
+            }
+            L::Return => {
+                match args.as_slice() {
+                    [] => b.build_return(None),
+                    [one] => b.build_return(Some(one)),
+                    many => b.build_aggregate_return(many),
+                }
+                .map_err(be)?;
+                None
+            }
+        };
+        if let (Some(v), Some(&r)) = (out, o.results.first()) {
+            self.vals.insert(r, v);
+        }
+        Ok(())
+    }
+
+    /// Adds the successor `i` of branch `op`'s arguments to its target's phis (coming from the
+    /// builder's current block) and returns the target.
+    fn edge(&self, op: scion_ir::OpId, i: usize) -> R<BasicBlock<'c>> {
+        let s = &self.m.ops[op].successors[i];
+        let target = *self
+            .blocks
+            .get(&s.block)
+            .ok_or("branch to a missing block")?;
+        let from = self.b.get_insert_block().ok_or("builder without a block")?;
+        for (phi, &a) in self.phis[&s.block].iter().zip(&s.args) {
+            let v = self.v(a)?;
+            phi.add_incoming(&[(&v, from)]);
+        }
+        Ok(target)
+    }
+
+    fn compare(
+        &self,
+        pred: CmpPred,
+        x: BasicValueEnum<'c>,
+        y: BasicValueEnum<'c>,
+        signed: bool,
+    ) -> R<IntValue<'c>> {
+        let b = self.b;
+        if x.is_float_value() {
+            let p = match pred {
+                CmpPred::Eq => FloatPredicate::OEQ,
+                CmpPred::Ne => FloatPredicate::UNE,
+                CmpPred::Lt => FloatPredicate::OLT,
+                CmpPred::Le => FloatPredicate::OLE,
+                CmpPred::Gt => FloatPredicate::OGT,
+                CmpPred::Ge => FloatPredicate::OGE,
+            };
+            return b
+                .build_float_compare(p, x.into_float_value(), y.into_float_value(), "")
+                .map_err(be);
+        }
+        let p = match (pred, signed) {
+            (CmpPred::Eq, _) => IntPredicate::EQ,
+            (CmpPred::Ne, _) => IntPredicate::NE,
+            (CmpPred::Lt, true) => IntPredicate::SLT,
+            (CmpPred::Le, true) => IntPredicate::SLE,
+            (CmpPred::Gt, true) => IntPredicate::SGT,
+            (CmpPred::Ge, true) => IntPredicate::SGE,
+            (CmpPred::Lt, false) => IntPredicate::ULT,
+            (CmpPred::Le, false) => IntPredicate::ULE,
+            (CmpPred::Gt, false) => IntPredicate::UGT,
+            (CmpPred::Ge, false) => IntPredicate::UGE,
+        };
+        if x.is_pointer_value() {
+            return b
+                .build_int_compare(
+                    p,
+                    b.build_ptr_to_int(x.into_pointer_value(), self.cx.i64_type(), "")
+                        .map_err(be)?,
+                    b.build_ptr_to_int(y.into_pointer_value(), self.cx.i64_type(), "")
+                        .map_err(be)?,
+                    "",
+                )
+                .map_err(be);
+        }
+        b.build_int_compare(p, x.into_int_value(), y.into_int_value(), "")
+            .map_err(be)
+    }
+
+    /// Integer division without traps: `MIN / -1` wraps to `MIN` (and `MIN % -1` is 0);
+    /// division by zero, undefined in the IR, divides by 1 (as `scion-clif` does).
+    fn int_div(
+        &self,
+        div: bool,
+        signed: bool,
+        x: IntValue<'c>,
+        y: IntValue<'c>,
+    ) -> R<IntValue<'c>> {
+        let b = self.b;
+        let t = y.get_type();
+        let one = t.const_int(1, false);
+        let zero = t.const_zero();
+        let is_zero = b
+            .build_int_compare(IntPredicate::EQ, y, zero, "")
+            .map_err(be)?;
+        if !signed {
+            let safe = b
+                .build_select(is_zero, one, y, "")
+                .map_err(be)?
+                .into_int_value();
+            return if div {
+                b.build_int_unsigned_div(x, safe, "")
+            } else {
+                b.build_int_unsigned_rem(x, safe, "")
+            }
+            .map_err(be);
+        }
+        let m1 = t.const_all_ones();
+        let is_m1 = b
+            .build_int_compare(IntPredicate::EQ, y, m1, "")
+            .map_err(be)?;
+        let bad = b.build_or(is_zero, is_m1, "").map_err(be)?;
+        let safe = b
+            .build_select(bad, one, y, "")
+            .map_err(be)?
+            .into_int_value();
+        let r = if div {
+            let q = b.build_int_signed_div(x, safe, "").map_err(be)?;
+            let neg = b.build_int_neg(x, "").map_err(be)?;
+            b.build_select(is_m1, neg, q, "")
+        } else {
+            let r = b.build_int_signed_rem(x, safe, "").map_err(be)?;
+            b.build_select(is_m1, zero, r, "")
+        };
+        Ok(r.map_err(be)?.into_int_value())
+    }
+
+    /// minNum/maxNum: the other operand when one is NaN (`q` when both are), `p` on ties.
+    fn min_max(
+        &self,
+        max: bool,
+        p: BasicValueEnum<'c>,
+        q: BasicValueEnum<'c>,
+        signed: bool,
+    ) -> R<BasicValueEnum<'c>> {
+        let b = self.b;
+        if !p.is_float_value() {
+            let name = match (max, signed) {
+                (false, true) => "llvm.smin",
+                (false, false) => "llvm.umin",
+                (true, true) => "llvm.smax",
+                (true, false) => "llvm.umax",
+            };
+            return self.call_intr(name, &[p.get_type()], &[p, q]);
+        }
+        let (pf, qf) = (p.into_float_value(), q.into_float_value());
+        let pred = if max {
+            FloatPredicate::OGT
+        } else {
+            FloatPredicate::OLT
+        };
+        let better = b.build_float_compare(pred, qf, pf, "").map_err(be)?;
+        let r = b.build_select(better, q, p, "").map_err(be)?;
+        let q_nan = b
+            .build_float_compare(FloatPredicate::UNO, qf, qf, "")
+            .map_err(be)?;
+        let r = b.build_select(q_nan, p, r, "").map_err(be)?;
+        let p_nan = b
+            .build_float_compare(FloatPredicate::UNO, pf, pf, "")
+            .map_err(be)?;
+        b.build_select(p_nan, q, r, "").map_err(be)
+    }
+
+    /// One ulp toward `+inf` (`up`) or `-inf`; NaN and the infinity in that direction stay.
+    fn next(&self, up: bool, x: FloatValue<'c>) -> R<BasicValueEnum<'c>> {
+        let b = self.b;
+        let ft = x.get_type();
+        let wide = ft.get_bit_width() == 64;
+        let it = int_type(self.cx, ft.get_bit_width());
+        let (zero_step, inf_bits) = match (wide, up) {
+            (false, true) => (1u64, u64::from(f32::INFINITY.to_bits())),
+            (false, false) => (0x8000_0001, u64::from(f32::NEG_INFINITY.to_bits())),
+            (true, true) => (1, f64::INFINITY.to_bits()),
+            (true, false) => (0x8000_0000_0000_0001, f64::NEG_INFINITY.to_bits()),
+        };
+        let fty = ft.as_basic_type_enum();
+        let inf = self.fconst(fty, inf_bits)?;
+        let zero = ft.const_zero();
+        let bits = b.build_bit_cast(x, it, "").map_err(be)?.into_int_value();
+        let one = it.const_int(1, false);
+        let inc = b.build_int_add(bits, one, "").map_err(be)?;
+        let dec = b.build_int_sub(bits, one, "").map_err(be)?;
+        let pos = b
+            .build_float_compare(FloatPredicate::OGT, x, zero, "")
+            .map_err(be)?;
+        let stepped = if up {
+            b.build_select(pos, inc, dec, "")
+        } else {
+            b.build_select(pos, dec, inc, "")
+        }
+        .map_err(be)?;
+        let is_zero = b
+            .build_float_compare(FloatPredicate::OEQ, x, zero, "")
+            .map_err(be)?;
+        let zs = it.const_int(zero_step, false);
+        let stepped = b
+            .build_select(is_zero, zs.into(), stepped, "")
+            .map_err(be)?;
+        let r = b.build_bit_cast(stepped, ft, "").map_err(be)?;
+        let nan = b
+            .build_float_compare(FloatPredicate::UNO, x, x, "")
+            .map_err(be)?;
+        let at_inf = b
+            .build_float_compare(FloatPredicate::OEQ, x, inf, "")
+            .map_err(be)?;
+        let keep = b.build_or(nan, at_inf, "").map_err(be)?;
+        b.build_select(keep, x.into(), r, "").map_err(be)
+    }
+
+    /// `lo.cast`: Rust `as` semantics between scalars.
+    fn cast(&self, x: BasicValueEnum<'c>, from: TypeId, to: TypeId) -> R<BasicValueEnum<'c>> {
+        let b = self.b;
+        let m = self.m;
+        let (ft, tt) = (m.types.get(from).clone(), m.types.get(to).clone());
+        let lt = llvm_type(self.cx, m, to)?;
+        Ok(match (&ft, &tt) {
+            (Type::Bool, Type::Bool) => x,
+            (Type::Float(_), Type::Bool) => {
+                let xf = x.into_float_value();
+                b.build_float_compare(FloatPredicate::UNE, xf, xf.get_type().const_zero(), "")
+                    .map_err(be)?
+                    .into()
+            }
+            (Type::Int(_), Type::Bool) => {
+                let xi = x.into_int_value();
+                b.build_int_compare(IntPredicate::NE, xi, xi.get_type().const_zero(), "")
+                    .map_err(be)?
+                    .into()
+            }
+            (Type::Int(_) | Type::Bool, Type::Int(_)) => {
+                let s = matches!(ft, Type::Int(i) if i.is_signed());
+                b.build_int_cast_sign_flag(x.into_int_value(), lt.into_int_type(), s, "")
+                    .map_err(be)?
+                    .into()
+            }
+            (Type::Int(_) | Type::Bool, Type::Float(_)) => {
+                let s = matches!(ft, Type::Int(i) if i.is_signed());
+                let (xi, fty) = (x.into_int_value(), lt.into_float_type());
+                if s {
+                    b.build_signed_int_to_float(xi, fty, "")
+                } else {
+                    b.build_unsigned_int_to_float(xi, fty, "")
+                }
+                .map_err(be)?
+                .into()
+            }
+            (Type::Float(_), Type::Int(it)) => {
+                let name = if it.is_signed() {
+                    "llvm.fptosi.sat"
+                } else {
+                    "llvm.fptoui.sat"
+                };
+                self.call_intr(name, &[lt, x.get_type()], &[x])?
+            }
+            (Type::Float(a), Type::Float(c)) if a == c => x,
+            (Type::Float(_), Type::Float(FloatTy::F64)) => b
+                .build_float_ext(x.into_float_value(), lt.into_float_type(), "")
+                .map_err(be)?
+                .into(),
+            (Type::Float(_), Type::Float(_)) => b
+                .build_float_trunc(x.into_float_value(), lt.into_float_type(), "")
+                .map_err(be)?
+                .into(),
+            _ => return Err("unsupported cast".into()),
+        })
+    }
+
+    /// `blockIdx.x * blockDim.x + threadIdx.x` as a `u64` (NVPTX only).
+    fn global_id(&self) -> R<IntValue<'c>> {
+        if self.target != Target::Nvptx64 {
+            return Err(format!(
+                "`lo.global_id` is a GPU op: target {} is a CPU",
+                self.target.name()
+            ));
+        }
+        let b = self.b;
+        let i64t = self.cx.i64_type();
+        let sreg = |name: &str| -> R<IntValue<'c>> {
+            let v = self.call_intr(name, &[], &[])?.into_int_value();
+            b.build_int_z_extend(v, i64t, "").map_err(be)
+        };
+        let ctaid = sreg("llvm.nvvm.read.ptx.sreg.ctaid.x")?;
+        let ntid = sreg("llvm.nvvm.read.ptx.sreg.ntid.x")?;
+        let tid = sreg("llvm.nvvm.read.ptx.sreg.tid.x")?;
+        let block = b.build_int_nuw_mul(ctaid, ntid, "").map_err(be)?;
+        b.build_int_nuw_add(block, tid, "").map_err(be)
+    }
+}
