@@ -33,7 +33,11 @@
 //!   Other calls are never merged. `lo` functions (CFG regions) are left alone.
 //!
 //! Merging a pure call is what makes the prelude's slab test shared between `intersects` and
-//! `distmin` once `mem-inline` put both in the traversal.
+//! `distmin` once `mem-inline` put both in the traversal. What remains of `distmin` then tests
+//! the condition `intersects` already decided: a `tree.if` whose condition is that of an
+//! enclosing `tree.if` (after merging) is folded to the region the enclosing one implies (true
+//! in a then region, false in an else region), when that region ends in `tree.yield`; its ops
+//! are then visited like the others.
 
 use rustc_hash::{FxHashMap, FxHashSet};
 use scion_ir::module::Module;
@@ -70,6 +74,7 @@ impl Pass for MemCse {
                 epoch: 0,
                 cell_epoch: 0,
                 table: FxHashMap::default(),
+                known: FxHashMap::default(),
                 changed: false,
             };
             cx.block(m, blocks[0]);
@@ -92,6 +97,8 @@ struct Scope<'a> {
     epoch: u32,
     cell_epoch: u32,
     table: FxHashMap<Key, OpId>,
+    /// Conditions of the enclosing `tree.if`s: true in a then region, false in an else region.
+    known: FxHashMap<ValueId, bool>,
     changed: bool,
 }
 
@@ -99,9 +106,11 @@ impl Scope<'_> {
     /// Visits the ops of `block` in order, then removes what it added to the table.
     fn block(&mut self, m: &mut Module, block: BlockId) {
         let mut added = Vec::new();
-        for op in m.blocks[block].ops.clone() {
+        let mut i = 0;
+        while let Some(&op) = m.blocks[block].ops.get(i) {
             let kind = m.ops[op].kind;
             if !kind.has_structured_regions() {
+                i += 1;
                 continue;
             }
             if self.candidate(m, op)
@@ -125,7 +134,13 @@ impl Scope<'_> {
                 } else {
                     self.table.insert(key.clone(), op);
                     added.push(key);
+                    i += 1;
                 }
+                continue;
+            }
+            if self.fold_known_if(m, op) {
+                // The taken region's ops now stand at `i`; visit them next.
+                self.changed = true;
                 continue;
             }
             let writes = writes_layout(m, self.writers, op);
@@ -136,10 +151,23 @@ impl Scope<'_> {
             if stores {
                 self.cell_epoch += 1;
             }
-            for r in m.ops[op].regions.clone() {
+            let cond = kind
+                .is_tree(tree::Op::If)
+                .then(|| rewrite::resolve_value(m, m.ops[op].operands[0]));
+            for (ri, r) in m.ops[op].regions.clone().into_iter().enumerate() {
                 let blocks = m.regions[r].blocks.clone();
                 if let [b] = blocks[..] {
+                    let saved = cond.map(|c| (c, self.known.insert(c, ri == 0)));
                     self.block(m, b);
+                    match saved {
+                        Some((c, Some(prev))) => {
+                            self.known.insert(c, prev);
+                        }
+                        Some((c, None)) => {
+                            self.known.remove(&c);
+                        }
+                        None => {}
+                    }
                 }
             }
             if writes {
@@ -148,10 +176,43 @@ impl Scope<'_> {
             if stores {
                 self.cell_epoch += 1;
             }
+            i += 1;
         }
         for k in added {
             self.table.remove(&k);
         }
+    }
+
+    /// Folds `op` when it is a `tree.if` on a condition an enclosing `tree.if` decides: the
+    /// taken region's ops move before it and its results become the region's yielded values.
+    /// Not when the taken region ends in `tree.return` (the rest of the block would be dead,
+    /// which is `dce`'s business only once it is structured away).
+    fn fold_known_if(&mut self, m: &mut Module, op: OpId) -> bool {
+        if !m.ops[op].kind.is_tree(tree::Op::If) {
+            return false;
+        }
+        let cond = rewrite::resolve_value(m, m.ops[op].operands[0]);
+        let Some(&taken) = self.known.get(&cond) else {
+            return false;
+        };
+        let Some(&region) = m.ops[op].regions.get(usize::from(!taken)) else {
+            return false;
+        };
+        let ends_in_yield = m.regions[region].blocks.first().is_some_and(|&b| {
+            m.blocks[b]
+                .ops
+                .last()
+                .is_some_and(|&t| m.ops[t].kind.is_tree(tree::Op::Yield))
+        });
+        if !ends_in_yield {
+            return false;
+        }
+        let Some(term) = rewrite::inline_region_before(m, region, op, &[]) else {
+            return false;
+        };
+        let values = m.ops[term].operands.to_vec();
+        rewrite::replace_op(m, op, &values);
+        true
     }
 
     /// True for the ops this pass may merge.
