@@ -43,9 +43,10 @@ use scion_ir::{tree, walk, BlockId, Builder, FuncId, Module, OpId, OpSpec, Value
 use scion_ir::{Pass, PassCx, PassError};
 
 /// The default size limit of an inlined callee, in ops (nested regions included). It takes
-/// the prelude's one-line geometric predicates (`intersects`, `distmin`, of 6 to 15 ops) and
-/// `slab_lane` (about 25), and leaves the larger kernels (`slab_interval` once its lanes are
-/// inlined, `hit_distance`) as calls, which `mem-cse` merges when repeated.
+/// the prelude's geometric predicates (`intersects` and `distmin` on boxes and triangles, 2 to
+/// 10 ops) and `slab_lane` (31), and leaves the larger kernels (`slab_interval`, 50 ops and
+/// more once its lanes are inlined; `hit_distance`, 66) as calls, which `mem-cse` merges when
+/// repeated.
 pub const DEFAULT_MAX_OPS: usize = 32;
 
 /// The pass object.
