@@ -100,16 +100,16 @@ pub enum Codegen {
 
 /// The compiled module: keeps the machine code alive.
 enum Code {
-    Cranelift(scion_clif::JitModule),
+    Cranelift(Box<scion_clif::JitModule>),
     Llvm(scion_llvm::JitModule),
 }
 
 impl Code {
     fn compile(m: &Module, codegen: Codegen) -> Result<Code, String> {
         Ok(match codegen {
-            Codegen::Cranelift => {
-                Code::Cranelift(scion_clif::JitModule::compile(m).map_err(|e| e.to_string())?)
-            }
+            Codegen::Cranelift => Code::Cranelift(Box::new(
+                scion_clif::JitModule::compile(m).map_err(|e| e.to_string())?,
+            )),
             Codegen::Llvm(level) => {
                 Code::Llvm(scion_llvm::JitModule::compile(m, level).map_err(|e| e.to_string())?)
             }
