@@ -1,8 +1,9 @@
 //! Differential tests of the lowering to `lo` and of the Cranelift JIT: the prelude's geometric
 //! functions (`hit_distance`, the slab test, `closest_point` on boxes and triangles, the
 //! triangle-triangle separating-axis test) give bit-identical results in the `tree`
-//! interpreter, the `lo` interpreter (after `mem-to-lo`) and the JIT-compiled code, on random
-//! inputs rich in NaN (with payloads), signed zeros, infinities and subnormals.
+//! interpreter, the `lo` interpreter (after `mem-to-lo`) and the JIT-compiled code (Cranelift,
+//! and LLVM at -O0 and -O3), on random inputs rich in NaN (with payloads), signed zeros,
+//! infinities and subnormals.
 
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
@@ -120,7 +121,13 @@ fn special_f32() -> impl Strategy<Value = f32> {
     ]
 }
 
-fn check_all(tree: &Module, lo: &Module, jit: &JitModule, floats: &[f32]) -> Result<(), String> {
+fn check_all(
+    tree: &Module,
+    lo: &Module,
+    jit: &JitModule,
+    llvm: &[&scion_llvm::JitModule],
+    floats: &[f32],
+) -> Result<(), String> {
     for &name in FUNCS {
         let f = tree.func_by_name(name).ok_or("missing function")?;
         let mut src = floats.iter().copied().cycle();
@@ -152,12 +159,25 @@ fn check_all(tree: &Module, lo: &Module, jit: &JitModule, floats: &[f32]) -> Res
                 "{name}({flat:?}): tree {want_flat:?} but JIT {jit_out:?}"
             ));
         }
+        for l in llvm {
+            let out = l
+                .call(name, &flat)
+                .map_err(|e| format!("{name}: llvm: {e}"))?;
+            if keys(&want_flat) != keys(&out) {
+                return Err(format!(
+                    "{name}({:x?}): tree {:x?} but LLVM {:x?}",
+                    keys(&flat),
+                    keys(&want_flat),
+                    keys(&out)
+                ));
+            }
+        }
     }
     Ok(())
 }
 
 #[test]
-fn prelude_functions_agree_in_tree_lo_and_jit() {
+fn prelude_functions_agree_in_tree_lo_cranelift_and_llvm() {
     let tree = tree_module();
     let (lo, skipped) = lower_module(&tree, false).expect("lowers");
     assert!(skipped.is_empty());
@@ -167,13 +187,15 @@ fn prelude_functions_agree_in_tree_lo_and_jit() {
     scion_compiler::passes::lo_inline::run(&mut inlined, 48);
     scion_ir::verify(&inlined).expect("inlined lo verifies");
     let jit = JitModule::compile(&inlined).expect("compiles");
+    let llvm0 = scion_llvm::JitModule::compile(&inlined, 0).expect("llvm -O0 compiles");
+    let llvm3 = scion_llvm::JitModule::compile(&inlined, 3).expect("llvm -O3 compiles");
     let cases = if cfg!(debug_assertions) { 300 } else { 3000 };
     let mut runner = TestRunner::new(Config {
         cases,
         ..Config::default()
     });
     let result = runner.run(&prop::collection::vec(special_f32(), 24), |floats| {
-        check_all(&tree, &lo, &jit, &floats).map_err(TestCaseError::fail)
+        check_all(&tree, &lo, &jit, &[&llvm0, &llvm3], &floats).map_err(TestCaseError::fail)
     });
     if let Err(e) = result {
         panic!("{e}");
@@ -217,7 +239,8 @@ fn a_real_hit_is_found_by_every_engine() {
     args.iter().for_each(|a| flatten(a, &mut flat));
     let out = jit.call("t_hit", &flat).unwrap();
     assert!(matches!(out[0], Val::F32(t) if t == 1.0), "{out:?}");
-    check_all(&tree, &lo, &jit, &floats).unwrap();
+    let llvm = scion_llvm::JitModule::compile(&lo, 2).expect("llvm compiles");
+    check_all(&tree, &lo, &jit, &[&llvm], &floats).unwrap();
 }
 
 /// Integer intrinsics and conversions on every width: bit counts, shifts, division (including

@@ -2,8 +2,9 @@
 //! generator of scion-ir's own property tests: arithmetic on every scalar type with special
 //! float values, `if` with yields and early returns, `foreach`, calls, tuples, vectors, records,
 //! references). Every function that lowers must verify, compile, and give the `tree`
-//! interpreter's results bit for bit, in the `lo` interpreter and as machine code, including
-//! what it leaves in its `mut` cells.
+//! interpreter's results bit for bit, in the `lo` interpreter and as machine code from
+//! Cranelift and from LLVM (`scion-llvm`'s JIT at -O2), including what it leaves in its `mut`
+//! cells.
 
 #[path = "../../dialects/tests/common/mod.rs"]
 mod common;
@@ -112,6 +113,8 @@ fn check_seed(seed: u64) -> Result<usize, String> {
     scion_ir::verify(&inlined).map_err(|e| format!("inlined lo does not verify: {e:?}"))?;
     let jit = JitModule::compile_with(&inlined, &[("ext", ext as *const u8)])
         .map_err(|e| format!("{e}\n{}", scion_ir::print_module(&inlined)))?;
+    let llvm = scion_llvm::JitModule::compile_with(&inlined, 2, &[("ext", ext as *const u8)])
+        .map_err(|e| format!("{e}\n{}", scion_ir::print_module(&inlined)))?;
     let mut rng = common::Rng(seed.rotate_left(23) | 1);
     let mut compared = 0;
     for &g in &lo.func_order {
@@ -159,6 +162,7 @@ fn check_seed(seed: u64) -> Result<usize, String> {
         let mut li = LoInterp::new(&lo);
         li.define_extern("ext", Box::new(|a: &[Val]| Ok(vec![a[0].clone()])));
         let mut host_cells: Vec<Vec<u64>> = Vec::new();
+        let mut ptr_args = Vec::new();
         let mut lo_cells = Vec::new();
         let (mut largs, mut jargs) = (Vec::new(), Vec::new());
         for (&p, a) in params.iter().zip(&args) {
@@ -174,6 +178,7 @@ fn check_seed(seed: u64) -> Result<usize, String> {
                     }
                     host_cells.push(words);
                     let ptr = host_cells.last_mut().unwrap().as_mut_ptr() as u64;
+                    ptr_args.push(jargs.len());
                     jargs.push(Val::Int(i128::from(ptr), IntTy::U64));
                 }
                 _ => {
@@ -190,11 +195,22 @@ fn check_seed(seed: u64) -> Result<usize, String> {
                 scion_ir::print_module(&lo)
             )
         })?;
+        // LLVM gets its own copy of the cells.
+        let mut llvm_cells = host_cells.clone();
+        let mut llvm_args = jargs.clone();
+        for (&i, cell) in ptr_args.iter().zip(llvm_cells.iter_mut()) {
+            llvm_args[i] = Val::Int(i128::from(cell.as_mut_ptr() as u64), IntTy::U64);
+        }
         let jit_out = jit.call(&name, &jargs).map_err(|e| e.to_string())?;
+        let llvm_out = llvm.call(&name, &llvm_args).map_err(|e| e.to_string())?;
         let keys = |v: &[Val]| v.iter().map(key).collect::<Vec<_>>();
-        if keys(&lo_out) != keys(&want_flat) || keys(&jit_out) != keys(&want_flat) {
+        if keys(&lo_out) != keys(&want_flat)
+            || keys(&jit_out) != keys(&want_flat)
+            || keys(&llvm_out) != keys(&want_flat)
+        {
             return Err(format!(
-                "@{name}({args:?}): tree {want_flat:?}, lo {lo_out:?}, jit {jit_out:?}\n{}\n{}",
+                "@{name}({args:?}): tree {want_flat:?}, lo {lo_out:?}, jit {jit_out:?}, \
+                 llvm {llvm_out:?}\n{}\n{}",
                 scion_ir::print_module(&m),
                 scion_ir::print_module(&lo)
             ));
@@ -208,12 +224,16 @@ fn check_seed(seed: u64) -> Result<usize, String> {
         for (c, (_, inner, _)) in cells.iter().zip(&lo_cells) {
             want_bytes.push(encode(&m, *inner, it.read(c).unwrap()));
         }
-        let jit_bytes: Vec<Vec<u8>> = host_cells
-            .iter()
-            .zip(&lo_cells)
-            .map(|(w, (_, _, len))| w.iter().flat_map(|x| x.to_le_bytes()).take(*len).collect())
-            .collect();
-        if lo_bytes != want_bytes || jit_bytes != want_bytes {
+        let bytes_of = |cells: &[Vec<u64>]| -> Vec<Vec<u8>> {
+            cells
+                .iter()
+                .zip(&lo_cells)
+                .map(|(w, (_, _, len))| w.iter().flat_map(|x| x.to_le_bytes()).take(*len).collect())
+                .collect()
+        };
+        let jit_bytes = bytes_of(&host_cells);
+        let llvm_bytes = bytes_of(&llvm_cells);
+        if lo_bytes != want_bytes || jit_bytes != want_bytes || llvm_bytes != want_bytes {
             return Err(format!(
                 "@{name}: mut cells differ\n{}",
                 scion_ir::print_module(&m)
@@ -225,7 +245,7 @@ fn check_seed(seed: u64) -> Result<usize, String> {
 }
 
 #[test]
-fn random_modules_agree_in_tree_lo_and_jit() {
+fn random_modules_agree_in_tree_lo_cranelift_and_llvm() {
     let n: usize = std::env::var("SCION_LOWER_SEEDS")
         .ok()
         .and_then(|s| s.parse().ok())

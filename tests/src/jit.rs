@@ -107,9 +107,10 @@ enum Code {
 impl Code {
     fn compile(m: &Module, codegen: Codegen) -> Result<Code, String> {
         Ok(match codegen {
-            Codegen::Cranelift => Code::Cranelift(Box::new(
-                scion_clif::JitModule::compile(m).map_err(|e| e.to_string())?,
-            )),
+            Codegen::Cranelift => {
+                let jit = scion_clif::JitModule::compile(m).map_err(|e| e.to_string())?;
+                Code::Cranelift(Box::new(jit))
+            }
             Codegen::Llvm(level) => {
                 Code::Llvm(scion_llvm::JitModule::compile(m, level).map_err(|e| e.to_string())?)
             }

@@ -117,7 +117,18 @@ impl JitModule {
                 }
                 .map_err(|e| LlvmError(e.to_string()))
             };
+            let multi = translate::results_struct(cx, m, f).map_err(LlvmError)?;
             let mut vals: Vec<BasicMetadataValueEnum> = Vec::new();
+            let out = match multi {
+                Some(st) => {
+                    let p = builder
+                        .build_alloca(st, "results")
+                        .map_err(|e| LlvmError(e.to_string()))?;
+                    vals.push(p.into());
+                    Some((p, st))
+                }
+                None => None,
+            };
             for (i, &p) in m.funcs[f].params.iter().enumerate() {
                 let t = llvm_type(cx, m, p).map_err(LlvmError)?;
                 let at = slot(args, i)?;
@@ -127,19 +138,25 @@ impl JitModule {
             let call = builder
                 .build_call(callee, &vals, "")
                 .map_err(|e| LlvmError(e.to_string()))?;
-            if let ValueKind::Basic(v) = call.try_as_basic_value() {
-                let outs: Vec<BasicValueEnum> = if m.funcs[f].results.len() == 1 {
-                    vec![v]
-                } else {
-                    (0..m.funcs[f].results.len() as u32)
-                        .map(|i| builder.build_extract_value(v.into_struct_value(), i, ""))
-                        .collect::<Result<_, _>>()
-                        .map_err(|e| LlvmError(e.to_string()))?
-                };
-                for (i, o) in outs.into_iter().enumerate() {
-                    let at = slot(res, i)?;
-                    store_slot(&builder, cx, o, at)?;
-                }
+            let outs: Vec<BasicValueEnum> = match (out, call.try_as_basic_value()) {
+                (Some((p, st)), _) => (0..st.count_fields())
+                    .map(|i| {
+                        let at = builder.build_struct_gep(st, p, i, "")?;
+                        let ty = st.get_field_type_at_index(i).unwrap_or(cx.i8_type().into());
+                        builder.build_load(ty, at, "")
+                    })
+                    .collect::<Result<_, _>>()
+                    .map_err(|e| LlvmError(e.to_string()))?,
+                (None, ValueKind::Basic(v)) if m.funcs[f].results.len() == 2 => (0..2)
+                    .map(|i| builder.build_extract_value(v.into_struct_value(), i, ""))
+                    .collect::<Result<_, _>>()
+                    .map_err(|e| LlvmError(e.to_string()))?,
+                (None, ValueKind::Basic(v)) => vec![v],
+                (None, ValueKind::Instruction(_)) => Vec::new(),
+            };
+            for (i, o) in outs.into_iter().enumerate() {
+                let at = slot(res, i)?;
+                store_slot(&builder, cx, o, at)?;
             }
             builder
                 .build_return(None)
@@ -205,6 +222,9 @@ impl JitModule {
     }
 
     /// The machine-code address of `@name` (C calling convention of the host), if defined.
+    /// A function with two results returns them as a struct of two (in two registers); one
+    /// with more takes the address of a struct of them (C layout) as a hidden first parameter
+    /// and returns nothing.
     pub fn get(&self, name: &str) -> Option<*const u8> {
         self.entries.get(name).map(|e| e.func as *const u8)
     }

@@ -4,7 +4,12 @@
 //! Types: `i1` is LLVM `i1` (a byte holding 0 or 1 in memory); integers keep their width and
 //! their signedness picks `sdiv`/`udiv`, `ashr`/`lshr`, signed or unsigned compares and
 //! extensions; `ptr` is the opaque `ptr` of address space 0 (on NVPTX the generic space, which
-//! covers global, local and shared memory). Several results are returned as a literal struct.
+//! covers global, local and shared memory). Two results are returned as a literal struct (in
+//! two registers). More than two are returned through memory: the function gets a hidden first
+//! parameter, the address of a caller-allocated struct of the results ([`results_struct`]),
+//! and returns `void`. (A first-class struct return would put a third `f32` result in x87's
+//! `st(0)` on x86-64, which quiets signaling NaNs; after inlining, SROA removes the memory
+//! traffic.)
 //!
 //! Float semantics are those of `scion-clif` and the interpreters, bit for bit: no fast-math
 //! flags (so LLVM never contracts `a*b+c`; `llvm.fma` only for `lo.fma`); a NaN produced by
@@ -12,7 +17,8 @@
 //! observed ([`scion_ir::lo::nan`]: not when its only uses are such ops or compares, which see
 //! only whether it is a NaN); `min`/`max` are
 //! compare-and-select (minNum/maxNum, first operand on ties, never `llvm.minnum`, whose zero
-//! and NaN-payload cases are looser); `rem` is `frem` (C `fmod`); float-to-int casts are the
+//! and NaN-payload cases are looser); `rem` is `frem` (C `fmod`; an error on NVPTX, whose
+//! `frem` is not exact); float-to-int casts are the
 //! saturating `llvm.fpto[su]i.sat`; `next_up`/`next_down` step the bit pattern (the portable
 //! sequence: NVVM's directed-rounding intrinsics round an *operation*, they cannot step a
 //! given value, so they would not be bit-identical to the interpreters' `next_up`). Integer
@@ -79,6 +85,24 @@ pub fn int_type(cx: &Context, bits: u32) -> inkwell::types::IntType<'_> {
     }
 }
 
+/// The struct of `f`'s results when it has more than two (returned through a hidden first
+/// pointer parameter), else `None`.
+pub fn results_struct<'c>(
+    cx: &'c Context,
+    m: &Module,
+    f: FuncId,
+) -> R<Option<inkwell::types::StructType<'c>>> {
+    let results = &m.funcs[f].results;
+    if results.len() <= 2 {
+        return Ok(None);
+    }
+    let tys = results
+        .iter()
+        .map(|&r| llvm_type(cx, m, r))
+        .collect::<R<Vec<_>>>()?;
+    Ok(Some(cx.struct_type(&tys, false)))
+}
+
 /// True when some function of `m` carries the `export` attribute: then every other function
 /// gets internal linkage (design note `backends.md` §1).
 pub fn has_exports(m: &Module) -> bool {
@@ -122,20 +146,20 @@ pub fn translate<'c>(
     let mut funcs = HashMap::new();
     for (i, &f) in m.func_order.iter().enumerate() {
         let func = &m.funcs[f];
-        let params = func
-            .params
-            .iter()
-            .map(|&p| llvm_type(cx, m, p).map(BasicMetadataTypeEnum::from))
-            .collect::<R<Vec<_>>>()?;
-        let results = func
-            .results
-            .iter()
-            .map(|&r| llvm_type(cx, m, r))
-            .collect::<R<Vec<_>>>()?;
-        let fty = match results.as_slice() {
-            [] => cx.void_type().fn_type(&params, false),
-            [one] => one.fn_type(&params, false),
-            many => cx.struct_type(many, false).fn_type(&params, false),
+        let multi = results_struct(cx, m, f)?;
+        let mut params: Vec<BasicMetadataTypeEnum> = Vec::new();
+        if multi.is_some() {
+            params.push(cx.ptr_type(Default::default()).into());
+        }
+        for &p in &func.params {
+            params.push(llvm_type(cx, m, p)?.into());
+        }
+        let fty = match func.results.as_slice() {
+            [one] => llvm_type(cx, m, *one)?.fn_type(&params, false),
+            [a, b] => cx
+                .struct_type(&[llvm_type(cx, m, *a)?, llvm_type(cx, m, *b)?], false)
+                .fn_type(&params, false),
+            _ => cx.void_type().fn_type(&params, false),
         };
         let linkage = if exports && !m.is_declaration(f) && func.attrs.get("export").is_none() {
             Linkage::Internal
@@ -168,6 +192,7 @@ pub fn translate<'c>(
             target,
             fv,
             funcs: &funcs,
+            ret: results_struct(cx, m, f)?,
             vals: HashMap::new(),
             blocks: HashMap::new(),
             phis: HashMap::new(),
@@ -218,6 +243,8 @@ struct Fn<'a, 'c> {
     target: Target,
     fv: FunctionValue<'c>,
     funcs: &'a HashMap<String, FunctionValue<'c>>,
+    /// The struct of this function's results when it returns several (through parameter 0).
+    ret: Option<inkwell::types::StructType<'c>>,
     vals: HashMap<ValueId, BasicValueEnum<'c>>,
     blocks: HashMap<BlockId, BasicBlock<'c>>,
     phis: HashMap<BlockId, Vec<PhiValue<'c>>>,
@@ -260,7 +287,7 @@ impl<'c> Fn<'_, 'c> {
                     phis.push(phi);
                 }
             } else {
-                for (&a, p) in m.blocks[lb].args.iter().zip(self.fv.get_param_iter()) {
+                for (&a, p) in m.blocks[lb].args.iter().zip(self.params()) {
                     self.vals.insert(a, p);
                 }
             }
@@ -269,7 +296,7 @@ impl<'c> Fn<'_, 'c> {
         if let Some(pro) = prologue {
             self.b.position_at_end(pro);
             let target = self.blocks[&lo_entry];
-            for (phi, p) in self.phis[&lo_entry].iter().zip(self.fv.get_param_iter()) {
+            for (phi, p) in self.phis[&lo_entry].iter().zip(self.params()) {
                 phi.add_incoming(&[(&p, pro)]);
             }
             self.b.build_unconditional_branch(target).map_err(be)?;
@@ -281,6 +308,28 @@ impl<'c> Fn<'_, 'c> {
             }
         }
         Ok(())
+    }
+
+    /// The LLVM parameters that are `lo` parameters (without the hidden results pointer).
+    fn params(&self) -> impl Iterator<Item = BasicValueEnum<'c>> {
+        self.fv
+            .get_param_iter()
+            .skip(usize::from(self.ret.is_some()))
+    }
+
+    /// An `alloca` of `ty` at the start of the entry block.
+    fn entry_alloca(&self, ty: BasicTypeEnum<'c>, align: u32) -> R<PointerValue<'c>> {
+        let entry = self.entry.ok_or("no entry block")?;
+        let at = self.cx.create_builder();
+        match entry.get_first_instruction() {
+            Some(i) => at.position_before(&i),
+            None => at.position_at_end(entry),
+        }
+        let slot = at.build_alloca(ty, "slot").map_err(be)?;
+        if let Some(i) = slot.as_instruction_value() {
+            i.set_alignment(align).map_err(be)?;
+        }
+        Ok(slot)
     }
 
     fn v(&self, x: ValueId) -> R<BasicValueEnum<'c>> {
@@ -417,6 +466,15 @@ impl<'c> Fn<'_, 'c> {
                     }
                     _ => return Err("bad constant".into()),
                 })
+            }
+            L::Rem if is_float && self.target == Target::Nvptx64 => {
+                // NVPTX lowers `frem` to `x - trunc(x / y) * y`, which is not C `fmod` (it
+                // rounds the quotient): rejected rather than silently inexact.
+                return Err(
+                    "float `lo.rem` (C fmod) has no exact lowering on nvptx64 (LLVM's frem \
+                     rounds the quotient)"
+                        .into(),
+                );
             }
             L::Add | L::Sub | L::Mul | L::Div | L::Rem if is_float => {
                 let (x, y) = (flt(0), flt(1));
@@ -560,19 +618,8 @@ impl<'c> Fn<'_, 'c> {
             L::StackSlot => {
                 let size = o.int_attr("size").unwrap_or(1).max(1) as u32;
                 let align = o.int_attr("align").unwrap_or(8).max(1) as u32;
-                let entry = self.entry.ok_or("no entry block")?;
-                let at = self.cx.create_builder();
-                match entry.get_first_instruction() {
-                    Some(i) => at.position_before(&i),
-                    None => at.position_at_end(entry),
-                }
-                let slot = at
-                    .build_alloca(self.cx.i8_type().array_type(size), "slot")
-                    .map_err(be)?;
-                if let Some(i) = slot.as_instruction_value() {
-                    i.set_alignment(align).map_err(be)?;
-                }
-                Some(slot.into())
+                let ty = self.cx.i8_type().array_type(size).into();
+                Some(self.entry_alloca(ty, align)?.into())
             }
             L::Call => {
                 let callee = o
@@ -583,13 +630,32 @@ impl<'c> Fn<'_, 'c> {
                     .funcs
                     .get(callee)
                     .ok_or_else(|| format!("unknown callee @{callee}"))?;
-                let cargs: Vec<BasicMetadataValueEnum> = args.iter().map(|&a| a.into()).collect();
+                let fid = m.func_by_name(callee).ok_or("unknown callee")?;
+                let multi = results_struct(self.cx, m, fid)?;
+                let mut cargs: Vec<BasicMetadataValueEnum> = Vec::new();
+                let out = match multi {
+                    Some(st) => {
+                        let p = self.entry_alloca(st.into(), 8)?;
+                        cargs.push(p.into());
+                        Some((p, st))
+                    }
+                    None => None,
+                };
+                cargs.extend(args.iter().map(|&a| BasicMetadataValueEnum::from(a)));
                 let call = b.build_call(f, &cargs, "").map_err(be)?;
                 call.set_call_convention(f.get_call_conventions());
-                if let inkwell::values::ValueKind::Basic(v) = call.try_as_basic_value() {
-                    if o.results.len() == 1 {
-                        self.vals.insert(o.results[0], v);
-                    } else {
+                match (out, call.try_as_basic_value()) {
+                    (Some((p, st)), _) => {
+                        for (i, &r) in o.results.iter().enumerate() {
+                            let at = b.build_struct_gep(st, p, i as u32, "").map_err(be)?;
+                            let ty = st
+                                .get_field_type_at_index(i as u32)
+                                .ok_or("results struct too short")?;
+                            let v = b.build_load(ty, at, "").map_err(be)?;
+                            self.vals.insert(r, v);
+                        }
+                    }
+                    (None, inkwell::values::ValueKind::Basic(v)) if o.results.len() == 2 => {
                         for (i, &r) in o.results.iter().enumerate() {
                             let e = b
                                 .build_extract_value(v.into_struct_value(), i as u32, "")
@@ -597,6 +663,12 @@ impl<'c> Fn<'_, 'c> {
                             self.vals.insert(r, e);
                         }
                     }
+                    (None, inkwell::values::ValueKind::Basic(v)) => {
+                        if let Some(&r) = o.results.first() {
+                            self.vals.insert(r, v);
+                        }
+                    }
+                    (None, inkwell::values::ValueKind::Instruction(_)) => {}
                 }
                 None
             }
@@ -624,10 +696,22 @@ impl<'c> Fn<'_, 'c> {
                 None
             }
             L::Return => {
-                match args.as_slice() {
-                    [] => b.build_return(None),
-                    [one] => b.build_return(Some(one)),
-                    many => b.build_aggregate_return(many),
+                match (self.ret, args.as_slice()) {
+                    (Some(st), many) => {
+                        let p = self
+                            .fv
+                            .get_nth_param(0)
+                            .ok_or("no results pointer")?
+                            .into_pointer_value();
+                        for (i, v) in many.iter().enumerate() {
+                            let at = b.build_struct_gep(st, p, i as u32, "").map_err(be)?;
+                            b.build_store(at, *v).map_err(be)?;
+                        }
+                        b.build_return(None)
+                    }
+                    (None, [one]) => b.build_return(Some(one)),
+                    (None, [_, _]) => b.build_aggregate_return(&args),
+                    (None, _) => b.build_return(None),
                 }
                 .map_err(be)?;
                 None

@@ -4,6 +4,8 @@
 //! Runs `mem-to-lo` (partial: functions that still need a layout, such as traversals of a sum
 //! ADT before destructor specialization exists for the input, are left out) and then
 //! `recursion-to-stack` with `--stack-size`, then `lo-inline`, and prints the `lo` module or its Cranelift IR.
+//! `--emit=llvm|asm|obj|ptx` use [`lower_to_lo`] the same way and hand the module to the LLVM
+//! backend (`driver::codegen`).
 
 use super::cli::Emit;
 use crate::passes;
