@@ -161,6 +161,14 @@ pub struct TraceArgs {
     /// `--device gpu`: the GPU architecture to compile for (`sm_XX`; default sm_90).
     #[arg(long, value_name = "sm_XX")]
     pub cpu: Option<String>,
+    /// The compiler's tree/mem -O level for `--backend jit|llvm` (scionc -O0..-O3; default 3;
+    /// LLVM's own pipeline stays at -O3).
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(0..=3))]
+    pub opt_level: u8,
+    /// `--backend jit|llvm`: leave out the tree/mem (DSL) optimizations of the -O level
+    /// (scionc --no-dsl-opt: mem-inline, const-fold, mem-cse, dce), to measure what they gain.
+    #[arg(long)]
+    pub no_dsl_opt: bool,
 }
 
 fn main() -> ExitCode {

@@ -22,7 +22,7 @@ use scion_runtime::scene::{load_obj, Scene};
 use scion_runtime::timing::{measure_with, Timing, TimingPlan};
 use scion_tests::backend::{Backend, BackendKind};
 use scion_tests::contract::{LayoutCode, Packed};
-use scion_tests::jit::{Codegen, JitClosestHit, JIT_OPT_LEVEL};
+use scion_tests::jit::{Codegen, JitClosestHit};
 use scion_tests::mem_interp::{MemInterpBackend, LIBRARY_LAYOUTS};
 use std::time::{Duration, Instant};
 
@@ -57,6 +57,9 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     if args.stack_size.is_some() && !compiled {
         eprintln!("scion: note: --stack-size is used by --backend jit|llvm only");
     }
+    if (args.no_dsl_opt || args.opt_level != 3) && !compiled {
+        eprintln!("scion: note: --opt-level and --no-dsl-opt are used by --backend jit|llvm only");
+    }
     if args.layout.is_some() && !uses_layout {
         eprintln!("scion: note: --layout is used by --backend jit|llvm|mem-interp only; this backend traces the logical tree");
     }
@@ -66,12 +69,12 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         BackendArg::Interp => Engine::Free(instantiate(BackendKind::Interp(1), args)?),
         BackendArg::MemInterp => Engine::Mem(Box::new(mem_backend(layout, args.threads)?)),
         BackendArg::Jit => Engine::Layout {
-            code: jit_code(layout, args.stack_size, Codegen::Cranelift)?,
+            code: jit_code(layout, args, Codegen::Cranelift)?,
             driver: BatchDriver::new(args.threads).map_err(CliError::new)?,
             engine: "jit",
         },
         BackendArg::Llvm => Engine::Layout {
-            code: jit_code(layout, args.stack_size, Codegen::Llvm(3))?,
+            code: jit_code(layout, args, Codegen::Llvm(3))?,
             driver: BatchDriver::new(args.threads).map_err(CliError::new)?,
             engine: "llvm -O3",
         },
@@ -306,11 +309,12 @@ fn instantiate(kind: BackendKind, args: &TraceArgs) -> Result<Box<dyn Backend>, 
 }
 
 /// The closest-hit code specialized to the library layout `layout` (a `--layout` name) and
-/// compiled by `codegen`, with a traversal stack of `stack_size` entries. The layout name is
-/// checked first, so a typo is reported as such.
+/// compiled by `codegen`, after the tree/mem passes of `args.opt_level` (without the DSL
+/// optimizations with `--no-dsl-opt`), with a traversal stack of `args.stack_size` entries.
+/// The layout name is checked first, so a typo is reported as such.
 fn jit_code(
     layout: &str,
-    stack_size: Option<u32>,
+    args: &TraceArgs,
     codegen: Codegen,
 ) -> Result<Box<dyn LayoutCode>, CliError> {
     let stem = layout.replace('-', "_");
@@ -325,8 +329,15 @@ fn jit_code(
         });
     };
     progress(&format!("compiling closest hit for layout `{name}`"));
-    let code = JitClosestHit::compile_with(stem, name, stack_size, JIT_OPT_LEVEL, codegen)
-        .map_err(|e| CliError::new(format!("cannot compile closest hit for `{layout}`: {e}")))?;
+    let code = JitClosestHit::compile_full(
+        stem,
+        name,
+        args.stack_size,
+        args.opt_level,
+        !args.no_dsl_opt,
+        codegen,
+    )
+    .map_err(|e| CliError::new(format!("cannot compile closest hit for `{layout}`: {e}")))?;
     eprintln!(
         "scion: compiled in {:.3} s",
         code.compile_time.as_secs_f64()

@@ -7,7 +7,7 @@
 //! [`BackendKind::instantiate`].
 
 use crate::contract::LayoutBackend;
-use crate::jit::{Codegen, JitClosestHit};
+use crate::jit::{Codegen, JitClosestHit, JIT_OPT_LEVEL};
 use crate::mem_interp::LIBRARY_LAYOUTS;
 use crate::oracle::ClosestHit;
 use scion_runtime::batch::BatchDriver;
@@ -83,8 +83,13 @@ impl BackendKind {
                     .iter()
                     .find(|l| l.0 == stem)
                     .ok_or_else(|| format!("no library layout `{stem}`"))?;
-                let code =
-                    JitClosestHit::compile_with(stem, layout, Some(stack), 2, Codegen::Llvm(3))?;
+                let code = JitClosestHit::compile_with(
+                    stem,
+                    layout,
+                    Some(stack),
+                    JIT_OPT_LEVEL,
+                    Codegen::Llvm(3),
+                )?;
                 Box::new(Compiled {
                     name: format!("llvm-O3-{layout}"),
                     inner: LayoutBackend::new(Box::new(code), threads)?,

@@ -1,7 +1,8 @@
 //! The JIT of a layout: `closest_hit.scion` specialized to a library layout by the normal
-//! pipeline (`destructor-specialize`, `constructor-specialize`, the `-O1` passes, `mem-to-lo`,
+//! pipeline (`destructor-specialize`, `constructor-specialize`, the `-O3` passes, `mem-to-lo`,
 //! `recursion-to-stack`, `lo-inline`), compiled by Cranelift (`scion-clif`) or LLVM
-//! (`scion-llvm`, [`Codegen`]) and run through the runtime contract of docs/design/specialization.md §3 as a [`LayoutCode`]. Input: a library
+//! (`scion-llvm`, [`Codegen`]) and run through the runtime contract of
+//! docs/design/specialization.md §3 as a [`LayoutCode`]. Input: a library
 //! layout (file stem and layout name) and a stack size; output: native `@L.sizes`, `@L.build`
 //! and the batch entry.
 //!
@@ -23,7 +24,7 @@ use crate::contract::{BufferSpec, LayoutCode, LogicalTreeView, STATUS_OK};
 use crate::mem_interp::layout_source;
 use crate::oracle::{CLOSEST_HIT, CLOSEST_HIT_NAME};
 use scion_compiler::driver::cli::Emit;
-use scion_compiler::driver::pipelines::for_level;
+use scion_compiler::driver::pipelines::for_level_with;
 use scion_compiler::driver::session::{PRELUDE, PRELUDE_NAME};
 use scion_compiler::frontend::{self, Frontend, PassOptions};
 use scion_ir::diag::SourceMap;
@@ -154,9 +155,9 @@ unsafe impl Send for JitClosestHit {}
 // SAFETY: as above; the only mutable state (`roots`) is behind a mutex.
 unsafe impl Sync for JitClosestHit {}
 
-/// The `-O` level [`JitClosestHit::compile`] uses: 2, so `mem-cse` merges the layout's
-/// redundant loads before lowering.
-pub const JIT_OPT_LEVEL: u8 = 2;
+/// The `-O` level [`JitClosestHit::compile`] uses: 3, the full DSL pipeline (`mem-inline`,
+/// `const-fold`, `mem-cse`, `dce`) before lowering.
+pub const JIT_OPT_LEVEL: u8 = 3;
 
 impl JitClosestHit {
     /// Compiles closest hit for the library layout in file `stem` (`pbrt`, `ptr`, ...) named
@@ -189,6 +190,19 @@ impl JitClosestHit {
         opt_level: u8,
         codegen: Codegen,
     ) -> Result<JitClosestHit, String> {
+        JitClosestHit::compile_full(stem, layout, stack_size, opt_level, true, codegen)
+    }
+
+    /// As [`JitClosestHit::compile_with`]; `dsl_opt: false` leaves out the DSL optimizations of
+    /// the level (`scionc --no-dsl-opt`), the baseline of `scripts/bench-dslopt.sh`.
+    pub fn compile_full(
+        stem: &str,
+        layout: &str,
+        stack_size: Option<u32>,
+        opt_level: u8,
+        dsl_opt: bool,
+        codegen: Codegen,
+    ) -> Result<JitClosestHit, String> {
         let start = Instant::now();
         let text = layout_source(stem).ok_or_else(|| format!("no library layout `{stem}`"))?;
         let mut sources = SourceMap::new();
@@ -206,7 +220,7 @@ impl JitClosestHit {
             "destructor-specialize".to_string(),
             "constructor-specialize".to_string(),
         ];
-        pipeline.extend(for_level(opt_level));
+        pipeline.extend(for_level_with(opt_level, dsl_opt));
         let popts = PassOptions {
             layout: Some(layout.to_string()),
             stack_size,

@@ -31,6 +31,8 @@ const BACKENDS: &[BackendKind] = &[
     BackendKind::Reference,
     BackendKind::Interp(0),
     BackendKind::Interp(1),
+    // The full DSL pipeline (mem-inline, const-fold, mem-cse, dce) at the tree level.
+    BackendKind::Interp(3),
     // LLVM's JIT at -O3, on the layouts of the Cranelift rows below (the same stack).
     BackendKind::Llvm {
         stem: "pbrt",

@@ -4,7 +4,9 @@
 //! `sshr`/`ushr`, signed or unsigned compares and extensions); `ptr` is the target's pointer
 //! type. Float semantics match the interpreters bit for bit: arithmetic rounds to nearest in
 //! the value's own precision; a NaN produced by `add sub mul div rem` is replaced by the
-//! canonical quiet NaN (as [`scion_ir::tree::scalar`] does); Cranelift never contracts `a*b+c`,
+//! canonical quiet NaN (as [`scion_ir::tree::scalar`] does) wherever its bits can be observed
+//! ([`scion_ir::lo::nan`]: not when every use is another such op or a compare, which see only
+//! whether it is a NaN); Cranelift never contracts `a*b+c`,
 //! and `fma` is emitted only for `lo.fma`; `min`/`max` are compare-and-select (Cranelift's
 //! `fmin`/`fmax` propagate NaN, `lo` wants the non-NaN operand); `rem` calls the C library's
 //! `fmodf`/`fmod`; `next_up`/`next_down` step the bit pattern. Blocks are translated in reverse
@@ -148,6 +150,7 @@ pub fn translate_func<M: ClModule>(
     let order = rpo(m, body);
     let mut blocks = HashMap::new();
     let mut vals: HashMap<ValueId, ir::Value> = HashMap::new();
+    let blind = scion_ir::lo::nan::payload_blind_results(m, body);
     for (i, &lb) in order.iter().enumerate() {
         let cb = b.create_block();
         if i == 0 {
@@ -172,6 +175,7 @@ pub fn translate_func<M: ClModule>(
                 m,
                 ptr,
                 vals: &mut vals,
+                blind: &blind,
             };
             fx.op(cl, syms, op, &blocks)?;
         }
@@ -186,6 +190,8 @@ struct Fx<'a, 'b> {
     m: &'a Module,
     ptr: ir::Type,
     vals: &'a mut HashMap<ValueId, ir::Value>,
+    /// Float results whose NaN payload nothing observes ([`scion_ir::lo::nan`]).
+    blind: &'a scion_ir::lo::nan::ValueSet,
 }
 
 impl Fx<'_, '_> {
@@ -293,7 +299,11 @@ impl Fx<'_, '_> {
                         self.b.inst_results(call)[0]
                     }
                 };
-                Some(self.canon(r, t))
+                if self.blind.contains(&o.results[0]) {
+                    Some(r)
+                } else {
+                    Some(self.canon(r, t))
+                }
             }
             L::Add => Some(self.b.ins().iadd(args[0], args[1])),
             L::Sub => Some(self.b.ins().isub(args[0], args[1])),

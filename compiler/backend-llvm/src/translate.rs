@@ -13,7 +13,9 @@
 //!
 //! Float semantics are those of `scion-clif` and the interpreters, bit for bit: no fast-math
 //! flags (so LLVM never contracts `a*b+c`; `llvm.fma` only for `lo.fma`); a NaN produced by
-//! `add sub mul div rem` is replaced by the canonical quiet NaN; `min`/`max` are
+//! `add sub mul div rem` is replaced by the canonical quiet NaN wherever its bits can be
+//! observed ([`scion_ir::lo::nan`]: not when its only uses are such ops or compares, which see
+//! only whether it is a NaN); `min`/`max` are
 //! compare-and-select (minNum/maxNum, first operand on ties, never `llvm.minnum`, whose zero
 //! and NaN-payload cases are looser); `rem` is `frem` (C `fmod`; an error on NVPTX, whose
 //! `frem` is not exact); float-to-int casts are the
@@ -195,6 +197,7 @@ pub fn translate<'c>(
             blocks: HashMap::new(),
             phis: HashMap::new(),
             entry: None,
+            blind: scion_ir::lo::nan::payload_blind_results(m, &m.regions[m.funcs[f].body].blocks),
         };
         t.body(f)
             .map_err(|e| format!("@{}: {e}", m.funcs[f].name))?;
@@ -247,6 +250,8 @@ struct Fn<'a, 'c> {
     phis: HashMap<BlockId, Vec<PhiValue<'c>>>,
     /// The LLVM entry block (allocas go to its start).
     entry: Option<BasicBlock<'c>>,
+    /// Float results whose NaN payload nothing observes ([`scion_ir::lo::nan`]).
+    blind: scion_ir::lo::nan::ValueSet,
 }
 
 impl<'c> Fn<'_, 'c> {
@@ -481,7 +486,11 @@ impl<'c> Fn<'_, 'c> {
                     _ => b.build_float_rem(x, y, ""),
                 }
                 .map_err(be)?;
-                Some(self.canon(r)?)
+                if self.blind.contains(&o.results[0]) {
+                    Some(r.into())
+                } else {
+                    Some(self.canon(r)?)
+                }
             }
             L::Add => Some(b.build_int_add(int(0), int(1), "").map_err(be)?.into()),
             L::Sub => Some(b.build_int_sub(int(0), int(1), "").map_err(be)?.into()),

@@ -99,6 +99,9 @@ Examples:
     scionc --emit=check library/layouts/ptr.scion
   Show the pass pipeline of -O2 without running it:
     scionc -O2 --print-pipeline library/algorithms/closest_hit.scion
+  Compare -O3 with and without the DSL optimizations (mem-inline, const-fold, mem-cse, dce):
+    scionc -O3 --emit=mem --layout LinearBVH closest_hit.scion pbrt.scion
+    scionc -O3 --no-dsl-opt --emit=mem --layout LinearBVH closest_hit.scion pbrt.scion
   Run one pass by name on tree IR and print every step:
     scionc --emit=tree --passes=const-fold,dce --print-after-all FILE.scion
   Compile closest-hit for pbrt to an AArch64 object with LLVM at -O3:
@@ -186,6 +189,11 @@ pub struct Options {
     /// Run exactly these passes (comma-separated names) instead of the -O pipeline.
     #[arg(long, value_name = "P1,P2,...", value_delimiter = ',')]
     pub passes: Option<Vec<String>>,
+
+    /// Leave out the tree/mem (DSL) optimizations of the -O level: mem-inline, const-fold,
+    /// mem-cse and dce. The specializations, lowering and backend optimizations stay.
+    #[arg(long, conflicts_with = "passes")]
+    pub no_dsl_opt: bool,
 
     /// Print the pass pipeline that would run, then stop.
     #[arg(long)]

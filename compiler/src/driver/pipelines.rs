@@ -4,6 +4,11 @@
 //! * `-O1` and up: `const-fold` first, so that `dce` sees the operands it made dead.
 //! * `-O2` and up: `mem-cse` between them (after the specializations, which `select` puts
 //!   first), so that `dce` drops the copies it made dead.
+//! * `-O3`: the full DSL pipeline of paper §7.3: `mem-inline` first, so that `mem-cse` sees the
+//!   inlined bodies side by side (the slab tests of `intersects` and `distmin` on one box).
+//! * `--no-dsl-opt`: none of these tree/mem optimizations at any level ([`DSL_PASSES`]); the
+//!   specializations, the lowering and the backend's own optimizations stay. It is the
+//!   baseline of the benchmark of what the DSL optimizations gain (`scripts/bench-dslopt.sh`).
 //! * `--emit=mem` (with `--layout`), and `--emit=lo|clif` with `--layout`:
 //!   `destructor-specialize` and `constructor-specialize` first, then the level's passes
 //!   (`--emit=lo|clif` then lower to `lo` in `driver::lower`). `--emit=header` always
@@ -14,14 +19,26 @@ use super::cli::{Emit, Options};
 use crate::passes;
 use scion_ir::diag::Diagnostic;
 
+/// The tree/mem optimizations (paper §7.3) that `--no-dsl-opt` leaves out.
+pub const DSL_PASSES: &[&str] = &["mem-inline", "const-fold", "mem-cse", "dce"];
+
 /// The passes of optimization level `level`.
 pub fn for_level(level: u8) -> Vec<String> {
     let names: &[&str] = match level {
         0 => &[],
         1 => &["const-fold", "dce"],
-        _ => &["const-fold", "mem-cse", "dce"],
+        2 => &["const-fold", "mem-cse", "dce"],
+        _ => &["mem-inline", "const-fold", "mem-cse", "dce"],
     };
     names.iter().map(|s| s.to_string()).collect()
+}
+
+/// The passes of level `level`, without the DSL optimizations when `dsl_opt` is false.
+pub fn for_level_with(level: u8, dsl_opt: bool) -> Vec<String> {
+    for_level(level)
+        .into_iter()
+        .filter(|n| dsl_opt || !DSL_PASSES.contains(&n.as_str()))
+        .collect()
 }
 
 /// The pipeline the options ask for: `--passes` when given, else the `-O` level's. Unknown
@@ -41,7 +58,7 @@ pub fn select(opts: &Options) -> Result<Vec<String>, Diagnostic> {
                 names.push("destructor-specialize".to_string());
                 names.push("constructor-specialize".to_string());
             }
-            names.extend(for_level(opts.opt_level));
+            names.extend(for_level_with(opts.opt_level, !opts.no_dsl_opt));
             names
         }
     };

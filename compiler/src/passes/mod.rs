@@ -3,12 +3,14 @@
 //!
 //! Generic passes that work on any dialect (`const-fold`, `dce`) come from `scion-ir`; passes
 //! that need the compiler's knowledge of layouts are registered here next to them
-//! ([`tree_to_mem`], [`mem_cse`]) and below them to `lo` ([`mem_to_lo`], [`recursion_to_stack`],
+//! ([`tree_to_mem`], [`mem_inline`], [`mem_cse`]) and below them to `lo` ([`mem_to_lo`], [`recursion_to_stack`],
 //! [`lo_inline`]). Pass order lives in `driver/pipelines.rs` alone.
 
 pub mod lo_inline;
 #[path = "mem/cse.rs"]
 pub mod mem_cse;
+#[path = "mem/inline.rs"]
+pub mod mem_inline;
 pub mod mem_to_lo;
 #[path = "mem/recursion_to_stack.rs"]
 pub mod recursion_to_stack;
@@ -34,8 +36,16 @@ pub fn registry() -> PassRegistry {
         create: || Box::new(tree_to_mem::constructor::ConstructorSpecialize),
     });
     r.register(PassInfo {
+        name: "mem-inline",
+        summary:
+            "inline calls of small non-recursive tree/mem functions (option max-ops, default 32)",
+        input: Level::Any,
+        output: Level::Any,
+        create: || Box::new(mem_inline::MemInline),
+    });
+    r.register(PassInfo {
         name: "mem-cse",
-        summary: "reuse dominating equivalent pure tree/mem ops, layout loads included",
+        summary: "reuse dominating equivalent pure tree/mem ops: layout and cell loads, pure calls",
         input: Level::Any,
         output: Level::Any,
         create: || Box::new(mem_cse::MemCse),
