@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # The main job: trace a real scene (../shared/scenes/bunny.obj, 69,630 triangles) with the
 # library's closest-hit compiled for the pbrt layout (destructor and constructor specialization,
-# lo, Cranelift JIT), check the hits against the runtime's reference traversal, and print the
-# figures (build, pack and trace time, Mrays/s, bytes). Also prints the tree IR of closest-hit.
-# Installs what is missing first. SCION_SCENE and SCION_LAYOUT (pbrt, ptr, pbrt-align16,
-# pbrt-soaos) pick another scene or layout; extra arguments go to the JIT's `scion trace`.
+# lo, then machine code twice: LLVM -O3 and the Cranelift JIT), check the hits of both against
+# the runtime's reference traversal, and print the figures (build, pack and trace time, Mrays/s,
+# bytes). Also prints the tree IR of closest-hit. Installs what is missing first. SCION_SCENE and
+# SCION_LAYOUT (pbrt, ptr, pbrt-align16, pbrt-soaos) pick another scene or layout; extra
+# arguments go to both `scion trace` runs.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh
@@ -16,15 +17,21 @@ target/release/scionc --emit=tree library/algorithms/closest_hit.scion library/l
   > target/demo-closest-hit.tree
 awk '/^func @closest_hit/,/^}/' target/demo-closest-hit.tree | sed -n 1,12p
 echo "   ... (whole module: target/demo-closest-hit.tree)"
-echo "== scion trace: $scene, $layout layout, Cranelift JIT" >&2
-target/release/scion trace --scene "$scene" --layout "$layout" --backend jit --rays primary --n 65536 \
-  -o target/demo-jit.hits "$@"
-echo "== scion trace: the same rays through the runtime's Rust reference" >&2
+echo "== scion trace: the runtime's Rust reference traversal (the hits to match)" >&2
 target/release/scion trace --scene "$scene" --backend reference --rays primary --n 65536 --runs 1 \
   -o target/demo-reference.hits > /dev/null
-if cmp -s target/demo-jit.hits target/demo-reference.hits; then
-  echo "hits: identical to the reference traversal (target/demo-jit.hits)"
-else
-  echo "hits: DIFFER from the reference traversal" >&2
-  exit 1
-fi
+for backend in llvm jit; do
+  case $backend in
+    llvm) what="LLVM -O3 (in-process JIT, host CPU)" ;;
+    jit) what="Cranelift JIT" ;;
+  esac
+  echo "== scion trace: $scene, $layout layout, $what" >&2
+  target/release/scion trace --scene "$scene" --layout "$layout" --backend "$backend" --rays primary \
+    --n 65536 -o "target/demo-$backend.hits" "$@"
+  if cmp -s "target/demo-$backend.hits" target/demo-reference.hits; then
+    echo "hits: identical to the reference traversal (target/demo-$backend.hits)"
+  else
+    echo "hits: DIFFER from the reference traversal ($backend)" >&2
+    exit 1
+  fi
+done

@@ -6,6 +6,7 @@
 #   - LLVM 22 development files (llvm-config, libLLVM, and the Polly, zlib and zstd libraries
 #     llvm-config names): the LLVM backend (compiler/backend-llvm, through inkwell/llvm-sys)
 #     links against them; .cargo/config.toml points llvm-sys at /usr/lib/llvm-22.
+#   - g++ and make: the test suite builds and runs the C++ example (examples/cpp).
 #   - The Rust toolchain is expected on the machine (cargo, rustc); we do not install it.
 set -euo pipefail
 
@@ -17,6 +18,9 @@ need_apt=()
 dpkg -s zlib1g-dev >/dev/null 2>&1 || need_apt+=(zlib1g-dev)
 dpkg -s libzstd-dev >/dev/null 2>&1 || need_apt+=(libzstd-dev)
 command -v python3 >/dev/null || need_apt+=(python3)
+# The C++ example's test (tests/tests/cpp_example.rs) builds examples/cpp with make and g++.
+command -v g++ >/dev/null || need_apt+=(g++)
+command -v make >/dev/null || need_apt+=(make)
 
 if [ ${#need_apt[@]} -gt 0 ]; then
   pkgs=$(printf '%s\n' "${need_apt[@]}" | sort -u | tr '\n' ' ')
