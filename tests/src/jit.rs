@@ -12,11 +12,11 @@
 //! The front end compiles with the entry option ([`PassOptions::entry`]) through
 //! [`frontend::compile`], the call `scionc` makes, and hands back the entries' C signature
 //! ([`EntrySig`]): the layout's buffers (their names, and the header's `SCION_L_BUFFER_ALIGN`,
-//! at least [`BUFFER_ALIGN`], for every buffer) and the query and result records, checked to be the 32-byte
-//! `Ray` and the 8-byte `(f32, u32)` hit record the host passes. The reference type `R` (`u32`
-//! or `ptr`) is the result type of `@scion_L_root`. After `@scion_L_build` the host calls
-//! `@scion_L_root` once and keeps the reference per packed buffer set (keyed by the buffers'
-//! addresses) for the batch calls.
+//! at least [`BUFFER_ALIGN`], for every buffer) and the query and result records, checked to
+//! be the 32-byte `Ray` and the 8-byte `(f32, u32)` hit record the host passes. The reference
+//! type `R` (`u32` or `ptr`) is the result type of `@scion_L_root`. After `@scion_L_build` the
+//! host calls `@scion_L_root` once and keeps the reference per packed buffer set (keyed by the
+//! buffers' addresses) for the batch calls.
 
 #![allow(unsafe_code)]
 
@@ -301,7 +301,7 @@ fn check_entries(m: &Module, sig: &EntrySig) -> Result<bool, String> {
             sig.algorithm, sig.query
         ));
     }
-    if sig.result.size != 8 || types(&sig.result.fields) != [f32t, u32t.clone()] {
+    if sig.result.size != 8 || types(&sig.result.fields) != [f32t, u32t] {
         return Err(format!(
             "`{}`'s result record is not the 8-byte `(f32, u32)` hit: {:?}",
             sig.algorithm, sig.result
@@ -318,7 +318,7 @@ fn check_entries(m: &Module, sig: &EntrySig) -> Result<bool, String> {
             m.funcs[f].results.iter().map(ty).collect(),
         ))
     };
-    let (root_params, root_results) = signature(&sig.layout_fn("root"))?;
+    let (_, root_results) = signature(&sig.layout_fn("root"))?;
     let r = match root_results.as_slice() {
         [t @ (Type::Ptr | Type::Int(IntTy::U32))] => t.clone(),
         other => {
@@ -350,11 +350,7 @@ fn check_entries(m: &Module, sig: &EntrySig) -> Result<bool, String> {
         ),
     ];
     for (name, params, results) in want {
-        let (p, res) = if name == sig.layout_fn("root") {
-            (root_params.clone(), root_results.clone())
-        } else {
-            signature(&name)?
-        };
+        let (p, res) = signature(&name)?;
         if p != params || res != results {
             return Err(format!(
                 "`@{name}` has signature {p:?} -> {res:?}, expected {params:?} -> {results:?}"
