@@ -82,6 +82,9 @@ pub struct CompileResult {
     /// For `--emit=llvm|asm|obj|ptx`: the `lo` module the LLVM backend compiles (the driver
     /// runs the backend with its target options; `output` stays empty).
     pub lo_module: Option<Module>,
+    /// With `--entry`: the C signature of the exported entry points (their records and the
+    /// layout's buffers, as `--emit=header` describes them), once the pipeline has run.
+    pub entry: Option<EntrySig>,
     /// IR dumps and timing reports asked for by the pass options (for standard error).
     pub dumps: String,
 }
@@ -187,6 +190,7 @@ pub fn compile(
         return out;
     }
     keep_reachable(&mut module, fe.inputs);
+    out.entry = entry.clone();
     if matches!(emit, Emit::Llvm | Emit::Asm | Emit::Obj | Emit::Ptx) {
         let entry = entry.as_ref().map(|s| (s, popts.entry_target));
         match crate::driver::lower::lower_with_entries(&mut module, popts.stack_size, entry) {

@@ -658,6 +658,7 @@ impl Fx<'_, '_> {
 mod tests {
     use super::*;
     use cranelift_jit::{JITBuilder, JITModule};
+    use scion_ir::interp::Val;
 
     fn linkages(text: &str) -> HashMap<String, Linkage> {
         let mut sources = scion_ir::diag::SourceMap::new();
@@ -688,6 +689,34 @@ mod tests {
         let l = linkages(&format!("{HELPER}{entry}"));
         assert_eq!(l["api"], Linkage::Export);
         assert_eq!(l["helper"], Linkage::Local);
+    }
+
+    #[test]
+    fn the_jit_runs_export_functions_over_local_helpers() {
+        let entry = "func @api(%0: i32) -> (i32) attributes {export} {\n  \
+                     %1 = \"lo.call\"(%0) {callee = @helper} : (i32) -> i32\n  \
+                     %2 = \"lo.add\"(%1, %0) : (i32, i32) -> i32\n  \
+                     \"lo.return\"(%2) : (i32) -> ()\n}\n";
+        let text = format!("{HELPER}{entry}");
+        let mut sources = scion_ir::diag::SourceMap::new();
+        let file = sources.add("<test>", text.clone());
+        let m = scion_ir::parse_module(&text, file).expect("parses");
+        let jit = crate::JitModule::compile(&m).expect("compiles");
+        assert!(
+            jit.function_ptr("api").is_some(),
+            "the export has an address"
+        );
+        assert!(
+            jit.function_ptr("helper").is_some(),
+            "so has the local helper"
+        );
+        for x in [21, -4, i32::MAX] {
+            let v = jit
+                .call("api", &[Val::Int(x.into(), IntTy::I32)])
+                .expect("runs");
+            let want = Val::Int(x.wrapping_add(x).into(), IntTy::I32);
+            assert_eq!(format!("{v:?}"), format!("{:?}", [want]));
+        }
     }
 
     #[test]

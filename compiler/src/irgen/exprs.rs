@@ -79,6 +79,23 @@ impl FuncCx<'_> {
                     .get(*i as usize)
                     .copied()
                     .ok_or_else(|| self.bug(format!("build field `{}` out of range", id.name))),
+                // A bare field-less variant is its constructor with no arguments (sema
+                // resolves a bare variant with fields to E0234 instead).
+                Some(Resolution::Variant(adt, v)) => {
+                    let (adt, v) = (*adt, *v as usize);
+                    let def = self
+                        .typed
+                        .adts
+                        .get(adt)
+                        .ok_or_else(|| self.bug("unknown sum"))?;
+                    if !def.variant_fields(v).is_empty() {
+                        return Err(self.bug(format!("bare variant `{}` with fields", id.name)));
+                    }
+                    let name = def.variants()[v].name.clone();
+                    let t = self.expr_ty(b, e)?;
+                    b.set_span(Some(e.span));
+                    Ok(b.ctor(t, Some(&name), &[]))
+                }
                 other => Err(self.bug(format!("name `{}` resolved to {other:?}", id.name))),
             },
             ExprKind::Int(n) => {
