@@ -26,6 +26,7 @@ mod flat;
 mod intrinsics;
 mod mem_ops;
 mod opmap;
+mod quant;
 
 use opmap::{lo_of, unsigned};
 

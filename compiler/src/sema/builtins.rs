@@ -20,6 +20,8 @@ enum Want {
     Float,
     /// Float vectors.
     FloatVec,
+    /// `f32` vectors (the quantization builtins).
+    F32Vec,
     /// 3-lane float vectors.
     FloatVec3,
     /// Any vector.
@@ -36,6 +38,7 @@ impl Want {
             Want::Numeric => "a number or a numeric vector",
             Want::Float => "a float or a float vector",
             Want::FloatVec => "a float vector",
+            Want::F32Vec => "an f32 vector",
             Want::FloatVec3 => "a 3-lane float vector",
             Want::Vector => "a vector",
             Want::Collection => "an array, slice or set",
@@ -62,6 +65,7 @@ impl Checker<'_> {
             }
             Want::Float => class == Class::Float || matches!(s, Ty::Vector(p, _) if p.is_float()),
             Want::FloatVec => matches!(s, Ty::Vector(p, _) if p.is_float()),
+            Want::F32Vec => matches!(s, Ty::Vector(Prim::F32, _)),
             Want::FloatVec3 => matches!(s, Ty::Vector(p, 3) if p.is_float()),
             Want::Vector => matches!(s, Ty::Vector(..)),
             Want::Collection => matches!(s, Ty::Array(..) | Ty::Slice(_) | Ty::Set(_)),
@@ -87,10 +91,11 @@ impl Checker<'_> {
             Sqrt | Floor | Ceil | Fma | FaddRd | FaddRu | FsubRd | FsubRu | FmulRd | FmulRu => {
                 (Want::Float, all, &[])
             }
-            Dot | Length | Normalize | FrameOrigin => (Want::FloatVec, all, &[]),
+            Dot | Length | Normalize => (Want::FloatVec, all, &[]),
+            FrameOrigin => (Want::F32Vec, all, &[]),
             Cross => (Want::FloatVec3, all, &[]),
-            FrameStep => (Want::FloatVec, 2, &[2]),
-            QuantLo | QuantHi => (Want::FloatVec, 3, &[3]),
+            FrameStep => (Want::F32Vec, 2, &[2]),
+            QuantLo | QuantHi => (Want::F32Vec, 3, &[3]),
             WithAxis => (Want::Vector, 1, &[1]),
             Len | Append => (Want::Collection, 1, &[]),
             Insert => (Want::Set, 1, &[]),

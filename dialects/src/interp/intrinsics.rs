@@ -6,14 +6,16 @@
 //! fusing (`((a0*b0 + a1*b1) + a2*b2)`), `length` is `sqrt(dot(v, v))`, `normalize` divides
 //! each lane by the length, `cross` is the usual 3-lane formula, `hmin`/`hmax`/`hsum` fold the
 //! lanes left to right. `sqrt` and `fma` are correctly rounded; `exp`, `log`, `sin` and `cos`
-//! come from the host's math library.
+//! come from the host's math library. The quantization builtins (`frame_origin`, `frame_step`,
+//! `quant_lo`, `quant_hi`) are [`crate::tree::quant`]'s reference functions, lane by lane.
 
 use super::tree::{lanewise1, lanewise2, scalar_type};
 use super::Val;
 use crate::entity::TypeId;
 use crate::module::Module;
+use crate::tree::quant;
 use crate::tree::scalar::Scalar;
-use crate::types::Type;
+use crate::types::{IntTy, Type};
 use std::rc::Rc;
 
 type R = Result<Val, String>;
@@ -143,6 +145,48 @@ pub fn eval(m: &Module, name: &str, args: &[Val], result: TypeId) -> R {
             [a, b, c] => fma3(a, b, c),
             _ => Err("`fma` needs three operands".into()),
         },
+        "frame_origin" => lanewise1(one()?, &|x| match x {
+            Scalar::F32(v) => Ok(Scalar::F32(quant::frame_origin(v))),
+            _ => Err("expects f32 lanes".into()),
+        }),
+        "frame_step" => match args {
+            [o, hi, m] => {
+                let m = quant_bound(m)?;
+                lanewise2(o, hi, &|x, y| match (x, y) {
+                    (Scalar::F32(o), Scalar::F32(hi)) => {
+                        Ok(Scalar::F32(quant::frame_step(o, hi, m)))
+                    }
+                    _ => Err("expects f32 lanes".into()),
+                })
+            }
+            _ => Err("`frame_step` needs three operands".into()),
+        },
+        "quant_lo" | "quant_hi" => match args {
+            [v, o, s, m] => {
+                let m = quant_bound(m)?;
+                let f = if name == "quant_lo" {
+                    quant::quant_lo
+                } else {
+                    quant::quant_hi
+                };
+                let (v, o, s) = (lanes(v)?, lanes(o)?, lanes(s)?);
+                if v.len() != o.len() || o.len() != s.len() {
+                    return Err(format!("`{name}` needs vectors of one length"));
+                }
+                v.iter()
+                    .zip(o)
+                    .zip(s)
+                    .map(|((v, o), s)| match (v, o, s) {
+                        (Val::F32(v), Val::F32(o), Val::F32(s)) => {
+                            Ok(Val::Int(f(*v, *o, *s, m) as i128, IntTy::U32))
+                        }
+                        _ => Err("expects f32 lanes".to_string()),
+                    })
+                    .collect::<Result<_, _>>()
+                    .map(Val::Vector)
+            }
+            _ => Err(format!("`{name}` needs four operands")),
+        },
         "popcount" | "clz" | "ctz" => lanewise1(one()?, &|x| match x {
             Scalar::Int(v, t) => {
                 let w = t.bits();
@@ -229,6 +273,14 @@ pub fn eval(m: &Module, name: &str, args: &[Val], result: TypeId) -> R {
             _ => Err("expects a set".into()),
         },
         _ => Err(format!("unknown intrinsic `{name}`")),
+    }
+}
+
+/// The bound `m` of the quantization builtins, converted to `u32` as `as u32` does.
+fn quant_bound(m: &Val) -> Result<u32, String> {
+    match m {
+        Val::Int(v, _) => Ok(*v as u32),
+        _ => Err("the code bound must be an integer".into()),
     }
 }
 

@@ -12,6 +12,7 @@
 //! [`ops`] lists the op kinds, [`verify`] their rules; this module adds builder shorthands.
 
 pub mod ops;
+pub mod quant;
 pub mod scalar;
 pub mod verify;
 

@@ -628,6 +628,13 @@ pub fn intrinsic_signature(m: &Module, name: &str, args: &[TypeId], result: Type
     let is_float = |ty: TypeId| t.as_float(t.scalar_of(ty)).is_some();
     let is_int = |ty: TypeId| t.as_int(t.scalar_of(ty)).is_some();
     let float_vec = |ty: TypeId| t.lanes(ty).is_some() && is_float(ty);
+    let f32_vec = |ty: TypeId| {
+        t.lanes(ty).is_some()
+            && matches!(
+                t.get(t.scalar_of(ty)),
+                Type::Float(FloatTy::F32)
+            )
+    };
     let sig = |n: usize, ok: bool| -> VResult {
         if args.len() != n {
             return Err(format!("`{name}` takes {n} operands, found {}", args.len()));
@@ -660,13 +667,13 @@ pub fn intrinsic_signature(m: &Module, name: &str, args: &[TypeId], result: Type
                 && t.as_int(args[1]).is_some()
                 && t.scalar_of(result) == args[2],
         ),
-        "frame_origin" => sig(1, all_same(1) && float_vec(result)),
+        "frame_origin" => sig(1, all_same(1) && f32_vec(result)),
         "frame_step" => sig(
             3,
             args.len() == 3
                 && args[0] == result
                 && args[1] == result
-                && float_vec(result)
+                && f32_vec(result)
                 && t.as_int(args[2]).is_some(),
         ),
         "quant_lo" | "quant_hi" => sig(
@@ -674,7 +681,7 @@ pub fn intrinsic_signature(m: &Module, name: &str, args: &[TypeId], result: Type
             args.len() == 4
                 && args[0] == args[1]
                 && args[1] == args[2]
-                && float_vec(args[0])
+                && f32_vec(args[0])
                 && t.lanes(result) == t.lanes(args[0])
                 && matches!(
                     t.get(t.scalar_of(result)),

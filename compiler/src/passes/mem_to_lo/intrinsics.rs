@@ -6,8 +6,8 @@
 //! is the round-to-nearest op followed by one ulp outward, unconditionally (`lo.next_down` /
 //! `lo.next_up`, layout catalog §3.8). `isnan` is `x != x`; `rsqrt` is `1 / sqrt`; `length`
 //! is `sqrt(dot(v, v))`; `normalize` divides each lane by the length. Intrinsics without a
-//! scalar form here (transcendentals, `round`, options, sets, quantization frames)
-//! are reported, never guessed.
+//! scalar form here (transcendentals, `round`, options, sets) are reported, never guessed; the
+//! quantization builtins are [`super::quant`]'s.
 
 use super::{FnLower, R};
 use scion_ir::attr::Attr;
@@ -52,6 +52,9 @@ pub(super) fn lower(
             })
             .collect())
     };
+    if let Some(quantized) = super::quant::lower(cx, cur, name, ins) {
+        return quantized;
+    }
     Ok(match name {
         "abs" => lanewise1(cx, L::Abs)?,
         "sqrt" => lanewise1(cx, L::Sqrt)?,

@@ -1,0 +1,180 @@
+//! The quantization builtins `frame_origin`, `frame_step`, `quant_lo` and `quant_hi` on one
+//! `f32` lane: the reference semantics (layout catalog §2.4, "conservative quantization"). The
+//! interpreter calls these functions; `mem-to-lo` lowers the builtins to `lo` ops that compute
+//! the same bits (compiler/tests/quant_diff.rs checks interpreter, Cranelift and LLVM against
+//! each other and these functions against the enclosure property).
+//!
+//! A frame is an origin `o` and a step `s`; code `q` decodes to `D(q) = fma(f32(q), s, o)`,
+//! exactly the derived-field expression of a quantized layout (`pbrt-q16`). For `s ≥ 0`, `D`
+//! is monotone non-decreasing in `q`, and:
+//!
+//! * `frame_origin(x)`: `x` rounded down to `0` or a normal float: `+0` for `0 ≤ x < FLT_MIN`
+//!   (including `-0` and positive subnormals), `-FLT_MIN` for `-FLT_MIN < x < 0`, else `x`
+//!   (NaN and infinities pass through).
+//! * `frame_step(o, hi, m)`: with `M = f32(m)` (`m` as `u32`, `0` taken as `1`),
+//!   `d = (f64(hi) − f64(o)) / f64(M)` raised to at least `2·FLT_MIN`, rounded *up* to `f32`,
+//!   then bumped by one ulp if `D(M) = fma(M, s, o) < hi`. One bump always suffices: `d` is
+//!   within `2^-52` relative of the exact quotient and one ulp adds at least `2^-24` relative,
+//!   so `D(M) ≥ hi` holds for every finite `o ≤ hi` (checked by the property tests). NaN in,
+//!   NaN out.
+//! * `a(v)` = the largest `q ∈ [0, m]` with `D(q) ≤ v` (`0` when there is none), `b(v)` = the
+//!   smallest `q ∈ [0, m]` with `D(q) ≥ v` (`m` when there is none); both by a bit-by-bit
+//!   binary search over the 32 bits of `q` (no early exit, so a backend can unroll it).
+//!   `quant_lo(v, o, s, m) = min(a(v), b(v))` and `quant_hi(v, o, s, m) = b(v)`. The `min`
+//!   keeps the low code at or below the high code where `D` has plateaus (a grid finer than
+//!   the float spacing at `o`). A NaN `v` gives `quant_lo = 0`, `quant_hi = m`.
+//!
+//! Conservativeness: for `o = frame_origin(lo_min)`, `s = frame_step(o, hi_max, m)` and any box
+//! `lo ≤ hi` inside `[lo_min, hi_max]`, `D(quant_lo(lo)) ≤ lo` and `D(quant_hi(hi)) ≥ hi`.
+
+/// `FLT_MIN`, the smallest positive normal `f32`.
+pub const FLT_MIN: f32 = f32::MIN_POSITIVE;
+
+/// `2·FLT_MIN` as an `f64`, the smallest step a frame gets.
+pub const MIN_STEP: f64 = 2.0 * f32::MIN_POSITIVE as f64;
+
+/// The decoder `D(q) = fma(f32(q), s, o)`.
+pub fn decode(q: u32, origin: f32, step: f32) -> f32 {
+    (q as f32).mul_add(step, origin)
+}
+
+/// `frame_origin(x)` on one lane (see the module doc).
+pub fn frame_origin(x: f32) -> f32 {
+    if x.abs() < FLT_MIN {
+        if x < 0.0 {
+            -FLT_MIN
+        } else {
+            0.0
+        }
+    } else {
+        x
+    }
+}
+
+/// The quantization bound `m` as the `u32` the search runs over (`0` is taken as `1` only by
+/// [`frame_step`]; the codes themselves are clamped to `[0, m]`).
+fn step_count(m: u32) -> f32 {
+    m.max(1) as f32
+}
+
+/// `frame_step(o, hi, m)` on one lane (see the module doc).
+pub fn frame_step(origin: f32, hi: f32, m: u32) -> f32 {
+    let mf = step_count(m);
+    let mut d = (hi as f64 - origin as f64) / mf as f64;
+    if d < MIN_STEP {
+        d = MIN_STEP;
+    }
+    let mut s = d as f32;
+    if (s as f64) < d {
+        s = next_up(s);
+    }
+    if mf.mul_add(s, origin) < hi {
+        s = next_up(s);
+    }
+    s
+}
+
+/// The largest `q ∈ [0, m]` with `pred(q)`, for a predicate true on a prefix of `[0, m]`
+/// (`0` when it holds nowhere): 32 bit-by-bit steps from the top bit down.
+fn last_true(m: u32, pred: impl Fn(u32) -> bool) -> u32 {
+    let mut r = 0u32;
+    for k in (0..32).rev() {
+        let t = r | (1 << k);
+        if t <= m && pred(t) {
+            r = t;
+        }
+    }
+    r
+}
+
+/// `a(v)`: the largest code whose plane is at or below `v`.
+fn code_below(v: f32, origin: f32, step: f32, m: u32) -> u32 {
+    last_true(m, |q| decode(q, origin, step) <= v)
+}
+
+/// `b(v)`: the smallest code whose plane is at or above `v`.
+fn code_above(v: f32, origin: f32, step: f32, m: u32) -> u32 {
+    let below = |q: u32| !(decode(q, origin, step) >= v);
+    if !below(0) {
+        return 0;
+    }
+    let r = last_true(m, below);
+    if r < m {
+        r + 1
+    } else {
+        m
+    }
+}
+
+/// `quant_lo(v, o, s, m)` on one lane (see the module doc).
+pub fn quant_lo(v: f32, origin: f32, step: f32, m: u32) -> u32 {
+    code_below(v, origin, step, m).min(code_above(v, origin, step, m))
+}
+
+/// `quant_hi(v, o, s, m)` on one lane (see the module doc).
+pub fn quant_hi(v: f32, origin: f32, step: f32, m: u32) -> u32 {
+    code_above(v, origin, step, m)
+}
+
+/// The next `f32` toward `+inf`, as `lo.next_up` computes it.
+fn next_up(x: f32) -> f32 {
+    crate::interp::lo::next_f32(x, true)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn encloses(lo: f32, hi: f32, wlo: f32, whi: f32) {
+        let o = frame_origin(wlo);
+        let s = frame_step(o, whi, 65535);
+        let (ql, qh) = (quant_lo(lo, o, s, 65535), quant_hi(hi, o, s, 65535));
+        assert!(ql <= qh, "{lo} {hi} in [{wlo}, {whi}]: {ql} > {qh}");
+        assert!(decode(ql, o, s) <= lo, "{lo} in [{wlo}, {whi}]: {ql}");
+        assert!(decode(qh, o, s) >= hi, "{hi} in [{wlo}, {whi}]: {qh}");
+    }
+
+    #[test]
+    fn origins_round_down_to_zero_or_normal() {
+        assert_eq!(frame_origin(1e-40).to_bits(), 0);
+        assert_eq!(frame_origin(-0.0).to_bits(), 0);
+        assert_eq!(frame_origin(-1e-40), -FLT_MIN);
+        assert_eq!(frame_origin(FLT_MIN), FLT_MIN);
+        assert_eq!(frame_origin(-3.5), -3.5);
+        assert!(frame_origin(f32::NAN).is_nan());
+    }
+
+    #[test]
+    fn edge_frames_enclose() {
+        // Flat frame: the step floors at 2·FLT_MIN and every code decodes to the plane.
+        let s = frame_step(5.0, 5.0, 65535);
+        assert_eq!(s as f64, MIN_STEP);
+        assert_eq!((quant_lo(5.0, 5.0, s, 65535), quant_hi(5.0, 5.0, s, 65535)), (0, 0));
+        // The root box gets (0, M).
+        let o = frame_origin(-2.0);
+        let s = frame_step(o, 3.0, 65535);
+        assert_eq!((quant_lo(-2.0, o, s, 65535), quant_hi(3.0, o, s, 65535)), (0, 65535));
+        // Far from the origin with a tiny extent: plateaus, low code never passes the high one.
+        encloses(1e6 + 0.25, 1e6 + 0.25, 1e6, 1e6 + 1.0);
+        // Huge extents (f32 `hi - lo` overflows).
+        encloses(-3e38, 3e38, -3.4e38, 3.4e38);
+        encloses(1.0, 2.0, -f32::MAX, f32::MAX);
+        // NaN planes give the whole frame.
+        assert_eq!(quant_lo(f32::NAN, 0.0, 1.0, 9), 0);
+        assert_eq!(quant_hi(f32::NAN, 0.0, 1.0, 9), 9);
+    }
+
+    #[test]
+    fn codes_are_tight_on_an_exact_grid() {
+        // Step 1, origin 0: every integer plane is its own code.
+        for v in [0.0f32, 1.0, 7.0, 100.0] {
+            assert_eq!(quant_lo(v, 0.0, 1.0, 1000), v as u32);
+            assert_eq!(quant_hi(v, 0.0, 1.0, 1000), v as u32);
+        }
+        assert_eq!(quant_lo(7.5, 0.0, 1.0, 1000), 7);
+        assert_eq!(quant_hi(7.5, 0.0, 1.0, 1000), 8);
+        assert_eq!(quant_hi(2000.0, 0.0, 1.0, 1000), 1000);
+        assert_eq!(quant_lo(-1.0, 0.0, 1.0, 1000), 0);
+        assert_eq!(quant_hi(4e9, 0.0, 1.0, u32::MAX), u32::MAX);
+    }
+}
