@@ -16,7 +16,7 @@
 //!   then bumped by one ulp if `D(M) = fma(M, s, o) < hi`. One bump always suffices: `d` is
 //!   within `2^-52` relative of the exact quotient and one ulp adds at least `2^-24` relative,
 //!   so `D(M) ≥ hi` holds for every finite `o ≤ hi` (checked by the property tests). NaN in,
-//!   NaN out.
+//!   the canonical quiet NaN out.
 //! * `a(v)` = the largest `q ∈ [0, m]` with `D(q) ≤ v` (`0` when there is none), `b(v)` = the
 //!   smallest `q ∈ [0, m]` with `D(q) ≥ v` (`m` when there is none); both by a bit-by-bit
 //!   binary search over the 32 bits of `q` (no early exit, so a backend can unroll it).
@@ -71,8 +71,15 @@ pub fn frame_step(origin: f32, hi: f32, m: u32) -> f32 {
     if mf.mul_add(s, origin) < hi {
         s = next_up(s);
     }
-    s
+    if s.is_nan() {
+        f32::from_bits(CANONICAL_NAN32)
+    } else {
+        s
+    }
 }
+
+/// The quiet NaN every engine gives for an arithmetic NaN (`scion_ir::tree::scalar`).
+const CANONICAL_NAN32: u32 = 0x7fc0_0000;
 
 /// The largest `q ∈ [0, m]` with `pred(q)`, for a predicate true on a prefix of `[0, m]`
 /// (`0` when it holds nowhere): 32 bit-by-bit steps from the top bit down.
