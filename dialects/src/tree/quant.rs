@@ -182,6 +182,7 @@ mod tests {
         assert_eq!(quant_hi(7.5, 0.0, 1.0, 1000), 8);
         assert_eq!(quant_hi(2000.0, 0.0, 1.0, 1000), 1000);
         assert_eq!(quant_lo(-1.0, 0.0, 1.0, 1000), 0);
-        assert_eq!(quant_hi(4e9, 0.0, 1.0, u32::MAX), u32::MAX);
+        assert_eq!(quant_hi(5e9, 0.0, 1.0, u32::MAX), u32::MAX);
+        assert_eq!(quant_lo(5e9, 0.0, 1.0, u32::MAX), u32::MAX);
     }
 }
