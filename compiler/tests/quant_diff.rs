@@ -355,10 +355,25 @@ fn catalog_edge_cases() {
         // (world lo, world hi, box lo, box hi): flat frame, frame-touching box, far from the
         // origin with a tiny extent, huge extents, subnormal origins.
         ([5.0; 3], [5.0; 3], [5.0; 3], [5.0; 3]),
-        ([-2.0, 0.0, 1.0], [3.0, 1.0, 2.0], [-2.0, 0.0, 1.0], [3.0, 1.0, 2.0]),
+        (
+            [-2.0, 0.0, 1.0],
+            [3.0, 1.0, 2.0],
+            [-2.0, 0.0, 1.0],
+            [3.0, 1.0, 2.0],
+        ),
         ([1e6; 3], [1e6 + 1.0; 3], [1e6 + 0.25; 3], [1e6 + 0.25; 3]),
-        ([-f32::MAX; 3], [f32::MAX; 3], [-1.0, 0.0, 3e38], [1.0, 0.0, f32::MAX]),
-        ([1e-40, -1e-40, -0.0], [1e-39, 1e-41, 1e-45], [1e-40, -1e-40, 0.0], [1e-39, 0.0, 1e-45]),
+        (
+            [-f32::MAX; 3],
+            [f32::MAX; 3],
+            [-1.0, 0.0, 3e38],
+            [1.0, 0.0, f32::MAX],
+        ),
+        (
+            [1e-40, -1e-40, -0.0],
+            [1e-39, 1e-41, 1e-45],
+            [1e-40, -1e-40, 0.0],
+            [1e-39, 0.0, 1e-45],
+        ),
     ];
     for &(wlo, whi, lo, hi) in cases {
         let o = wlo.map(frame_origin);
@@ -368,13 +383,20 @@ fn catalog_edge_cases() {
         e.agree("q", vec![v3(lo), v3(o), v3(s)]).unwrap();
         e.agree("q", vec![v3(hi), v3(o), v3(s)]).unwrap();
         for i in 0..3 {
-            let (a, b) = (quant_lo(lo[i], o[i], s[i], M), quant_hi(hi[i], o[i], s[i], M));
+            let (a, b) = (
+                quant_lo(lo[i], o[i], s[i], M),
+                quant_hi(hi[i], o[i], s[i], M),
+            );
             assert!(a <= b, "{wlo:?} {whi:?}: {a} > {b}");
             assert!(decode(a, o[i], s[i]) <= lo[i], "{wlo:?} {whi:?} lane {i}");
             assert!(decode(b, o[i], s[i]) >= hi[i], "{wlo:?} {whi:?} lane {i}");
         }
         if wlo == lo && whi == hi && wlo[0] < whi[0] {
-            assert_eq!(quant_lo(lo[0], o[0], s[0], M), 0, "the root box starts at 0");
+            assert_eq!(
+                quant_lo(lo[0], o[0], s[0], M),
+                0,
+                "the root box starts at 0"
+            );
             assert_eq!(quant_hi(hi[0], o[0], s[0], M), M, "the root box ends at M");
         }
     }

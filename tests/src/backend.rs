@@ -10,6 +10,7 @@ use crate::contract::LayoutBackend;
 use crate::jit::{Codegen, JitClosestHit, JIT_OPT_LEVEL};
 use crate::mem_interp::LIBRARY_LAYOUTS;
 use crate::oracle::ClosestHit;
+use crate::quantized::Boxes;
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Hit, Ray, Triangle};
@@ -31,6 +32,11 @@ pub trait Backend: Sync {
     /// "stack overflow" is a correct answer.
     fn stack_limit(&self) -> Option<usize> {
         None
+    }
+    /// How the boxes the backend traverses relate to the logical tree's: its hits equal the
+    /// reference traversal of `boxes().decoded_tree(tree)` bit for bit.
+    fn boxes(&self) -> Boxes {
+        Boxes::Exact
     }
     /// The largest scene worth giving this backend in tests (a slow one packs every tree
     /// again in an interpreter); `None` for any.
@@ -119,6 +125,9 @@ impl Backend for Compiled {
     }
     fn stack_limit(&self) -> Option<usize> {
         self.inner.stack_limit()
+    }
+    fn boxes(&self) -> Boxes {
+        self.inner.boxes()
     }
     fn max_triangles(&self) -> Option<usize> {
         self.inner.max_triangles()

@@ -264,6 +264,9 @@ impl Backend for LayoutBackend {
     fn name(&self) -> String {
         format!("layout-{}", self.code.layout())
     }
+    fn boxes(&self) -> crate::quantized::Boxes {
+        crate::mem_interp::layout_boxes(&self.code.layout())
+    }
     fn trace(&self, _: &[Triangle], tree: &LogicalTree, rays: &[Ray]) -> Result<Vec<Hit>, String> {
         let packed = Packed::new(self.code.as_ref(), tree)?;
         packed

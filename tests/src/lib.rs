@@ -23,3 +23,4 @@ pub mod contract;
 pub mod jit;
 pub mod mem_interp;
 pub mod oracle;
+pub mod quantized;

@@ -13,6 +13,7 @@
 
 use crate::backend::Backend;
 use crate::oracle::{in_threads, ray_val, tree_depth, CLOSEST_HIT, CLOSEST_HIT_NAME};
+use crate::quantized::Boxes;
 use scion_compiler::driver::cli::Emit;
 use scion_compiler::driver::session::{PRELUDE, PRELUDE_NAME};
 use scion_compiler::frontend::{self, Frontend, PassOptions};
@@ -25,15 +26,24 @@ use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Hit, Ray, Triangle};
 use std::time::{Duration, Instant};
 
-/// The library's layouts: file stem, layout name, and whether the layout keeps the logical
-/// tree's boxes exactly (quantized layouts may legitimately differ from the reference).
-pub const LIBRARY_LAYOUTS: &[(&str, &str, bool)] = &[
-    ("pbrt", "LinearBVH", true),
-    ("ptr", "PtrBVH", true),
-    ("pbrt_align16", "PbrtAlign16", true),
-    ("pbrt_soaos", "PbrtSoAoS", true),
-    ("pbrt_q16", "PbrtQ16", false),
+/// The library's layouts: file stem, layout name, and how the layout stores boxes (a
+/// quantized layout's bit-for-bit reference is the traversal of [`Boxes::decoded_tree`]).
+pub const LIBRARY_LAYOUTS: &[(&str, &str, Boxes)] = &[
+    ("pbrt", "LinearBVH", Boxes::Exact),
+    ("ptr", "PtrBVH", Boxes::Exact),
+    ("pbrt_align16", "PbrtAlign16", Boxes::Exact),
+    ("pbrt_soaos", "PbrtSoAoS", Boxes::Exact),
+    ("pbrt_q16", "PbrtQ16", Boxes::GlobalQ16),
 ];
+
+/// How the library layout named `layout` (or with file stem `layout`) stores boxes;
+/// [`Boxes::Exact`] for any other layout.
+pub fn layout_boxes(layout: &str) -> Boxes {
+    LIBRARY_LAYOUTS
+        .iter()
+        .find(|l| l.0 == layout || l.1 == layout)
+        .map_or(Boxes::Exact, |l| l.2)
+}
 
 /// The source of a library layout by file stem.
 pub fn layout_source(stem: &str) -> Option<&'static str> {
@@ -301,6 +311,9 @@ impl MemInterpBackend {
 impl Backend for MemInterpBackend {
     fn name(&self) -> String {
         format!("mem-interp-{}", self.stem)
+    }
+    fn boxes(&self) -> Boxes {
+        layout_boxes(&self.stem)
     }
     fn trace(&self, _: &[Triangle], tree: &LogicalTree, rays: &[Ray]) -> Result<Vec<Hit>, String> {
         in_threads(tree, rays, self.threads, |part, first| {

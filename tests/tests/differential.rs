@@ -1,11 +1,15 @@
 //! Differential tests: every backend's closest hits equal the runtime's reference traversal bit
 //! for bit (same `t` bits, same primitive id), and brute force except where pruning provably
-//! drops the brute-force hit (docs/runtime.md, "Brute force and traversal").
+//! drops the brute-force hit (docs/runtime.md, "Brute force and traversal"). A quantized layout
+//! (`pbrt_q16`) traverses wider, conservative boxes, which can break a tie in `t` differently
+//! or keep a grazing hit that the exact boxes prune; its reference is the traversal of the tree
+//! with the decoded boxes (`scion_tests::quantized`), and brute force is checked the same way.
 //!
 //! The test is a table: one row per (scene, tree, ray kind, backend). [`BACKENDS`] lists the
 //! backends; a new backend (the JIT of a layout) is one more entry there and one more
-//! `BackendKind` variant. The LLVM rows (`BackendKind::Llvm`, -O3) cover the same exact
-//! layouts, scenes and hard cases as the Cranelift rows. Scenes: the generated hard cases (always) and the real scenes of
+//! `BackendKind` variant. The LLVM rows (`BackendKind::Llvm`, -O3) cover the same
+//! layouts, scenes and hard cases as the Cranelift rows. Scenes: the generated hard cases
+//! (always) and the real scenes of
 //! `shared/scenes` (skipped with a printed line when missing; those over 20 k triangles only
 //! in release builds). The interpreter is slow, so real scenes get few rays (release: 128
 //! primary and 64 secondary, plus 64 axis and 64 feature rays on scenes under 50 k triangles;
@@ -15,7 +19,7 @@ mod common;
 
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::LogicalTree;
-use scion_runtime::geom::Ray;
+use scion_runtime::geom::{Hit, Ray};
 use scion_runtime::reference::{closest_hits_brute, closest_hits_tree};
 use scion_runtime::scene::{gen, Scene};
 use scion_tests::backend::{Backend, BackendKind};
@@ -24,6 +28,7 @@ use scion_tests::contract::LayoutBackend;
 use scion_tests::jit::JitClosestHit;
 use scion_tests::mem_interp::{MemInterpBackend, LIBRARY_LAYOUTS};
 use scion_tests::oracle::tree_depth;
+use scion_tests::quantized::Boxes;
 use std::time::Instant;
 
 /// The backends under test, each compared with the reference on every (scene, tree, rays).
@@ -50,11 +55,16 @@ const BACKENDS: &[BackendKind] = &[
         stem: "pbrt_soaos",
         stack: JIT_STACK,
     },
+    BackendKind::Llvm {
+        stem: "pbrt_q16",
+        stack: JIT_STACK,
+    },
 ];
 
 /// The backends of [`BACKENDS`] and the layouts run through the runtime contract: the
 /// hand-written `flat32` of `common`, and closest hit specialized to each library layout that
-/// keeps boxes exact, run by the interpreter at the mem level (scenes up to 2 k triangles)
+/// (every one; the quantized `pbrt_q16` against the reference traversal of its decoded boxes,
+/// `Boxes::decoded_tree`), run by the interpreter at the mem level (scenes up to 2 k triangles)
 /// and compiled by the Cranelift JIT (every scene).
 fn backends() -> Vec<Box<dyn Backend>> {
     let mut all: Vec<Box<dyn Backend>> = BACKENDS
@@ -64,25 +74,23 @@ fn backends() -> Vec<Box<dyn Backend>> {
     all.push(Box::new(
         LayoutBackend::new(Box::new(common::Flat32), 2).expect("threads"),
     ));
-    // Closest hit specialized to each exact library layout, interpreted at the mem level.
-    for &(stem, name, exact) in LIBRARY_LAYOUTS {
+    // Closest hit specialized to each library layout, interpreted at the mem level.
+    for &(stem, name, _) in LIBRARY_LAYOUTS {
         // Debug builds interpret slowly: pbrt only.
-        if exact && (release() || stem == "pbrt") {
+        if release() || stem == "pbrt" {
             let b = MemInterpBackend::new(stem, name, 2).unwrap_or_else(|e| panic!("{stem}: {e}"));
             all.push(Box::new(b));
         }
     }
-    // The same, lowered to `lo` and compiled by Cranelift: every exact layout, every row, with
+    // The same, lowered to `lo` and compiled by Cranelift: every layout, every row, with
     // a stack of 256 entries so that the deepest hard case (depth 69) is compared too (the
     // default 64 and its overflow status are tested in tests/jit.rs and the CLI tests).
-    for &(stem, name, exact) in LIBRARY_LAYOUTS {
-        if exact {
-            let code = JitClosestHit::compile(stem, name, Some(JIT_STACK))
-                .unwrap_or_else(|e| panic!("jit {stem}: {e}"));
-            all.push(Box::new(
-                LayoutBackend::new(Box::new(code), 2).expect("threads"),
-            ));
-        }
+    for &(stem, name, _) in LIBRARY_LAYOUTS {
+        let code = JitClosestHit::compile(stem, name, Some(JIT_STACK))
+            .unwrap_or_else(|e| panic!("jit {stem}: {e}"));
+        all.push(Box::new(
+            LayoutBackend::new(Box::new(code), 2).expect("threads"),
+        ));
     }
     all
 }
@@ -209,6 +217,8 @@ fn backends_agree_with_the_reference() {
         let rays: Vec<Ray> = row.rays.rays(scene, row.n, row.seed);
         let tree_ref = closest_hits_tree(tree, &rays, &driver);
         let brute = closest_hits_brute(&scene.triangles, &rays, &driver);
+        // A quantized layout's reference: the traversal of the tree with its decoded boxes.
+        let mut decoded: Vec<(Boxes, LogicalTree, Vec<Hit>)> = Vec::new();
         for b in &backends {
             if b.max_triangles().is_some_and(|m| scene.len() > m) {
                 continue;
@@ -235,7 +245,19 @@ fn backends_agree_with_the_reference() {
                     continue;
                 }
             };
-            match compare(&what, tree, &rays, &got, &tree_ref, &brute) {
+            let boxes = b.boxes();
+            let (tree, tree_ref) = if boxes == Boxes::Exact {
+                (tree, &tree_ref)
+            } else {
+                if !decoded.iter().any(|d| d.0 == boxes) {
+                    let t = boxes.decoded_tree(tree).into_owned();
+                    let r = closest_hits_tree(&t, &rays, &driver);
+                    decoded.push((boxes, t, r));
+                }
+                let d = decoded.iter().find(|d| d.0 == boxes).expect("pushed above");
+                (&d.1, &d.2)
+            };
+            match compare(&what, tree, &rays, &got, tree_ref, &brute) {
                 Ok(a) => {
                     compared += a.rays;
                     hits += a.hits;

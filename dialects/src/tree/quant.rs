@@ -156,11 +156,17 @@ mod tests {
         // Flat frame: the step floors at 2·FLT_MIN and every code decodes to the plane.
         let s = frame_step(5.0, 5.0, 65535);
         assert_eq!(s as f64, MIN_STEP);
-        assert_eq!((quant_lo(5.0, 5.0, s, 65535), quant_hi(5.0, 5.0, s, 65535)), (0, 0));
+        assert_eq!(
+            (quant_lo(5.0, 5.0, s, 65535), quant_hi(5.0, 5.0, s, 65535)),
+            (0, 0)
+        );
         // The root box gets (0, M).
         let o = frame_origin(-2.0);
         let s = frame_step(o, 3.0, 65535);
-        assert_eq!((quant_lo(-2.0, o, s, 65535), quant_hi(3.0, o, s, 65535)), (0, 65535));
+        assert_eq!(
+            (quant_lo(-2.0, o, s, 65535), quant_hi(3.0, o, s, 65535)),
+            (0, 65535)
+        );
         // Far from the origin with a tiny extent: plateaus, low code never passes the high one.
         encloses(1e6 + 0.25, 1e6 + 0.25, 1e6, 1e6 + 1.0);
         // Huge extents (f32 `hi - lo` overflows).

@@ -629,11 +629,7 @@ pub fn intrinsic_signature(m: &Module, name: &str, args: &[TypeId], result: Type
     let is_int = |ty: TypeId| t.as_int(t.scalar_of(ty)).is_some();
     let float_vec = |ty: TypeId| t.lanes(ty).is_some() && is_float(ty);
     let f32_vec = |ty: TypeId| {
-        t.lanes(ty).is_some()
-            && matches!(
-                t.get(t.scalar_of(ty)),
-                Type::Float(FloatTy::F32)
-            )
+        t.lanes(ty).is_some() && matches!(t.get(t.scalar_of(ty)), Type::Float(FloatTy::F32))
     };
     let sig = |n: usize, ok: bool| -> VResult {
         if args.len() != n {

@@ -35,7 +35,10 @@ pub(super) fn lower(
     let scalar = |i: usize| -> R<ValueId> {
         match arg(i)?.as_slice() {
             [x] => Ok(*x),
-            _ => Err((format!("`{name}`: the code bound must be one integer"), None)),
+            _ => Err((
+                format!("`{name}`: the code bound must be one integer"),
+                None,
+            )),
         }
     };
     let mut q = Q { cx, cur };
