@@ -3,7 +3,8 @@
 //! `nvptx64`, then `scion-llvm` at `-O3`, `sm_90` by default) and run on an NVIDIA GPU through
 //! `scion-cuda` (docs/gpu.md): the tree is packed on the device by the generated kernels, the
 //! rays traced with one thread per ray, and every hit compared bit for bit with the runtime's
-//! reference traversal of the same logical tree. Input: the trace arguments; output: the
+//! reference traversal of the same logical tree (for a quantized layout such as `pbrt-q16`,
+//! with the boxes it decodes: `scion_tests::quantized`). Input: the trace arguments; output: the
 //! report of `scion trace` with the kernel's Mrays/s and a `check` line, or the PTX kit
 //! (`scion_cuda::kit`) that `scion-gpu` runs on machines without LLVM.
 
@@ -23,6 +24,7 @@ use scion_runtime::batch::BatchDriver;
 use scion_runtime::reference::closest_hit::closest_hits_tree;
 use scion_runtime::scene::load_obj;
 use scion_runtime::timing::trimmed_mean;
+use scion_tests::mem_interp::layout_boxes;
 use scion_tests::mem_interp::{layout_source, LIBRARY_LAYOUTS};
 use scion_tests::oracle::{CLOSEST_HIT, CLOSEST_HIT_NAME};
 use std::path::Path;
@@ -241,7 +243,9 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
         })?;
     progress("tracing the same rays with the reference for the check");
     let driver = BatchDriver::new(args.threads).map_err(CliError::new)?;
-    let reference = closest_hits_tree(&tree, &rays, &driver);
+    // A quantized layout traverses its decoded (conservative) boxes: that tree is its reference.
+    let decoded = layout_boxes(&kit.layout).decoded_tree(&tree);
+    let reference = closest_hits_tree(&decoded, &rays, &driver);
     let check = Comparison::of(&hits, &reference);
 
     let drop = (runs - 1) / 4;

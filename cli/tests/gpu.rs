@@ -1,4 +1,5 @@
-//! `scion ptx` and `scion trace --device gpu`: the PTX of closest hit for pbrt and ptr has the
+//! `scion ptx` and `scion trace --device gpu`: the PTX of closest hit for pbrt, ptr (and pbrt-q16,
+//! whose box decoder is an explicit `fma.rn.f32`) has the
 //! kernels of docs/design/backends.md §1 with the parameters the CUDA runtime passes (the
 //! reference a `u32` for pbrt, a 64-bit address for ptr), no FMA contraction, and the asked
 //! architecture; without a GPU, `--device gpu` is one clear error line and exit status 1; with
@@ -69,6 +70,23 @@ fn ptx_kits_have_the_contract_kernels() {
         assert!(!kit.ptx.contains("fma."), "{layout}: FMA in the PTX");
         assert!(kit.ptx.contains("mul.rn.f32"), "{layout}");
     }
+    // pbrt-q16 decodes its boxes with an explicit fused multiply-add (layout catalog §2.4):
+    // `fma.rn.f32` is there on purpose, and nothing else is contracted into one.
+    let path = dir.join("pbrt-q16.ptx");
+    let o = scion(&["ptx", "--layout", "pbrt-q16", "-o", path.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let kit = PtxKit::parse(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    assert_eq!(
+        (kit.layout.as_str(), kit.algorithm.as_str()),
+        ("PbrtQ16", "closest_hit")
+    );
+    assert_eq!(kit.buffers, ["globals", "primitives", "nodes"]);
+    assert_eq!(kernel_shapes(&kit).unwrap(), RootRef::U32);
+    assert!(kit.ptx.contains("fma.rn.f32"), "pbrt-q16: no decoder FMA");
+    assert!(
+        !kit.ptx.contains("fma.rn.ftz"),
+        "pbrt-q16: flush-to-zero decoder"
+    );
     let path = dir.join("sm80.ptx");
     let o = scion(&[
         "ptx",
@@ -109,7 +127,7 @@ fn device_gpu_traces_like_the_reference_or_says_why_not() {
     let scene = dir.join("cube.obj");
     std::fs::write(&scene, CUBE).unwrap();
     let scene = scene.to_str().unwrap();
-    for layout in ["pbrt", "ptr"] {
+    for layout in ["pbrt", "ptr", "pbrt-q16"] {
         let kit = dir.join(format!("{layout}.ptx"));
         let hits = dir.join(format!("{layout}.hits"));
         let o = scion(&[
