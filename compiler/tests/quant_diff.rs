@@ -351,31 +351,31 @@ fn decoded_boxes_enclose_and_are_tight() {
 #[test]
 fn catalog_edge_cases() {
     let e = engines();
-    let cases: &[([f32; 3], [f32; 3], [f32; 3], [f32; 3])] = &[
-        // (world lo, world hi, box lo, box hi): flat frame, frame-touching box, far from the
+    let cases: &[[[f32; 3]; 4]] = &[
+        // [world lo, world hi, box lo, box hi]: flat frame, frame-touching box, far from the
         // origin with a tiny extent, huge extents, subnormal origins.
-        ([5.0; 3], [5.0; 3], [5.0; 3], [5.0; 3]),
-        (
+        [[5.0; 3], [5.0; 3], [5.0; 3], [5.0; 3]],
+        [
             [-2.0, 0.0, 1.0],
             [3.0, 1.0, 2.0],
             [-2.0, 0.0, 1.0],
             [3.0, 1.0, 2.0],
-        ),
-        ([1e6; 3], [1e6 + 1.0; 3], [1e6 + 0.25; 3], [1e6 + 0.25; 3]),
-        (
+        ],
+        [[1e6; 3], [1e6 + 1.0; 3], [1e6 + 0.25; 3], [1e6 + 0.25; 3]],
+        [
             [-f32::MAX; 3],
             [f32::MAX; 3],
             [-1.0, 0.0, 3e38],
             [1.0, 0.0, f32::MAX],
-        ),
-        (
+        ],
+        [
             [1e-40, -1e-40, -0.0],
             [1e-39, 1e-41, 1e-45],
             [1e-40, -1e-40, 0.0],
             [1e-39, 0.0, 1e-45],
-        ),
+        ],
     ];
-    for &(wlo, whi, lo, hi) in cases {
+    for &[wlo, whi, lo, hi] in cases {
         let o = wlo.map(frame_origin);
         let s = [0, 1, 2].map(|i| frame_step(o[i], whi[i], M));
         e.agree("fo", vec![v3(wlo)]).unwrap();

@@ -27,6 +27,8 @@
 //! Conservativeness: for `o = frame_origin(lo_min)`, `s = frame_step(o, hi_max, m)` and any box
 //! `lo ≤ hi` inside `[lo_min, hi_max]`, `D(quant_lo(lo)) ≤ lo` and `D(quant_hi(hi)) ≥ hi`.
 
+use std::cmp::Ordering;
+
 /// `FLT_MIN`, the smallest positive normal `f32`.
 pub const FLT_MIN: f32 = f32::MIN_POSITIVE;
 
@@ -101,7 +103,13 @@ fn code_below(v: f32, origin: f32, step: f32, m: u32) -> u32 {
 
 /// `b(v)`: the smallest code whose plane is at or above `v`.
 fn code_above(v: f32, origin: f32, step: f32, m: u32) -> u32 {
-    let below = |q: u32| !(decode(q, origin, step) >= v);
+    // Not `D(q) ≥ v`: below `v`, or unordered (NaN), as `lo.not` of `lo.cmp ge` computes it.
+    let below = |q: u32| {
+        !matches!(
+            decode(q, origin, step).partial_cmp(&v),
+            Some(Ordering::Greater | Ordering::Equal)
+        )
+    };
     if !below(0) {
         return 0;
     }
