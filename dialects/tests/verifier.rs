@@ -344,3 +344,24 @@ fn broken_links_are_reported_not_panics() {
         ]
     );
 }
+
+/// The quantization builtins are defined on `f32` lanes only (`scion_ir::tree::quant`).
+#[test]
+fn quantization_builtins_take_f32_lanes() {
+    check(
+        r#"
+func @f(%a: vector<3xf64>) -> (vector<3xf64>) {
+  %b = "tree.intrinsic"(%a) {name = "frame_origin"} : (vector<3xf64>) -> vector<3xf64>
+  "tree.return"(%b) : (vector<3xf64>) -> ()
+}"#,
+        expect![[r#"
+            error: `frame_origin` does not apply to (vector<3xf64>) -> vector<3xf64>
+              in: %1 = "tree.intrinsic"(%0) {name = "frame_origin"} : (vector<3xf64>) -> vector<3xf64>
+            func @f(%0: vector<3xf64>) -> (vector<3xf64>) {
+              // error: `frame_origin` does not apply to (vector<3xf64>) -> vector<3xf64>
+              %1 = "tree.intrinsic"(%0) {name = "frame_origin"} : (vector<3xf64>) -> vector<3xf64>
+              "tree.return"(%1) : (vector<3xf64>) -> ()
+            }
+        "#]],
+    );
+}

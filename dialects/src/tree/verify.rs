@@ -622,6 +622,8 @@ fn verify_match(m: &Module, o: &Operation, ot: &[TypeId], rt: &[TypeId]) -> VRes
 /// `i1` per lane). Vectors: `dot` and `length` (vector to its element), `cross` (3 lanes),
 /// `normalize`, `hmin hmax hsum` (lanes to element). Containers: `len` (array to any integer),
 /// `some none is_some unwrap` on `option<T>`, `set_empty set_insert set_contains` on `set<T>`.
+/// Quantization (`f32` vectors only): `frame_origin`, `frame_step(o, hi, int)`,
+/// `quant_lo`/`quant_hi(v, o, s, int)` giving `u32` lanes.
 pub fn intrinsic_signature(m: &Module, name: &str, args: &[TypeId], result: TypeId) -> VResult {
     let t = &m.types;
     let show = |ty: TypeId| t.display(ty).to_string();

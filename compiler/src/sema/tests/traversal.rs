@@ -180,6 +180,12 @@ fn builtins() {
     ok("func f(lo: f32x3, hi: f32x3) -> u16x3 = { let o = frame_origin(lo); let s = frame_step(o, hi, 65535); return quant_lo(lo, o, s, 65535) as u16x3; }");
     err("func f(lo: f32x3) = frame_step(lo, lo, 1.0)", "E0231");
     err("func f(lo: f32x3) = quant_hi(lo, lo, lo)", "E0205");
+    // The quantization builtins are defined on f32 lanes only (scion_ir::tree::quant).
+    err("func f(lo: f64x3) -> f64x3 = frame_origin(lo)", "E0231");
+    err(
+        "func f(v: f64x3) -> u32x3 = quant_lo(v, v, v, 65535)",
+        "E0231",
+    );
 }
 
 #[test]
