@@ -1,5 +1,5 @@
 //! Integration tests of the `scion` command: the happy path on a small OBJ file (reference,
-//! interpreter and the JIT of pbrt and ptr write the same hits file; rays files are read; a
+//! interpreter and the JITs of pbrt, ptr and pbrt-q16 write the same hits file; rays files are read; a
 //! JIT stack too small names the overflowing ray), and the user errors (a missing
 //! scene, a NaN coordinate reported with file and line, bad flags, an
 //! unknown layout, an empty scene) as clear messages with exit status 1 (2 for clap's usage
@@ -207,7 +207,7 @@ fn soup(n: usize) -> String {
 }
 
 #[test]
-fn the_jit_writes_the_reference_hits_for_pbrt_and_ptr() {
+fn the_jit_writes_the_reference_hits_for_pbrt_ptr_and_pbrt_q16() {
     let dir = scratch("jit");
     let scene = write(&dir, "soup.obj", &soup(400));
     let run = |backend: &str, layout: &str, rays: &str| {
@@ -239,7 +239,13 @@ fn the_jit_writes_the_reference_hits_for_pbrt_and_ptr() {
     for rays in ["primary", "secondary"] {
         let (_, want) = run("reference", "pbrt", rays);
         assert_eq!(want.len(), 3000 * 8);
-        for (layout, per_node) in [("pbrt", "32.0 B/node"), ("ptr", "48.0 B/node")] {
+        // pbrt-q16's conservative boxes visit more nodes and find the same hits on these rays
+        // (ties and grazing rays are the differential table's business).
+        for (layout, per_node) in [
+            ("pbrt", "32.0 B/node"),
+            ("ptr", "48.0 B/node"),
+            ("pbrt-q16", "16.0 B/node"),
+        ] {
             let (stdout, got) = run("jit", layout, rays);
             assert_eq!(got, want, "jit {layout} {rays} differs from reference");
             assert!(stdout.contains(per_node), "{stdout}");
