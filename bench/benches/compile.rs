@@ -4,7 +4,7 @@
 //! pipelines both at -O3).
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use scion_tests::jit::{Codegen, JitClosestHit};
+use scion_host::jit::{Codegen, JitClosestHit};
 
 fn compile_time(c: &mut Criterion) {
     let mut g = c.benchmark_group("compile closest_hit + pbrt");

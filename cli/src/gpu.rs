@@ -4,7 +4,7 @@
 //! `scion-cuda` (docs/gpu.md): the tree is packed on the device by the generated kernels, the
 //! rays traced with one thread per ray, and every hit compared bit for bit with the runtime's
 //! reference traversal of the same logical tree (for a quantized layout such as `pbrt-q16`,
-//! with the boxes it decodes: `scion_tests::quantized`). Input: the trace arguments; output: the
+//! with the boxes it decodes: `scion_host::quantized`). Input: the trace arguments; output: the
 //! report of `scion trace` with the kernel's Mrays/s and a `check` line, or the PTX kit
 //! (`scion_cuda::kit`) that `scion-gpu` runs on machines without LLVM.
 
@@ -19,14 +19,14 @@ use scion_cuda::compare::Comparison;
 use scion_cuda::kit::PtxKit;
 use scion_cuda::trace::GpuPipeline;
 use scion_cuda::Device;
+use scion_host::mem_interp::layout_boxes;
+use scion_host::mem_interp::{layout_source, LIBRARY_LAYOUTS};
+use scion_host::oracle::{CLOSEST_HIT, CLOSEST_HIT_NAME};
 use scion_ir::diag::SourceMap;
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::reference::closest_hit::closest_hits_tree;
 use scion_runtime::scene::load_obj;
 use scion_runtime::timing::trimmed_mean;
-use scion_tests::mem_interp::layout_boxes;
-use scion_tests::mem_interp::{layout_source, LIBRARY_LAYOUTS};
-use scion_tests::oracle::{CLOSEST_HIT, CLOSEST_HIT_NAME};
 use std::path::Path;
 use std::time::{Duration, Instant};
 

@@ -5,13 +5,17 @@
 //! The layout-free backends (reference, interp, brute) trace the logical tree itself: their
 //! structure is the tree's node array plus its reordered triangles, and there is nothing to
 //! pack. `--backend jit` follows the runtime contract of docs/design/specialization.md §3
-//! through `scion_tests::contract` (`@L.sizes`, one aligned allocation per buffer, `@L.build`
+//! through `scion_host::contract` (`@L.sizes`, one aligned allocation per buffer, `@L.build`
 //! timed as the pack time, the batch entry over blocks of 64, a nonzero status reported with
-//! the failing ray), with the code of `scion_tests::jit` (closest hit specialized to the
+//! the failing ray), with the code of `scion_host::jit` (closest hit specialized to the
 //! layout, lowered to `lo` at `-O2` and compiled by Cranelift; the compile time is printed).
 //! `--backend llvm` is the same with the machine code from LLVM's JIT at `-O3` (`scion-llvm`).
 
 use crate::{BackendArg, BuilderArg, CliError, DeviceArg, RaysArg, TraceArgs};
+use scion_host::backend::{Backend, BackendKind};
+use scion_host::contract::{LayoutCode, Packed};
+use scion_host::jit::{Codegen, JitClosestHit};
+use scion_host::mem_interp::{MemInterpBackend, LIBRARY_LAYOUTS};
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::{build_median, build_sah_binned, LogicalNode, LogicalTree, SahOptions};
 use scion_runtime::geom::{Hit, Ray, Triangle};
@@ -20,10 +24,6 @@ use scion_runtime::query::{
 };
 use scion_runtime::scene::{load_obj, Scene};
 use scion_runtime::timing::{measure_with, Timing, TimingPlan};
-use scion_tests::backend::{Backend, BackendKind};
-use scion_tests::contract::{LayoutCode, Packed};
-use scion_tests::jit::{Codegen, JitClosestHit};
-use scion_tests::mem_interp::{MemInterpBackend, LIBRARY_LAYOUTS};
 use std::time::{Duration, Instant};
 
 /// The layouts of library/layouts, by the name `--layout` takes.

@@ -5,12 +5,12 @@
 mod common;
 
 use common::{Flat32, STACK};
+use scion_host::contract::{BufferSpec, LayoutCode, Packed, TraceFailure, STATUS_STACK_OVERFLOW};
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::{build_caterpillar, build_sah_binned, DeepSide, LogicalTree, SahOptions};
 use scion_runtime::geom::{Ray, Vec3};
 use scion_runtime::reference::closest_hits_tree;
 use scion_runtime::scene::gen;
-use scion_tests::contract::{BufferSpec, LayoutCode, Packed, TraceFailure, STATUS_STACK_OVERFLOW};
 
 #[test]
 fn buffers_are_sized_aligned_and_hits_match_the_reference() {
@@ -110,9 +110,9 @@ fn build_statuses_and_the_empty_tree() {
 #[test]
 #[cfg(target_pointer_width = "64")]
 fn logical_tree_view_abi() {
+    use scion_host::contract::LogicalTreeView;
     use scion_runtime::bvh::LogicalNode;
     use scion_runtime::geom::Triangle;
-    use scion_tests::contract::LogicalTreeView;
     use std::mem::{offset_of, size_of};
     assert_eq!(size_of::<LogicalTreeView>(), 32);
     assert_eq!(offset_of!(LogicalTreeView, nodes), 0);

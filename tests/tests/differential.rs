@@ -3,7 +3,7 @@
 //! drops the brute-force hit (docs/runtime.md, "Brute force and traversal"). A quantized layout
 //! (`pbrt_q16`) traverses wider, conservative boxes, which can break a tie in `t` differently
 //! or keep a grazing hit that the exact boxes prune; its reference is the traversal of the tree
-//! with the decoded boxes (`scion_tests::quantized`), and brute force is checked the same way.
+//! with the decoded boxes (`scion_host::quantized`), and brute force is checked the same way.
 //!
 //! The test is a table: one row per (scene, tree, ray kind, backend). [`BACKENDS`] lists the
 //! backends; a new backend (the JIT of a layout) is one more entry there and one more
@@ -17,18 +17,18 @@
 
 mod common;
 
+use scion_host::backend::{Backend, BackendKind};
+use scion_host::contract::LayoutBackend;
+use scion_host::jit::JitClosestHit;
+use scion_host::mem_interp::{MemInterpBackend, LIBRARY_LAYOUTS};
+use scion_host::oracle::tree_depth;
+use scion_host::quantized::Boxes;
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Hit, Ray};
 use scion_runtime::reference::{closest_hits_brute, closest_hits_tree};
 use scion_runtime::scene::{gen, Scene};
-use scion_tests::backend::{Backend, BackendKind};
 use scion_tests::cases::{compare, real_scene, scenes_dir, RayKind, TreeKind, REAL_SCENES};
-use scion_tests::contract::LayoutBackend;
-use scion_tests::jit::JitClosestHit;
-use scion_tests::mem_interp::{MemInterpBackend, LIBRARY_LAYOUTS};
-use scion_tests::oracle::tree_depth;
-use scion_tests::quantized::Boxes;
 use std::time::Instant;
 
 /// The backends under test, each compared with the reference on every (scene, tree, rays).
@@ -286,14 +286,14 @@ fn backends_agree_with_the_reference() {
 /// The oracle's own failure modes are errors, not panics or wrong results.
 #[test]
 fn oracle_reports_bad_programs() {
-    let bad = scion_tests::oracle::ClosestHit::compile_source(
+    let bad = scion_host::oracle::ClosestHit::compile_source(
         "bad.scion",
         "func closest_hit(ray: Ray, bvh: BVH, best: mut (f32, u32)) = nope",
         1,
     );
     let e = bad.err().expect("an undefined name is a compile error");
     assert!(e.contains("error"), "{e}");
-    let none = scion_tests::oracle::ClosestHit::compile_source(
+    let none = scion_host::oracle::ClosestHit::compile_source(
         "other.scion",
         "func other(x: f32) -> f32 = x",
         0,
@@ -304,7 +304,7 @@ fn oracle_reports_bad_programs() {
 /// The empty scene: every ray misses, without running the program.
 #[test]
 fn empty_scene_misses() {
-    let p = scion_tests::oracle::ClosestHit::compile(1).unwrap();
+    let p = scion_host::oracle::ClosestHit::compile(1).unwrap();
     let tree = LogicalTree::empty();
     let rays = vec![Ray::new(
         scion_runtime::geom::Vec3::new(0.0, 0.0, 0.0),
@@ -318,7 +318,7 @@ fn empty_scene_misses() {
 /// differs from the reference on duplicated triangles, and `compare` says where.
 #[test]
 fn a_wrong_tie_rule_is_caught() {
-    use scion_tests::oracle::{ClosestHit, CLOSEST_HIT};
+    use scion_host::oracle::{ClosestHit, CLOSEST_HIT};
     let mutated = CLOSEST_HIT.replace("t.id < best[1]", "t.id > best[1]");
     assert_ne!(mutated, CLOSEST_HIT, "the mutation must apply");
     let p = ClosestHit::compile_source("mutated.scion", &mutated, 1).unwrap();
@@ -337,8 +337,8 @@ fn a_wrong_tie_rule_is_caught() {
 /// it.
 #[test]
 fn interpreter_errors_name_the_ray() {
+    use scion_host::oracle::{ClosestHit, CLOSEST_HIT};
     use scion_runtime::geom::Vec3;
-    use scion_tests::oracle::{ClosestHit, CLOSEST_HIT};
     let mutated = CLOSEST_HIT.replace("best = (d, t.id);", "best = (d, t.id / (t.id - t.id));");
     assert_ne!(mutated, CLOSEST_HIT, "the mutation must apply");
     let p = ClosestHit::compile_source("div0.scion", &mutated, 0).unwrap();

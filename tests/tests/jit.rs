@@ -2,13 +2,13 @@
 //! layout catalog says (pbrt 32 bytes, ptr 48), hits bit-identical to the reference, and a
 //! traversal stack smaller than the tree reported as a stack overflow naming the first ray.
 
+use scion_host::contract::{LayoutCode, Packed, TraceFailure, STATUS_STACK_OVERFLOW};
+use scion_host::jit::JitClosestHit;
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::{build_caterpillar, build_sah_binned, DeepSide, SahOptions};
 use scion_runtime::geom::{Ray, Vec3};
 use scion_runtime::reference::closest_hits_tree;
 use scion_runtime::scene::gen;
-use scion_tests::contract::{LayoutCode, Packed, TraceFailure, STATUS_STACK_OVERFLOW};
-use scion_tests::jit::JitClosestHit;
 
 #[test]
 fn jit_layouts_pack_to_their_sizes_and_match_the_reference() {

@@ -12,13 +12,13 @@
 mod obvhs_peer;
 
 use scion_bench::{race, table, Contender, RayKind, Workload};
+use scion_host::contract::{LayoutCode, Packed};
+use scion_host::jit::{Codegen, JitClosestHit};
+use scion_host::mem_interp::LIBRARY_LAYOUTS;
+use scion_host::oracle::ClosestHit;
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::reference::closest_hits_tree;
 use scion_runtime::timing::TimingPlan;
-use scion_tests::contract::{LayoutCode, Packed};
-use scion_tests::jit::{Codegen, JitClosestHit};
-use scion_tests::mem_interp::LIBRARY_LAYOUTS;
-use scion_tests::oracle::ClosestHit;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;

@@ -11,10 +11,10 @@
 
 #![allow(dead_code)]
 
+use scion_host::contract::{BufferSpec, LayoutCode, STATUS_OK, STATUS_STACK_OVERFLOW};
 use scion_runtime::bvh::{LogicalTree, NO_NODE};
 use scion_runtime::geom::{Aabb, Ray, Triangle, Vec3};
 use scion_runtime::reference::prelude::{distmin_box, hit_distance, intersects_box};
-use scion_tests::contract::{BufferSpec, LayoutCode, STATUS_OK, STATUS_STACK_OVERFLOW};
 
 /// Entries of the traversal stack.
 pub const STACK: usize = 64;

@@ -10,6 +10,10 @@
 //! reference is what `@L.node` returns for the root: calling it once more on the packed
 //! buffers (fresh counters) places every node at the same place again and returns it (index 0
 //! for `by I` layouts in pre-order, an address for `ptr` layouts).
+//!
+//! It also holds the library's layouts ([`LIBRARY_LAYOUTS`], [`layout_source`],
+//! [`layout_boxes`]), which the JIT ([`crate::jit`]) and the GPU path of `scion trace` compile
+//! too.
 
 use crate::backend::Backend;
 use crate::oracle::{in_threads, ray_val, tree_depth, CLOSEST_HIT, CLOSEST_HIT_NAME};

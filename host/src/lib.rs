@@ -1,0 +1,25 @@
+//! `scion-host`: the host side of code Scion compiles for the closest-hit algorithm, shared by
+//! the `scion` command, the benchmarks and the differential tests (`scion-tests`). Input: a
+//! scene's logical tree and rays; output: hits, through one of the [`backend::Backend`]s.
+//!
+//! - [`oracle`]: `closest_hit.scion` compiled to the `tree` dialect and interpreted over a
+//!   runtime logical tree, lazily (no layout): the layout-free oracle and the `interp` backend.
+//! - [`backend`]: the [`backend::Backend`] trait every way of tracing rays implements
+//!   (reference traversal, brute force, the interpreter, the JIT of each library layout) and
+//!   [`backend::BackendKind`], the backends `scion trace` offers.
+//! - [`contract`]: the host side of the runtime contract (`@L.sizes`, aligned buffers,
+//!   `@L.build`, batch entries over blocks of 64, statuses with the failing ray's index) for
+//!   code specialized to a layout.
+//! - [`mem_interp`]: the library layouts' sources ([`mem_interp::LIBRARY_LAYOUTS`]) and closest
+//!   hit specialized to each of them (`tree`+`mem` level), run by the interpreter over its byte
+//!   memory through that contract.
+//! - [`jit`]: closest hit specialized to each library layout, lowered to `lo` and compiled by
+//!   Cranelift or LLVM, as a [`contract::LayoutCode`].
+//! - [`quantized`]: how a layout stores its boxes, and the decoded tree a quantized layout
+//!   really traverses (its bit-for-bit reference).
+pub mod backend;
+pub mod contract;
+pub mod jit;
+pub mod mem_interp;
+pub mod oracle;
+pub mod quantized;
