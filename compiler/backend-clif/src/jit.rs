@@ -15,7 +15,8 @@ use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
 use cranelift_jit::{JITBuilder, JITModule};
 use cranelift_module::{FuncId as ClFuncId, Linkage, Module as _};
 use scion_ir::interp::Val;
-use scion_ir::types::{FloatTy, Type};
+use scion_ir::lo::backend::{from_slot, is_called, to_slot};
+use scion_ir::types::Type;
 use scion_ir::{FuncId, Module};
 use std::collections::HashMap;
 use std::fmt;
@@ -152,44 +153,6 @@ impl JitModule {
             .zip(results)
             .map(|(t, raw)| from_slot(raw, t))
             .collect())
-    }
-}
-
-/// True when some `lo.call` of `m` names `callee`.
-fn is_called(m: &Module, callee: &str) -> bool {
-    m.ops.iter().any(|(_, o)| {
-        o.parent.is_some()
-            && o.kind == scion_ir::OpKind::Lo(scion_ir::lo::Op::Call)
-            && o.attr("callee").and_then(|a| a.as_sym()) == Some(callee)
-    })
-}
-
-fn to_slot(v: &Val, t: &Type) -> Option<u64> {
-    Some(match (v, t) {
-        (Val::Bool(b), Type::Bool) => u64::from(*b),
-        (Val::Int(x, it), Type::Int(want)) if it == want => *x as u64,
-        (Val::Int(x, _), Type::Ptr) => *x as u64,
-        (Val::F32(x), Type::Float(FloatTy::F32)) => u64::from(x.to_bits()),
-        (Val::F64(x), Type::Float(FloatTy::F64)) => x.to_bits(),
-        _ => return None,
-    })
-}
-
-fn from_slot(raw: u64, t: &Type) -> Val {
-    match t {
-        Type::Bool => Val::Bool(raw & 1 != 0),
-        Type::Int(it) => {
-            let bits = it.bits();
-            let masked = if bits == 64 {
-                raw
-            } else {
-                raw & ((1u64 << bits) - 1)
-            };
-            Val::Int(it.wrap(masked as i128), *it)
-        }
-        Type::Float(FloatTy::F32) => Val::F32(f32::from_bits(raw as u32)),
-        Type::Float(_) => Val::F64(f64::from_bits(raw)),
-        _ => Val::Int(raw as i128, scion_ir::types::IntTy::U64),
     }
 }
 

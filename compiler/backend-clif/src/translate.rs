@@ -20,6 +20,7 @@ use cranelift_codegen::ir::{
 use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
 use cranelift_module::{FuncId as ClFuncId, Linkage, Module as ClModule};
 use scion_ir::entity::{BlockId, FuncId, TypeId, ValueId};
+use scion_ir::lo::backend::reverse_post_order;
 use scion_ir::lo::Op as L;
 use scion_ir::op::OpKind;
 use scion_ir::tree::CmpPred;
@@ -106,35 +107,6 @@ pub struct Symbols {
     fmod: ClFuncId,
 }
 
-/// Blocks reachable from the entry, in reverse post-order.
-fn rpo(m: &Module, blocks: &[BlockId]) -> Vec<BlockId> {
-    let mut seen = std::collections::HashSet::new();
-    let mut post = Vec::new();
-    let Some(&entry) = blocks.first() else {
-        return post;
-    };
-    let mut stack = vec![(entry, 0usize)];
-    seen.insert(entry);
-    while let Some(&mut (b, ref mut i)) = stack.last_mut() {
-        let succs: Vec<BlockId> = m.blocks[b]
-            .ops
-            .last()
-            .map(|&o| m.ops[o].successors.iter().map(|s| s.block).collect())
-            .unwrap_or_default();
-        if let Some(&s) = succs.get(*i) {
-            *i += 1;
-            if seen.insert(s) {
-                stack.push((s, 0));
-            }
-        } else {
-            post.push(b);
-            stack.pop();
-        }
-    }
-    post.reverse();
-    post
-}
-
 /// Builds the body of `lo` function `f` into `func` (whose signature is set).
 pub fn translate_func<M: ClModule>(
     cl: &mut M,
@@ -147,7 +119,7 @@ pub fn translate_func<M: ClModule>(
     let ptr = cl.target_config().pointer_type();
     let mut b = FunctionBuilder::new(func, fctx);
     let body = &m.regions[m.funcs[f].body].blocks;
-    let order = rpo(m, body);
+    let order = reverse_post_order(m, body);
     let mut blocks = HashMap::new();
     let mut vals: HashMap<ValueId, ir::Value> = HashMap::new();
     let blind = scion_ir::lo::nan::payload_blind_results(m, body);

@@ -10,6 +10,7 @@
 //! semantics are `tree`'s ([`crate::tree::scalar`]); `min`/`max` are IEEE `minNum`/`maxNum`;
 //! directed rounding is a round-to-nearest op followed by `next_up`/`next_down`.
 
+pub mod backend;
 pub mod nan;
 pub mod ops;
 pub mod verify;

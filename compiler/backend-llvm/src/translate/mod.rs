@@ -48,6 +48,7 @@ use inkwell::values::{
 };
 use inkwell::{FloatPredicate, IntPredicate};
 use scion_ir::entity::{BlockId, FuncId, TypeId, ValueId};
+use scion_ir::lo::backend::reverse_post_order;
 use scion_ir::lo::Op as L;
 use scion_ir::op::OpKind;
 use scion_ir::tree::CmpPred;
@@ -207,35 +208,6 @@ pub fn translate<'c>(
     Ok((lm, funcs))
 }
 
-/// Blocks reachable from the entry, in reverse post-order.
-fn rpo(m: &Module, blocks: &[BlockId]) -> Vec<BlockId> {
-    let mut seen = std::collections::HashSet::new();
-    let mut post = Vec::new();
-    let Some(&entry) = blocks.first() else {
-        return post;
-    };
-    let mut stack = vec![(entry, 0usize)];
-    seen.insert(entry);
-    while let Some(&mut (b, ref mut i)) = stack.last_mut() {
-        let succs: Vec<BlockId> = m.blocks[b]
-            .ops
-            .last()
-            .map(|&o| m.ops[o].successors.iter().map(|s| s.block).collect())
-            .unwrap_or_default();
-        if let Some(&s) = succs.get(*i) {
-            *i += 1;
-            if seen.insert(s) {
-                stack.push((s, 0));
-            }
-        } else {
-            post.push(b);
-            stack.pop();
-        }
-    }
-    post.reverse();
-    post
-}
-
 /// The translation state of one function.
 struct Fn<'a, 'c> {
     cx: &'c Context,
@@ -259,7 +231,7 @@ struct Fn<'a, 'c> {
 impl<'c> Fn<'_, 'c> {
     fn body(&mut self, f: FuncId) -> R<()> {
         let m = self.m;
-        let order = rpo(m, &m.regions[m.funcs[f].body].blocks);
+        let order = reverse_post_order(m, &m.regions[m.funcs[f].body].blocks);
         let Some(&lo_entry) = order.first() else {
             return Err("function without blocks".into());
         };
