@@ -11,18 +11,13 @@
 use crate::trace::{build, progress, rays, secs, significant, LAYOUTS};
 use crate::{BackendArg, CliError, PtxArgs, TraceArgs};
 use scion_compiler::abi::EntryTarget;
-use scion_compiler::driver::cli::Emit;
-use scion_compiler::driver::pipelines::for_level;
-use scion_compiler::driver::session::{PRELUDE, PRELUDE_NAME};
-use scion_compiler::frontend::{self, Frontend, PassOptions};
 use scion_cuda::compare::Comparison;
 use scion_cuda::kit::PtxKit;
 use scion_cuda::trace::GpuPipeline;
 use scion_cuda::Device;
+use scion_host::jit::{library_lo, LoOptions};
 use scion_host::mem_interp::layout_boxes;
-use scion_host::mem_interp::{layout_source, LIBRARY_LAYOUTS};
-use scion_host::oracle::{CLOSEST_HIT, CLOSEST_HIT_NAME};
-use scion_ir::diag::SourceMap;
+use scion_host::mem_interp::LIBRARY_LAYOUTS;
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::reference::closest_hit::closest_hits_tree;
 use scion_runtime::scene::load_obj;
@@ -52,56 +47,24 @@ pub fn compile_kit(
                 .note(format!("library layouts: {}", names.join(", "))),
         );
     };
-    let text =
-        layout_source(stem).ok_or_else(|| CliError::new(format!("no library layout `{stem}`")))?;
-    let mut sources = SourceMap::new();
-    let prelude = [sources.add(PRELUDE_NAME, PRELUDE)];
-    let inputs = [
-        sources.add(CLOSEST_HIT_NAME, CLOSEST_HIT),
-        sources.add(format!("library/layouts/{stem}.scion"), text),
-    ];
-    let fe = Frontend {
-        sources: &sources,
-        prelude: &prelude,
-        inputs: &inputs,
-    };
-    let mut pipeline = vec![
-        "destructor-specialize".to_string(),
-        "constructor-specialize".to_string(),
-    ];
-    pipeline.extend(for_level(OPT_LEVEL));
-    let popts = PassOptions {
-        layout: Some(name.to_string()),
-        stack_size,
-        entry: Some(ALGORITHM.to_string()),
-        entry_target: EntryTarget::Gpu,
-        ..PassOptions::default()
-    };
     let fail = |what: &str, detail: String| {
         CliError::new(format!(
             "cannot compile closest hit for `{layout}` ({what}): {detail}"
         ))
     };
-    let front = |emit: Emit| -> Result<String, CliError> {
-        let r = frontend::compile(&fe, emit, &pipeline, &popts);
-        if let Some(ice) = r.internal_error {
-            return Err(fail("internal compiler error", ice.to_string()));
-        }
-        if r.diagnostics.has_errors() {
-            return Err(fail("front end", r.diagnostics.render(&sources)));
-        }
-        r.output
-            .ok_or_else(|| fail("front end", format!("no {} output", emit.as_str())))
-    };
-    let lo = front(Emit::Lo)?;
-    let buffers = buffer_names(&front(Emit::Header)?, name).map_err(|e| fail("header", e))?;
-    let file = sources.add("<lo IR>", lo.clone());
-    let m = scion_ir::parse_module(&lo, file).map_err(|d| {
-        fail(
-            "lo",
-            format!("printed lo does not parse back: {}", d.render(&sources)),
-        )
-    })?;
+    let lo = library_lo(
+        stem,
+        name,
+        &LoOptions {
+            stack_size,
+            opt_level: OPT_LEVEL,
+            dsl_opt: true,
+            target: EntryTarget::Gpu,
+        },
+    )
+    .map_err(|e| fail("front end", e))?;
+    let m = lo.module;
+    let buffers: Vec<String> = lo.entry.buffers.iter().map(|b| b.name.clone()).collect();
     let opts = scion_llvm::Options {
         target: scion_llvm::Target::Nvptx64,
         cpu: cpu.map(String::from),
@@ -111,38 +74,6 @@ pub fn compile_kit(
         .map_err(|e| fail("LLVM", e.to_string()))?;
     let ptx = String::from_utf8(ptx).map_err(|_| fail("LLVM", "PTX is not UTF-8".into()))?;
     Ok((PtxKit::new(name, ALGORITHM, buffers, &ptx), start.elapsed()))
-}
-
-/// The buffer names of layout `layout` from its C header (`--emit=header`): the count from
-/// `SCION_<L>_BUFFER_COUNT`, the names from the `/* buffer i: name (...) */` lines.
-pub fn buffer_names(header: &str, layout: &str) -> Result<Vec<String>, String> {
-    // The macro spells the layout as it is or in capitals.
-    let count: usize = header
-        .lines()
-        .find_map(|l| {
-            let (name, n) = l
-                .strip_prefix("#define SCION_")?
-                .split_once("_BUFFER_COUNT ")?;
-            name.eq_ignore_ascii_case(layout)
-                .then(|| n.trim().parse().ok())?
-        })
-        .ok_or_else(|| format!("the header has no `#define SCION_{layout}_BUFFER_COUNT N`"))?;
-    let mut names: Vec<String> = (0..count).map(|i| format!("buffer {i}")).collect();
-    for line in header.lines() {
-        let Some(rest) = line.strip_prefix("/* buffer ") else {
-            continue;
-        };
-        let Some((i, rest)) = rest.split_once(": ") else {
-            continue;
-        };
-        let (Ok(i), Some(name)) = (i.parse::<usize>(), rest.split(" (").next()) else {
-            continue;
-        };
-        if let Some(slot) = names.get_mut(i) {
-            *slot = name.trim().to_string();
-        }
-    }
-    Ok(names)
 }
 
 /// `scion ptx`: writes the PTX kit of `--layout`.
@@ -321,23 +252,4 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
         )));
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn buffer_names_come_from_the_header() {
-        let h = "#define SCION_LinearBVH_BUFFER_COUNT 3\n\
-                 /* buffer 0: nodes (element 32 bytes, stride 32, align 32) */\n\
-                 /* buffer 2: globals (element 8 bytes, stride 8, align 8) */\n";
-        assert_eq!(
-            buffer_names(h, "LinearBVH").unwrap(),
-            ["nodes", "buffer 1", "globals"]
-        );
-        assert!(buffer_names("", "LinearBVH").is_err());
-        let caps = "#define SCION_LINEARBVH_BUFFER_COUNT 1\n";
-        assert_eq!(buffer_names(caps, "LinearBVH").unwrap(), ["buffer 0"]);
-    }
 }

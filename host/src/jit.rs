@@ -146,6 +146,70 @@ unsafe impl Sync for JitClosestHit {}
 /// `const-fold`, `mem-cse`, `dce`) before lowering.
 pub const JIT_OPT_LEVEL: u8 = 3;
 
+/// How [`library_lo`] compiles.
+#[derive(Clone, Copy, Debug)]
+pub struct LoOptions {
+    /// Traversal stack entries (`None`: the default, 64).
+    pub stack_size: Option<u32>,
+    /// The tree/mem `-O` level.
+    pub opt_level: u8,
+    /// False leaves out the DSL optimizations of that level (`--no-dsl-opt`).
+    pub dsl_opt: bool,
+    /// Host entries, or also the GPU kernels (`--target nvptx64`).
+    pub target: EntryTarget,
+}
+
+/// Closest hit specialized to a library layout, lowered to `lo` with its exported entry points.
+pub struct LibraryLo {
+    /// The verified `lo` module.
+    pub module: Module,
+    /// The C signature of the entries (records, buffers).
+    pub entry: EntrySig,
+}
+
+/// Compiles `closest_hit.scion` for the library layout in file `stem` named `layout`, as
+/// `scionc --layout L --entry closest_hit --emit=lo` does (the one front-end path of the CPU
+/// JITs and of the GPU's PTX). Errors are rendered diagnostics.
+pub fn library_lo(stem: &str, layout: &str, o: &LoOptions) -> Result<LibraryLo, String> {
+    let text = layout_source(stem).ok_or_else(|| format!("no library layout `{stem}`"))?;
+    let mut sources = SourceMap::new();
+    let prelude = [sources.add(PRELUDE_NAME, PRELUDE)];
+    let inputs = [
+        sources.add(CLOSEST_HIT_NAME, CLOSEST_HIT),
+        sources.add(format!("library/layouts/{stem}.scion"), text),
+    ];
+    let fe = Frontend {
+        sources: &sources,
+        prelude: &prelude,
+        inputs: &inputs,
+    };
+    let mut pipeline = vec![
+        "destructor-specialize".to_string(),
+        "constructor-specialize".to_string(),
+    ];
+    pipeline.extend(for_level_with(o.opt_level, o.dsl_opt));
+    let popts = PassOptions {
+        layout: Some(layout.to_string()),
+        stack_size: o.stack_size,
+        entry: Some(ALGORITHM.to_string()),
+        entry_target: o.target,
+        ..PassOptions::default()
+    };
+    let r = frontend::compile(&fe, Emit::Lo, &pipeline, &popts);
+    if let Some(ice) = r.internal_error {
+        return Err(format!("internal compiler error: {ice}"));
+    }
+    if r.diagnostics.has_errors() {
+        return Err(r.diagnostics.render(&sources));
+    }
+    let entry = r.entry.ok_or("no entry signature")?;
+    let out = r.output.ok_or("no lo output")?;
+    let file = sources.add("<lo IR>", out.clone());
+    let module = scion_ir::parse_module(&out, file)
+        .map_err(|d| format!("printed lo IR does not parse back: {}", d.render(&sources)))?;
+    Ok(LibraryLo { module, entry })
+}
+
 impl JitClosestHit {
     /// Compiles closest hit for the library layout in file `stem` (`pbrt`, `ptr`, ...) named
     /// `layout`, with a traversal stack of `stack_size` entries (`None`: the default, 64), at
@@ -191,42 +255,19 @@ impl JitClosestHit {
         codegen: Codegen,
     ) -> Result<JitClosestHit, String> {
         let start = Instant::now();
-        let text = layout_source(stem).ok_or_else(|| format!("no library layout `{stem}`"))?;
-        let mut sources = SourceMap::new();
-        let prelude = [sources.add(PRELUDE_NAME, PRELUDE)];
-        let inputs = [
-            sources.add(CLOSEST_HIT_NAME, CLOSEST_HIT),
-            sources.add(format!("library/layouts/{stem}.scion"), text),
-        ];
-        let fe = Frontend {
-            sources: &sources,
-            prelude: &prelude,
-            inputs: &inputs,
-        };
-        let mut pipeline = vec![
-            "destructor-specialize".to_string(),
-            "constructor-specialize".to_string(),
-        ];
-        pipeline.extend(for_level_with(opt_level, dsl_opt));
-        let popts = PassOptions {
-            layout: Some(layout.to_string()),
-            stack_size,
-            entry: Some(ALGORITHM.to_string()),
-            entry_target: EntryTarget::Host,
-            ..PassOptions::default()
-        };
-        let r = frontend::compile(&fe, Emit::Lo, &pipeline, &popts);
-        if let Some(ice) = r.internal_error {
-            return Err(format!("internal compiler error: {ice}"));
-        }
-        if r.diagnostics.has_errors() {
-            return Err(r.diagnostics.render(&sources));
-        }
-        let sig = r.entry.ok_or("no entry signature")?;
-        let out = r.output.ok_or("no lo output")?;
-        let file = sources.add("<lo IR>", out.clone());
-        let m = scion_ir::parse_module(&out, file)
-            .map_err(|d| format!("printed lo IR does not parse back: {}", d.render(&sources)))?;
+        let LibraryLo {
+            module: m,
+            entry: sig,
+        } = library_lo(
+            stem,
+            layout,
+            &LoOptions {
+                stack_size,
+                opt_level,
+                dsl_opt,
+                target: EntryTarget::Host,
+            },
+        )?;
         let pointer_refs = check_entries(&m, &sig)?;
         let jit = Code::compile(&m, codegen)?;
         let get = |name: &str| {
