@@ -43,56 +43,82 @@ fn hit(h: &RayHit, found: bool, ids: &[u32], tris: &[Triangle]) -> Hit {
     }
 }
 
-/// The BVH2 contender.
-pub fn bvh2<'a>(tris: &'a [Triangle], driver: &'a BatchDriver) -> Contender<'a> {
+/// A tree obvhs traverses with its own closest-hit traversal.
+trait Traversable: Send + Sync {
+    fn closest(&self, ray: ORay, hit: &mut RayHit, tris: &[OTriangle]) -> bool;
+    fn primitive_indices(&self) -> &[u32];
+    fn node_bytes(&self) -> usize;
+}
+
+impl Traversable for obvhs::bvh2::Bvh2 {
+    fn closest(&self, ray: ORay, hit: &mut RayHit, tris: &[OTriangle]) -> bool {
+        self.ray_traverse(ray, hit, |r, id| {
+            tris[self.primitive_indices[id] as usize].intersect(r)
+        })
+    }
+    fn primitive_indices(&self) -> &[u32] {
+        &self.primitive_indices
+    }
+    fn node_bytes(&self) -> usize {
+        std::mem::size_of_val(self.nodes.as_slice())
+    }
+}
+
+impl Traversable for obvhs::cwbvh::CwBvh {
+    fn closest(&self, ray: ORay, hit: &mut RayHit, tris: &[OTriangle]) -> bool {
+        self.ray_traverse(ray, hit, |r, id| {
+            tris[self.primitive_indices[id] as usize].intersect(r)
+        })
+    }
+    fn primitive_indices(&self) -> &[u32] {
+        &self.primitive_indices
+    }
+    fn node_bytes(&self) -> usize {
+        std::mem::size_of_val(self.nodes.as_slice())
+    }
+}
+
+/// The contender named `name` over the tree `build` makes from the converted triangles (its
+/// time is the setup).
+fn contender<'a, B: Traversable + 'a>(
+    name: &str,
+    tris: &'a [Triangle],
+    driver: &'a BatchDriver,
+    build: impl FnOnce(&[OTriangle], &mut Duration) -> B,
+) -> Contender<'a> {
     let otris = convert(tris);
     let mut core_time = Duration::ZERO;
     let start = Instant::now();
-    let bvh = build_bvh2_from_tris(&otris, BvhBuildParams::medium_build(), &mut core_time);
+    let bvh = build(&otris, &mut core_time);
     let setup = start.elapsed();
-    let bytes = std::mem::size_of_val(bvh.nodes.as_slice())
-        + std::mem::size_of_val(bvh.primitive_indices.as_slice())
+    let bytes = bvh.node_bytes()
+        + std::mem::size_of_val(bvh.primitive_indices())
         + std::mem::size_of_val(otris.as_slice());
     Contender {
-        name: "obvhs bvh2".into(),
+        name: name.into(),
         bytes: Some(bytes),
         setup,
         subset: None,
         trace: Box::new(move |rays: &[Ray]| {
             Ok(driver.map(rays, |r| {
                 let mut h = RayHit::none();
-                let found = bvh.ray_traverse(oray(r), &mut h, |ray, id| {
-                    otris[bvh.primitive_indices[id] as usize].intersect(ray)
-                });
-                hit(&h, found, &bvh.primitive_indices, tris)
+                let found = bvh.closest(oray(r), &mut h, &otris);
+                hit(&h, found, bvh.primitive_indices(), tris)
             }))
         }),
     }
 }
 
+/// The BVH2 contender.
+pub fn bvh2<'a>(tris: &'a [Triangle], driver: &'a BatchDriver) -> Contender<'a> {
+    contender("obvhs bvh2", tris, driver, |t, time| {
+        build_bvh2_from_tris(t, BvhBuildParams::medium_build(), time)
+    })
+}
+
 /// The CWBVH contender.
 pub fn cwbvh<'a>(tris: &'a [Triangle], driver: &'a BatchDriver) -> Contender<'a> {
-    let otris = convert(tris);
-    let mut core_time = Duration::ZERO;
-    let start = Instant::now();
-    let bvh = build_cwbvh_from_tris(&otris, BvhBuildParams::medium_build(), &mut core_time);
-    let setup = start.elapsed();
-    let bytes = std::mem::size_of_val(bvh.nodes.as_slice())
-        + std::mem::size_of_val(bvh.primitive_indices.as_slice())
-        + std::mem::size_of_val(otris.as_slice());
-    Contender {
-        name: "obvhs cwbvh".into(),
-        bytes: Some(bytes),
-        setup,
-        subset: None,
-        trace: Box::new(move |rays: &[Ray]| {
-            Ok(driver.map(rays, |r| {
-                let mut h = RayHit::none();
-                let found = bvh.ray_traverse(oray(r), &mut h, |ray, id| {
-                    otris[bvh.primitive_indices[id] as usize].intersect(ray)
-                });
-                hit(&h, found, &bvh.primitive_indices, tris)
-            }))
-        }),
-    }
+    contender("obvhs cwbvh", tris, driver, |t, time| {
+        build_cwbvh_from_tris(t, BvhBuildParams::medium_build(), time)
+    })
 }
