@@ -21,14 +21,11 @@
 #![allow(unsafe_code)]
 
 use crate::contract::{BufferSpec, LayoutCode, LogicalTreeView, STATUS_OK};
-use crate::mem_interp::layout_source;
-use crate::oracle::{CLOSEST_HIT, CLOSEST_HIT_NAME};
+use crate::mem_interp::compile_library;
 use scion_compiler::abi::{EntrySig, EntryTarget};
 use scion_compiler::driver::cli::Emit;
 use scion_compiler::driver::pipelines::for_level_with;
-use scion_compiler::driver::session::{PRELUDE, PRELUDE_NAME};
-use scion_compiler::frontend::{self, Frontend, PassOptions};
-use scion_ir::diag::SourceMap;
+use scion_compiler::frontend::PassOptions;
 use scion_ir::types::{FloatTy, IntTy, Type};
 use scion_ir::Module;
 use scion_runtime::bvh::LogicalTree;
@@ -171,18 +168,6 @@ pub struct LibraryLo {
 /// `scionc --layout L --entry closest_hit --emit=lo` does (the one front-end path of the CPU
 /// JITs and of the GPU's PTX). Errors are rendered diagnostics.
 pub fn library_lo(stem: &str, layout: &str, o: &LoOptions) -> Result<LibraryLo, String> {
-    let text = layout_source(stem).ok_or_else(|| format!("no library layout `{stem}`"))?;
-    let mut sources = SourceMap::new();
-    let prelude = [sources.add(PRELUDE_NAME, PRELUDE)];
-    let inputs = [
-        sources.add(CLOSEST_HIT_NAME, CLOSEST_HIT),
-        sources.add(format!("library/layouts/{stem}.scion"), text),
-    ];
-    let fe = Frontend {
-        sources: &sources,
-        prelude: &prelude,
-        inputs: &inputs,
-    };
     let mut pipeline = vec![
         "destructor-specialize".to_string(),
         "constructor-specialize".to_string(),
@@ -195,18 +180,8 @@ pub fn library_lo(stem: &str, layout: &str, o: &LoOptions) -> Result<LibraryLo, 
         entry_target: o.target,
         ..PassOptions::default()
     };
-    let r = frontend::compile(&fe, Emit::Lo, &pipeline, &popts);
-    if let Some(ice) = r.internal_error {
-        return Err(format!("internal compiler error: {ice}"));
-    }
-    if r.diagnostics.has_errors() {
-        return Err(r.diagnostics.render(&sources));
-    }
-    let entry = r.entry.ok_or("no entry signature")?;
-    let out = r.output.ok_or("no lo output")?;
-    let file = sources.add("<lo IR>", out.clone());
-    let module = scion_ir::parse_module(&out, file)
-        .map_err(|d| format!("printed lo IR does not parse back: {}", d.render(&sources)))?;
+    let (module, entry) = compile_library(stem, Emit::Lo, &pipeline, &popts)?;
+    let entry = entry.ok_or("no entry signature")?;
     Ok(LibraryLo { module, entry })
 }
 

@@ -18,6 +18,7 @@
 use crate::backend::Backend;
 use crate::oracle::{in_threads, ray_val, tree_depth, CLOSEST_HIT, CLOSEST_HIT_NAME};
 use crate::quantized::Boxes;
+use scion_compiler::abi::EntrySig;
 use scion_compiler::driver::cli::Emit;
 use scion_compiler::driver::session::{PRELUDE, PRELUDE_NAME};
 use scion_compiler::frontend::{self, Frontend, PassOptions};
@@ -68,40 +69,56 @@ pub struct MemClosestHit {
     buffers: usize,
 }
 
+/// Compiles `closest_hit.scion` with the prelude and the library layout in file `stem` through
+/// the front end (`frontend::compile`, as scionc does) to `emit` with `pipeline` and `popts`,
+/// and parses the printed module back. Output: the module and, with `popts.entry`, the entries'
+/// C signature; errors are rendered diagnostics.
+pub fn compile_library(
+    stem: &str,
+    emit: Emit,
+    pipeline: &[String],
+    popts: &PassOptions,
+) -> Result<(Module, Option<EntrySig>), String> {
+    let text = layout_source(stem).ok_or_else(|| format!("no library layout `{stem}`"))?;
+    let mut sources = SourceMap::new();
+    let prelude = [sources.add(PRELUDE_NAME, PRELUDE)];
+    let inputs = [
+        sources.add(CLOSEST_HIT_NAME, CLOSEST_HIT),
+        sources.add(format!("library/layouts/{stem}.scion"), text),
+    ];
+    let fe = Frontend {
+        sources: &sources,
+        prelude: &prelude,
+        inputs: &inputs,
+    };
+    let r = frontend::compile(&fe, emit, pipeline, popts);
+    if let Some(ice) = r.internal_error {
+        return Err(format!("internal compiler error: {ice}"));
+    }
+    if r.diagnostics.has_errors() {
+        return Err(r.diagnostics.render(&sources));
+    }
+    let level = emit.as_str();
+    let out = r.output.ok_or_else(|| format!("no {level} output"))?;
+    let file = sources.add(format!("<{level} IR>"), out.clone());
+    let module = scion_ir::parse_module(&out, file).map_err(|d| {
+        format!(
+            "printed {level} IR does not parse back: {}",
+            d.render(&sources)
+        )
+    })?;
+    Ok((module, r.entry))
+}
+
 impl MemClosestHit {
     /// Compiles closest hit for the library layout in file `stem` named `layout`.
     pub fn compile(stem: &str, layout: &str) -> Result<MemClosestHit, String> {
-        let text = layout_source(stem).ok_or_else(|| format!("no library layout `{stem}`"))?;
-        let mut sources = SourceMap::new();
-        let prelude = [sources.add(PRELUDE_NAME, PRELUDE)];
-        let inputs = [
-            sources.add(CLOSEST_HIT_NAME, CLOSEST_HIT),
-            sources.add(format!("library/layouts/{stem}.scion"), text),
-        ];
-        let fe = Frontend {
-            sources: &sources,
-            prelude: &prelude,
-            inputs: &inputs,
-        };
-        let pipeline = vec![
-            "destructor-specialize".to_string(),
-            "constructor-specialize".to_string(),
-        ];
         let popts = PassOptions {
             layout: Some(layout.to_string()),
             ..PassOptions::default()
         };
-        let r = frontend::compile(&fe, Emit::Mem, &pipeline, &popts);
-        if let Some(ice) = r.internal_error {
-            return Err(format!("internal compiler error: {ice}"));
-        }
-        if r.diagnostics.has_errors() {
-            return Err(r.diagnostics.render(&sources));
-        }
-        let out = r.output.ok_or("no mem-level output")?;
-        let file = sources.add("<mem IR>", out.clone());
-        let module = scion_ir::parse_module(&out, file)
-            .map_err(|d| format!("printed mem IR does not parse back: {}", d.render(&sources)))?;
+        let pipeline = ["destructor-specialize", "constructor-specialize"].map(String::from);
+        let (module, _) = compile_library(stem, Emit::Mem, &pipeline, &popts)?;
         for f in ["closest_hit", "sizes", "build", "node"] {
             let name = if f == "closest_hit" {
                 f.to_string()

@@ -10,11 +10,9 @@
 use scion_clif::JitModule;
 use scion_compiler::driver::cli::Emit;
 use scion_compiler::driver::pipelines::for_level;
-use scion_compiler::driver::session::{PRELUDE, PRELUDE_NAME};
-use scion_compiler::frontend::{self, Frontend, PassOptions};
+use scion_compiler::frontend::PassOptions;
 use scion_host::contract::LogicalTreeView;
-use scion_host::mem_interp::layout_source;
-use scion_host::oracle::{CLOSEST_HIT, CLOSEST_HIT_NAME};
+use scion_host::mem_interp::compile_library;
 use scion_ir::diag::SourceMap;
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::{build_sah_binned, LogicalTree, SahOptions};
@@ -35,18 +33,6 @@ type BatchPtrFn =
 
 /// The `lo` text of `scionc -O2 --emit=lo --layout NAME --entry closest_hit`.
 fn entries_lo(stem: &str, layout: &str) -> String {
-    let mut sources = SourceMap::new();
-    let prelude = [sources.add(PRELUDE_NAME, PRELUDE)];
-    let text = layout_source(stem).expect("a library layout");
-    let inputs = [
-        sources.add(CLOSEST_HIT_NAME, CLOSEST_HIT),
-        sources.add(format!("library/layouts/{stem}.scion"), text),
-    ];
-    let fe = Frontend {
-        sources: &sources,
-        prelude: &prelude,
-        inputs: &inputs,
-    };
     let mut pipeline = vec![
         "destructor-specialize".to_string(),
         "constructor-specialize".to_string(),
@@ -57,14 +43,10 @@ fn entries_lo(stem: &str, layout: &str) -> String {
         entry: Some("closest_hit".to_string()),
         ..PassOptions::default()
     };
-    let r = frontend::compile(&fe, Emit::Lo, &pipeline, &popts);
-    assert!(r.internal_error.is_none(), "{:?}", r.internal_error);
-    assert!(
-        !r.diagnostics.has_errors(),
-        "{}",
-        r.diagnostics.render(&sources)
-    );
-    r.output.expect("lo output")
+    let (m, entry) =
+        compile_library(stem, Emit::Lo, &pipeline, &popts).unwrap_or_else(|e| panic!("{e}"));
+    assert!(entry.is_some(), "--entry gives the entries' signature");
+    scion_ir::print_module(&m)
 }
 
 fn jit(lo: &str) -> JitModule {
