@@ -37,3 +37,23 @@ config.substitutions.append(("%scion-opt", scion_opt))
 # `not` and `count` come from LLVM's tools.
 config.environment["PATH"] = os.pathsep.join([llvm_bin, config.environment.get("PATH", os.environ.get("PATH", ""))])
 config.environment["NO_COLOR"] = "1"
+
+# NVIDIA's PTX assembler, looked for where scripts/setup.sh (which installs it) and
+# scion_cuda::ptxas look: --param ptxas, $SCION_PTXAS, PATH, /usr/local/cuda/bin, then the copy
+# setup.sh puts in ~/.cache/scion. Tests that assemble PTX say `REQUIRES: ptxas`; without it
+# they are UNSUPPORTED, not passed.
+import shutil
+
+ptxas_candidates = [
+    lit_config.params.get("ptxas"),
+    os.environ.get("SCION_PTXAS"),
+    shutil.which("ptxas"),
+    "/usr/local/cuda/bin/ptxas",
+    os.path.expanduser("~/.cache/scion/cuda-13.5.37/bin/ptxas"),
+]
+ptxas = next((p for p in ptxas_candidates if p and os.access(p, os.X_OK)), None)
+if ptxas:
+    config.available_features.add("ptxas")
+    config.substitutions.append(("%ptxas", ptxas))
+else:
+    lit_config.note("ptxas not found: the tests that assemble PTX are UNSUPPORTED (scripts/setup.sh installs it)")

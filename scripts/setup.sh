@@ -7,6 +7,10 @@
 #     llvm-config names): the LLVM backend (compiler/backend-llvm, through inkwell/llvm-sys)
 #     links against them; .cargo/config.toml points llvm-sys at /usr/lib/llvm-22.
 #   - g++ and make: the test suite builds and runs the C++ example (examples/cpp).
+#   - NVIDIA's PTX assembler `ptxas` (CUDA 13.5, from the Python package registry's
+#     nvidia-cuda-nvcc wheel, only the one binary, into ~/.cache/scion): the lit suite assembles
+#     the emitted PTX for sm_75..sm_90 with it, so PTX is checked on machines without a GPU.
+#     A ptxas already on PATH, in /usr/local/cuda/bin or named by $SCION_PTXAS is used instead.
 #   - The Rust toolchain is expected on the machine (cargo, rustc); we do not install it.
 set -euo pipefail
 
@@ -35,4 +39,36 @@ if ! command -v cargo >/dev/null; then
   echo "setup: cargo not found; install the Rust toolchain (rustup) first" >&2
   exit 1
 fi
-echo "setup: ok ($(cargo --version), lit $(/usr/lib/llvm-22/bin/lit --version 2>&1 | head -1), LLVM $(/usr/lib/llvm-22/bin/llvm-config --version))" >&2
+# ptxas: the same places compiler/tests/lit.rs looks in.
+PTXAS_VERSION=13.5.37
+ptxas_cache="${HOME}/.cache/scion/cuda-${PTXAS_VERSION}/bin/ptxas"
+ptxas=""
+for p in "${SCION_PTXAS:-}" "$(command -v ptxas || true)" /usr/local/cuda/bin/ptxas "$ptxas_cache"; do
+  if [ -n "$p" ] && [ -x "$p" ]; then ptxas=$p; break; fi
+done
+if [ -z "$ptxas" ]; then
+  echo "setup: installing ptxas ${PTXAS_VERSION} (nvidia-cuda-nvcc wheel, Python package registry) into ${ptxas_cache%/bin/ptxas}" >&2
+  tmp=$(mktemp -d)
+  if python3 -m pip download -q --no-deps --only-binary=:all: -d "$tmp" "nvidia-cuda-nvcc==${PTXAS_VERSION}" >&2 &&
+     python3 - "$tmp" "$ptxas_cache" <<'PY'
+import glob, os, sys, zipfile
+tmp, dest = sys.argv[1], sys.argv[2]
+wheel = glob.glob(os.path.join(tmp, "*.whl"))[0]
+with zipfile.ZipFile(wheel) as z:
+    name = next(n for n in z.namelist() if n.endswith("/bin/ptxas"))
+    os.makedirs(os.path.dirname(dest), exist_ok=True)
+    with z.open(name) as src, open(dest + ".part", "wb") as out:
+        out.write(src.read())
+os.chmod(dest + ".part", 0o755)
+os.replace(dest + ".part", dest)
+PY
+  then
+    ptxas=$ptxas_cache
+  else
+    echo "setup: WARNING: could not install ptxas; the lit tests that assemble PTX will be UNSUPPORTED" >&2
+  fi
+  rm -rf "$tmp"
+fi
+[ -n "$ptxas" ] && ptxas_note=", ptxas $("$ptxas" --version | sed -n 's/.*release \([0-9.]*\).*/\1/p')" || ptxas_note=", no ptxas"
+
+echo "setup: ok ($(cargo --version), lit $(/usr/lib/llvm-22/bin/lit --version 2>&1 | head -1), LLVM $(/usr/lib/llvm-22/bin/llvm-config --version)${ptxas_note})" >&2

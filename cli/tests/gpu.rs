@@ -7,7 +7,10 @@
 
 use scion_cuda::kit::PtxKit;
 use scion_cuda::ptx;
-use scion_cuda::trace::{check_kernels, KernelNames, RootRef};
+use scion_cuda::trace::{
+    check_kernels, packing_stack, per_level_frame, stack_frames, KernelNames, RootRef,
+    MAX_PACK_STACK,
+};
 use scion_cuda::CudaError;
 use std::path::PathBuf;
 use std::process::{Command, Output};
@@ -100,6 +103,69 @@ fn ptx_kits_have_the_contract_kernels() {
     assert!(o.status.success(), "{}", text(&o.stderr));
     let kit = PtxKit::parse(&std::fs::read_to_string(&path).unwrap()).unwrap();
     assert_eq!(ptx::directive(&kit.ptx, ".target"), Some("sm_80"));
+}
+
+/// Without a GPU, NVIDIA's offline assembler (CUDA 13.5's ptxas, installed by
+/// scripts/setup.sh) still checks what the driver's JIT will see: the kit of every library
+/// layout assembles for sm_90, and its verbose log (the format of the JIT log the packing
+/// stack is sized from) names the four kernels and the recursive node functions' frames.
+#[test]
+fn ptxas_assembles_the_kits_and_its_log_sizes_the_packing_stack() {
+    let Some(ptxas) = scion_cuda::ptxas::find() else {
+        println!("skip: no ptxas (scripts/setup.sh installs CUDA 13.5's into ~/.cache/scion)");
+        return;
+    };
+    let dir = scratch("ptxas");
+    for layout in ["pbrt", "ptr", "pbrt-q16", "pbrt-align16", "pbrt-soaos"] {
+        let path = dir.join(format!("{layout}.ptx"));
+        let o = scion(&["ptx", "--layout", layout, "-o", path.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        let kit = PtxKit::parse(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        let log = scion_cuda::ptxas::assemble(&ptxas, &kit.ptx, "sm_90")
+            .unwrap_or_else(|e| panic!("{layout}: {e}"));
+        let names = KernelNames::new(&kit.layout, &kit.algorithm);
+        let kernels = [
+            names.sizes.as_str(),
+            names.build.as_str(),
+            names.root.as_str(),
+            names.batch.as_str(),
+        ];
+        let frames = stack_frames(&log);
+        for k in kernels {
+            assert!(
+                frames.iter().any(|(f, _)| f == k),
+                "{layout}: no {k} in\n{log}"
+            );
+        }
+        // `@L.node` recurses, so it is a function of its own with a frame on the stack.
+        let per_level = per_level_frame(&log, &kernels)
+            .unwrap_or_else(|| panic!("{layout}: no function frames in\n{log}"));
+        assert!(per_level > 0, "{layout}: {log}");
+        // A 64-level tree packs within the stack the runtime may ask for.
+        assert!(
+            packing_stack(64, Some(per_level), 1024) < MAX_PACK_STACK,
+            "{layout}"
+        );
+    }
+    // The architecture asked for is the one assembled.
+    let path = dir.join("sm80.ptx");
+    let o = scion(&[
+        "ptx",
+        "--layout",
+        "ptr",
+        "--cpu",
+        "sm_80",
+        "-o",
+        path.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let kit = PtxKit::parse(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let log = scion_cuda::ptxas::assemble(&ptxas, &kit.ptx, "sm_80").unwrap();
+    assert!(log.contains("for 'sm_80'"), "{log}");
+    // And a PTX ptxas cannot take is an error with its diagnostics.
+    let e = scion_cuda::ptxas::assemble(&ptxas, ".version 7.8\n.target sm_90\nbogus;\n", "sm_90")
+        .unwrap_err();
+    assert!(e.starts_with("ptxas rejected the PTX"), "{e}");
 }
 
 #[test]

@@ -11,7 +11,8 @@
 //!   parameters, launch grids;
 //! * [`trace`]: the closest-hit pipeline (pack the logical tree on the device, trace rays);
 //! * [`kit`]: self-describing PTX for machines without the compiler (`scion-gpu`);
-//! * [`compare`]: GPU hits against the CPU reference, bit for bit.
+//! * [`compare`]: GPU hits against the CPU reference, bit for bit;
+//! * [`ptxas`]: NVIDIA's offline assembler, to check PTX where there is no GPU.
 
 pub mod args;
 pub mod compare;
@@ -21,6 +22,7 @@ pub mod error;
 pub mod kit;
 pub mod module;
 pub mod ptx;
+pub mod ptxas;
 pub mod trace;
 
 pub use args::{DevicePtr, Grid, KernelArg};

@@ -181,6 +181,20 @@ pub fn stack_frames(info_log: &str) -> Vec<(String, u64)> {
     out
 }
 
+/// The stack bytes one level of the packing recursion may need: the sum of the frames of the
+/// module's functions other than `kernels`, each counted once (ptxas repeats a function's
+/// properties under every kernel that calls it); `None` when the log names no frame.
+pub fn per_level_frame(info_log: &str, kernels: &[&str]) -> Option<u64> {
+    let mut seen = std::collections::BTreeMap::new();
+    for (f, bytes) in stack_frames(info_log) {
+        if !kernels.contains(&f.as_str()) {
+            let b = seen.entry(f).or_insert(0);
+            *b = bytes.max(*b);
+        }
+    }
+    (!seen.is_empty()).then(|| seen.values().sum())
+}
+
 /// A PTX module with the four kernels of one algorithm and layout, ready to pack and trace.
 pub struct GpuPipeline<'d> {
     device: &'d Device,
@@ -246,14 +260,7 @@ impl<'d> GpuPipeline<'d> {
             names.root.as_str(),
             names.batch.as_str(),
         ];
-        let frames = stack_frames(&module.info_log);
-        let frames = (!frames.is_empty()).then(|| {
-            frames
-                .iter()
-                .filter(|(f, _)| !kernels.contains(&f.as_str()))
-                .map(|f| f.1)
-                .sum()
-        });
+        let frames = per_level_frame(&module.info_log, &kernels);
         Ok(GpuPipeline {
             device,
             module,
@@ -575,5 +582,21 @@ mod tests {
             vec![("LinearBVH_node".to_string(), 48), ("k".to_string(), 0)]
         );
         assert!(stack_frames("").is_empty());
+    }
+
+    #[test]
+    fn per_level_frame_counts_each_function_once() {
+        // ptxas lists `node` under both kernels that call it.
+        let log = "ptxas info    : Function properties for node\n\
+                   \x20   80 bytes stack frame, 80 bytes spill stores, 80 bytes spill loads\n\
+                   ptxas info    : Function properties for build_k\n\
+                   \x20   8 bytes stack frame, 0 bytes spill stores, 0 bytes spill loads\n\
+                   ptxas info    : Function properties for node\n\
+                   \x20   80 bytes stack frame, 80 bytes spill stores, 80 bytes spill loads\n\
+                   ptxas info    : Function properties for helper\n\
+                   \x20   16 bytes stack frame, 0 bytes spill stores, 0 bytes spill loads\n";
+        assert_eq!(per_level_frame(log, &["build_k"]), Some(96));
+        assert_eq!(per_level_frame(log, &["build_k", "node", "helper"]), None);
+        assert_eq!(per_level_frame("", &[]), None);
     }
 }

@@ -118,13 +118,10 @@ pub fn target_machine(
             }
             host_cpu()
         }
+        // No features on NVPTX: LLVM then writes the lowest PTX ISA version that has the SM
+        // (7.8 for sm_90, 8.6 for sm_100, 6.3 for sm_75), the one the most drivers accept.
         Some(c) => (c.to_string(), String::new()),
-        None => (target.default_cpu().to_string(), ptx_features(target)),
-    };
-    let features = if target == Target::Nvptx64 && features.is_empty() {
-        ptx_features(target)
-    } else {
-        features
+        None => (target.default_cpu().to_string(), String::new()),
     };
     let triple = TargetTriple::create(target.triple());
     let t = LTarget::from_triple(&triple)
@@ -146,23 +143,33 @@ pub fn target_machine(
     })
 }
 
-/// The PTX ISA version: 7.8 is the first with `sm_90` and is accepted by CUDA 12 and 13.
-fn ptx_features(target: Target) -> String {
-    if target == Target::Nvptx64 {
-        "+ptx78".to_string()
-    } else {
-        String::new()
-    }
-}
+/// The GPU architectures LLVM 22's NVPTX backend knows (`llc -march=nvptx64 -mcpu=help`; a
+/// test keeps the list in step with the installed LLVM). LLVM would take any other name with a
+/// warning and then abort or emit PTX for no GPU, so `--cpu` is checked against it first.
+pub const NVPTX_CPUS: &[&str] = &[
+    "sm_20", "sm_21", "sm_30", "sm_32", "sm_35", "sm_37", "sm_50", "sm_52", "sm_53", "sm_60",
+    "sm_61", "sm_62", "sm_70", "sm_72", "sm_75", "sm_80", "sm_86", "sm_87", "sm_88", "sm_89",
+    "sm_90", "sm_90a", "sm_100", "sm_100a", "sm_100f", "sm_101", "sm_101a", "sm_101f", "sm_103",
+    "sm_103a", "sm_103f", "sm_110", "sm_110a", "sm_110f", "sm_120", "sm_120a", "sm_120f", "sm_121",
+    "sm_121a", "sm_121f",
+];
 
-/// Rejects a CPU name that cannot be one: NVPTX wants `sm_XX` (optionally `sm_XXa`); other
-/// names go to LLVM, which ignores unknown ones with a warning.
+/// Rejects a CPU name that cannot be one: NVPTX wants one of [`NVPTX_CPUS`]; other names go to
+/// LLVM, which ignores unknown ones with a warning.
 fn check_cpu(target: Target, cpu: &str) -> Result<(), LlvmError> {
     if target == Target::Nvptx64 {
-        let digits = cpu.strip_prefix("sm_").map(|d| d.trim_end_matches('a'));
-        if !digits.is_some_and(|d| !d.is_empty() && d.chars().all(|c| c.is_ascii_digit())) {
+        if !NVPTX_CPUS.contains(&cpu) {
+            let hint = if cpu.starts_with("sm_") {
+                format!(
+                    "LLVM 22 knows {} to {}",
+                    NVPTX_CPUS[0],
+                    NVPTX_CPUS[NVPTX_CPUS.len() - 1]
+                )
+            } else {
+                "expected sm_XX".to_string()
+            };
             return Err(LlvmError(format!(
-                "unknown NVPTX cpu `{cpu}`: expected sm_XX (e.g. sm_90)"
+                "unknown NVPTX cpu `{cpu}`: {hint} (e.g. sm_90 for H100/H200, sm_80 for A100)"
             )));
         }
     } else if cpu.is_empty()
@@ -201,4 +208,49 @@ pub(crate) fn codegen(
         .write_to_memory_buffer(lm, file)
         .map_err(|e| LlvmError(format!("code generation: {e}")))?;
     Ok(buf.as_slice().to_vec())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// [`NVPTX_CPUS`] is what the installed LLVM's NVPTX backend lists, so `--cpu` neither
+    /// rejects a GPU LLVM knows nor lets through one it would only warn about.
+    #[test]
+    fn nvptx_cpus_match_llc() {
+        let llc = "/usr/lib/llvm-22/bin/llc";
+        let out = std::process::Command::new(llc)
+            .args(["-march=nvptx64", "-mcpu=help"])
+            .output()
+            .unwrap_or_else(|e| panic!("{llc}: {e} (scripts/setup.sh installs llvm-22-tools)"));
+        let text = String::from_utf8_lossy(&out.stdout) + String::from_utf8_lossy(&out.stderr);
+        let cpus_part = text
+            .split("Available features")
+            .next()
+            .expect("llc -mcpu=help output");
+        let mut listed: Vec<&str> = cpus_part
+            .lines()
+            .filter_map(|l| l.split_whitespace().next())
+            .filter(|w| w.starts_with("sm_"))
+            .collect();
+        let mut ours = NVPTX_CPUS.to_vec();
+        listed.sort_unstable();
+        ours.sort_unstable();
+        assert_eq!(ours, listed);
+    }
+
+    /// Every known SM makes a target machine; unknown names are errors that say what is known.
+    #[test]
+    fn nvptx_cpu_checked() {
+        for cpu in ["sm_75", "sm_90", "sm_100", "sm_120"] {
+            assert!(
+                target_machine(Target::Nvptx64, Some(cpu), 3).is_ok(),
+                "{cpu}"
+            );
+        }
+        let e = target_machine(Target::Nvptx64, Some("sm_99"), 3)
+            .err()
+            .unwrap();
+        assert!(e.0.contains("unknown NVPTX cpu `sm_99`"), "{}", e.0);
+    }
 }
