@@ -143,43 +143,115 @@ pub fn target_machine(
     })
 }
 
-/// The GPU architectures LLVM 22's NVPTX backend knows (`llc -march=nvptx64 -mcpu=help`; a
-/// test keeps the list in step with the installed LLVM). LLVM would take any other name with a
-/// warning and then abort or emit PTX for no GPU, so `--cpu` is checked against it first.
-pub const NVPTX_CPUS: &[&str] = &[
-    "sm_20", "sm_21", "sm_30", "sm_32", "sm_35", "sm_37", "sm_50", "sm_52", "sm_53", "sm_60",
-    "sm_61", "sm_62", "sm_70", "sm_72", "sm_75", "sm_80", "sm_86", "sm_87", "sm_88", "sm_89",
-    "sm_90", "sm_90a", "sm_100", "sm_100a", "sm_100f", "sm_101", "sm_101a", "sm_101f", "sm_103",
-    "sm_103a", "sm_103f", "sm_110", "sm_110a", "sm_110f", "sm_120", "sm_120a", "sm_120f", "sm_121",
-    "sm_121a", "sm_121f",
-];
+/// The CPU names LLVM knows per target, read from `llc -mcpu=help` when this crate was built
+/// (build.rs): `X86_64_CPUS`, `AARCH64_CPUS`, `NVPTX64_CPUS`. Empty when `llc` was missing.
+pub mod cpus {
+    include!(concat!(env!("OUT_DIR"), "/cpus.rs"));
+}
 
-/// Rejects a CPU name that cannot be one: NVPTX wants one of [`NVPTX_CPUS`]; other names go to
-/// LLVM, which ignores unknown ones with a warning.
-fn check_cpu(target: Target, cpu: &str) -> Result<(), LlvmError> {
-    if target == Target::Nvptx64 {
-        if !NVPTX_CPUS.contains(&cpu) {
-            let hint = if cpu.starts_with("sm_") {
-                format!(
-                    "LLVM 22 knows {} to {}",
-                    NVPTX_CPUS[0],
-                    NVPTX_CPUS[NVPTX_CPUS.len() - 1]
-                )
-            } else {
-                "expected sm_XX".to_string()
-            };
-            return Err(LlvmError(format!(
-                "unknown NVPTX cpu `{cpu}`: {hint} (e.g. sm_90 for H100/H200, sm_80 for A100)"
-            )));
+impl Target {
+    /// The CPU names LLVM knows for this target (empty when the build found no `llc`).
+    pub fn known_cpus(self) -> &'static [&'static str] {
+        match self {
+            Target::X86_64 => cpus::X86_64_CPUS,
+            Target::Aarch64 => cpus::AARCH64_CPUS,
+            Target::Nvptx64 => cpus::NVPTX64_CPUS,
         }
-    } else if cpu.is_empty()
-        || !cpu
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '.')
-    {
-        return Err(LlvmError(format!("bad cpu name `{cpu}`")));
     }
-    Ok(())
+}
+
+/// Rejects a CPU LLVM does not know for `target`: LLVM would only warn and emit generic code
+/// (or, on NVPTX, abort). The error names a near miss when there is one.
+fn check_cpu(target: Target, cpu: &str) -> Result<(), LlvmError> {
+    let known = target.known_cpus();
+    let ok = if known.is_empty() {
+        // No list (no llc at build time): only the shape of the name.
+        match target {
+            Target::Nvptx64 => cpu.strip_prefix("sm_").is_some_and(|d| {
+                let d = d.trim_end_matches(['a', 'f']);
+                !d.is_empty() && d.chars().all(|c| c.is_ascii_digit())
+            }),
+            _ => {
+                !cpu.is_empty()
+                    && cpu
+                        .chars()
+                        .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'))
+            }
+        }
+    } else {
+        known.contains(&cpu)
+    };
+    if ok {
+        return Ok(());
+    }
+    let what = match target {
+        Target::Nvptx64 => "NVPTX cpu",
+        Target::X86_64 => "x86_64 cpu",
+        Target::Aarch64 => "aarch64 cpu",
+    };
+    let hint = match nearest(cpu, known) {
+        Some(n) => format!(" (did you mean {n}?)"),
+        None => match target {
+            Target::Nvptx64 => " (e.g. sm_90 for H100/H200, sm_80 for A100)".to_string(),
+            Target::X86_64 => " (e.g. x86-64-v3, znver4, sapphirerapids, or native)".to_string(),
+            Target::Aarch64 => " (e.g. neoverse-v2, apple-m2, or native)".to_string(),
+        },
+    };
+    let list = if known.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "; LLVM 22 knows {} (`llc-22 -march={} -mcpu=help` lists them)",
+            known.len(),
+            target.llc_march()
+        )
+    };
+    Err(LlvmError(format!("unknown {what} `{cpu}`{hint}{list}")))
+}
+
+impl Target {
+    /// The `-march` name of `llc` for this target.
+    pub fn llc_march(self) -> &'static str {
+        match self {
+            Target::X86_64 => "x86-64",
+            Target::Aarch64 => "aarch64",
+            Target::Nvptx64 => "nvptx64",
+        }
+    }
+}
+
+/// The known names closest to `cpu` by edit distance, when close (at most 2 edits, and fewer
+/// than half the name's length), as "`a`", "`a` or `b`" (at most three).
+fn nearest(cpu: &str, known: &[&str]) -> Option<String> {
+    let scored: Vec<(usize, &str)> = known
+        .iter()
+        .map(|k| (edit_distance(cpu, k), *k))
+        .filter(|(d, _)| *d <= 2 && *d * 2 < cpu.len())
+        .collect();
+    let best = scored.iter().map(|s| s.0).min()?;
+    let names: Vec<String> = scored
+        .iter()
+        .filter(|s| s.0 == best)
+        .take(3)
+        .map(|s| format!("`{}`", s.1))
+        .collect();
+    Some(names.join(" or "))
+}
+
+/// Levenshtein distance over bytes.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let (a, b) = (a.as_bytes(), b.as_bytes());
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.iter().enumerate() {
+        let mut cur = vec![i + 1; b.len() + 1];
+        for (j, cb) in b.iter().enumerate() {
+            cur[j + 1] = (prev[j] + usize::from(ca != cb))
+                .min(prev[j + 1] + 1)
+                .min(cur[j] + 1);
+        }
+        prev = cur;
+    }
+    prev[b.len()]
 }
 
 /// The host CPU's name and feature string.
@@ -214,43 +286,79 @@ pub(crate) fn codegen(
 mod tests {
     use super::*;
 
-    /// [`NVPTX_CPUS`] is what the installed LLVM's NVPTX backend lists, so `--cpu` neither
-    /// rejects a GPU LLVM knows nor lets through one it would only warn about.
+    /// The lists came from this LLVM (build.rs) and hold the CPUs the docs name.
     #[test]
-    fn nvptx_cpus_match_llc() {
-        let llc = "/usr/lib/llvm-22/bin/llc";
-        let out = std::process::Command::new(llc)
-            .args(["-march=nvptx64", "-mcpu=help"])
-            .output()
-            .unwrap_or_else(|e| panic!("{llc}: {e} (scripts/setup.sh installs llvm-22-tools)"));
-        let text = String::from_utf8_lossy(&out.stdout) + String::from_utf8_lossy(&out.stderr);
-        let cpus_part = text
-            .split("Available features")
-            .next()
-            .expect("llc -mcpu=help output");
-        let mut listed: Vec<&str> = cpus_part
-            .lines()
-            .filter_map(|l| l.split_whitespace().next())
-            .filter(|w| w.starts_with("sm_"))
-            .collect();
-        let mut ours = NVPTX_CPUS.to_vec();
-        listed.sort_unstable();
-        ours.sort_unstable();
-        assert_eq!(ours, listed);
+    fn known_cpus_come_from_llvm() {
+        for (t, cpus) in [
+            (
+                Target::X86_64,
+                &["x86-64", "x86-64-v3", "znver4", "sapphirerapids"][..],
+            ),
+            (Target::Aarch64, &["generic", "neoverse-v2", "apple-m2"][..]),
+            (
+                Target::Nvptx64,
+                &["sm_75", "sm_80", "sm_90", "sm_100", "sm_120", "sm_121f"][..],
+            ),
+        ] {
+            for cpu in cpus {
+                assert!(
+                    t.known_cpus().contains(cpu),
+                    "{cpu} not in {:?}",
+                    t.known_cpus()
+                );
+            }
+            assert!(t.known_cpus().contains(&t.default_cpu()), "{t:?}");
+        }
     }
 
-    /// Every known SM makes a target machine; unknown names are errors that say what is known.
+    /// Every known CPU makes a target machine; unknown names are errors that say what is known.
     #[test]
-    fn nvptx_cpu_checked() {
+    fn cpus_are_checked() {
         for cpu in ["sm_75", "sm_90", "sm_100", "sm_120"] {
             assert!(
                 target_machine(Target::Nvptx64, Some(cpu), 3).is_ok(),
                 "{cpu}"
             );
         }
-        let e = target_machine(Target::Nvptx64, Some("sm_99"), 3)
-            .err()
-            .unwrap();
-        assert!(e.0.contains("unknown NVPTX cpu `sm_99`"), "{}", e.0);
+        assert!(target_machine(Target::X86_64, Some("znver4"), 3).is_ok());
+        assert!(target_machine(Target::Aarch64, Some("neoverse-v2"), 3).is_ok());
+        let err = |t, cpu| target_machine(t, Some(cpu), 3).err().unwrap().0;
+        let e = err(Target::Nvptx64, "sm90");
+        assert!(
+            e.starts_with("unknown NVPTX cpu `sm90` (did you mean `sm_90`?)"),
+            "{e}"
+        );
+        let e = err(Target::X86_64, "znver9");
+        assert!(
+            e.starts_with("unknown x86_64 cpu `znver9` (did you mean `znver"),
+            "{e}"
+        );
+        assert!(
+            e.contains("`llc-22 -march=x86-64 -mcpu=help` lists them"),
+            "{e}"
+        );
+        let e = err(Target::Aarch64, "gfx90a");
+        assert!(
+            e.starts_with("unknown aarch64 cpu `gfx90a` (e.g. neoverse-v2"),
+            "{e}"
+        );
+        let e = err(Target::Nvptx64, "gfx90a");
+        assert!(
+            e.starts_with("unknown NVPTX cpu `gfx90a` (e.g. sm_90 for H100/H200"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn edit_distance_counts_edits() {
+        assert_eq!(edit_distance("znver4", "znver4"), 0);
+        assert_eq!(edit_distance("znver9", "znver4"), 1);
+        assert_eq!(edit_distance("sm_99", "sm_90"), 1);
+        assert_eq!(edit_distance("", "abc"), 3);
+        assert_eq!(nearest("x", &["y"]), None);
+        assert_eq!(
+            nearest("sm_99", &["sm_89", "sm_90", "sm_75"]).unwrap(),
+            "`sm_89` or `sm_90`"
+        );
     }
 }
