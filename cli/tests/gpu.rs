@@ -37,6 +37,18 @@ fn text(b: &[u8]) -> String {
 const CUBE: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n\
 f 1 2 3 4\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
 
+/// `scion ptx --layout layout [--cpu cpu]` into `dir`, read back as a kit.
+fn make_kit(dir: &std::path::Path, layout: &str, cpu: Option<&str>) -> PtxKit {
+    let path = dir.join(format!("{layout}-{}.ptx", cpu.unwrap_or("default")));
+    let mut args = vec!["ptx", "--layout", layout, "-o", path.to_str().unwrap()];
+    if let Some(cpu) = cpu {
+        args.extend(["--cpu", cpu]);
+    }
+    let o = scion(&args);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    PtxKit::parse(&std::fs::read_to_string(&path).unwrap()).unwrap()
+}
+
 fn kernel_shapes(kit: &PtxKit) -> Result<RootRef, CudaError> {
     let entries = ptx::entries(&kit.ptx).map_err(CudaError::Host)?;
     check_kernels(&KernelNames::new(&kit.layout, &kit.algorithm), |k| {
@@ -58,10 +70,7 @@ fn ptx_kits_have_the_contract_kernels() {
         ("pbrt", "LinearBVH", RootRef::U32),
         ("ptr", "PtrBVH", RootRef::U64),
     ] {
-        let path = dir.join(format!("{layout}.ptx"));
-        let o = scion(&["ptx", "--layout", layout, "-o", path.to_str().unwrap()]);
-        assert!(o.status.success(), "{}", text(&o.stderr));
-        let kit = PtxKit::parse(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        let kit = make_kit(&dir, layout, None);
         assert_eq!(
             (kit.layout.as_str(), kit.algorithm.as_str()),
             (name, "closest_hit")
@@ -75,10 +84,7 @@ fn ptx_kits_have_the_contract_kernels() {
     }
     // pbrt-q16 decodes its boxes with an explicit fused multiply-add (layout catalog §2.4):
     // `fma.rn.f32` is there on purpose, and nothing else is contracted into one.
-    let path = dir.join("pbrt-q16.ptx");
-    let o = scion(&["ptx", "--layout", "pbrt-q16", "-o", path.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", text(&o.stderr));
-    let kit = PtxKit::parse(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let kit = make_kit(&dir, "pbrt-q16", None);
     assert_eq!(
         (kit.layout.as_str(), kit.algorithm.as_str()),
         ("PbrtQ16", "closest_hit")
@@ -90,18 +96,7 @@ fn ptx_kits_have_the_contract_kernels() {
         !kit.ptx.contains("fma.rn.ftz"),
         "pbrt-q16: flush-to-zero decoder"
     );
-    let path = dir.join("sm80.ptx");
-    let o = scion(&[
-        "ptx",
-        "--layout",
-        "pbrt",
-        "--cpu",
-        "sm_80",
-        "-o",
-        path.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", text(&o.stderr));
-    let kit = PtxKit::parse(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let kit = make_kit(&dir, "pbrt", Some("sm_80"));
     assert_eq!(ptx::directive(&kit.ptx, ".target"), Some("sm_80"));
 }
 
@@ -117,10 +112,7 @@ fn ptxas_assembles_the_kits_and_its_log_sizes_the_packing_stack() {
     };
     let dir = scratch("ptxas");
     for layout in ["pbrt", "ptr", "pbrt-q16", "pbrt-align16", "pbrt-soaos"] {
-        let path = dir.join(format!("{layout}.ptx"));
-        let o = scion(&["ptx", "--layout", layout, "-o", path.to_str().unwrap()]);
-        assert!(o.status.success(), "{}", text(&o.stderr));
-        let kit = PtxKit::parse(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        let kit = make_kit(&dir, layout, None);
         let log = scion_cuda::ptxas::assemble(&ptxas, &kit.ptx, "sm_90")
             .unwrap_or_else(|e| panic!("{layout}: {e}"));
         let names = KernelNames::new(&kit.layout, &kit.algorithm);
@@ -148,18 +140,7 @@ fn ptxas_assembles_the_kits_and_its_log_sizes_the_packing_stack() {
         );
     }
     // The architecture asked for is the one assembled.
-    let path = dir.join("sm80.ptx");
-    let o = scion(&[
-        "ptx",
-        "--layout",
-        "ptr",
-        "--cpu",
-        "sm_80",
-        "-o",
-        path.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", text(&o.stderr));
-    let kit = PtxKit::parse(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let kit = make_kit(&dir, "ptr", Some("sm_80"));
     let log = scion_cuda::ptxas::assemble(&ptxas, &kit.ptx, "sm_80").unwrap();
     assert!(log.contains("for 'sm_80'"), "{log}");
     // And a PTX ptxas cannot take is an error with its diagnostics.

@@ -113,7 +113,10 @@ fn global_id_and_objects_are_rejected_where_they_mean_nothing() {
         opt_level: 0,
     };
     let e = emit(&m, &bad_sm, Output::Asm).unwrap_err();
-    assert!(e.0.contains("unknown NVPTX cpu `gfx90a` (e.g. sm_90"), "{e}");
+    assert!(
+        e.0.contains("unknown NVPTX cpu `gfx90a` (e.g. sm_90"),
+        "{e}"
+    );
     let native_gpu = Options {
         target: Target::Nvptx64,
         cpu: Some("native".into()),
