@@ -1,11 +1,9 @@
 #!/usr/bin/env bash
 # The GPU check (issue 4 part 5, docs/gpu.md): on a machine with an NVIDIA GPU, trace every
 # scene of the scenes folder with closest hit for layouts pbrt, ptr and pbrt-q16 on the GPU,
-# primary and secondary rays, each hit compared bit for bit with the CPU reference (in mode
-# scion, pbrt-q16 against the reference traversal of its decoded boxes; scion-gpu in mode kit
-# compares with the exact tree, which pbrt-q16 matches on these rays except where a tie in t or
-# a grazing hit resolves differently in the wider boxes, not seen on the CPU); then run the GPU tests
-# of scion-cuda. Prints one summary table and exits 0 only when everything passed.
+# primary and secondary rays, each hit compared bit for bit with the CPU reference (pbrt-q16's
+# is the reference traversal of its decoded boxes, in both modes: the kit names its boxes);
+# then run the GPU tests of scion-cuda. Prints one summary table and exits 0 only when everything passed.
 #
 # Runs from the kit made by scripts/gpu-kit.sh (no Rust toolchain needed):
 #   gpu-kit/gpu-check.sh                   # or: GPU_KIT=gpu-kit scripts/gpu-check.sh

@@ -4,7 +4,7 @@
 //! `scion-cuda` (docs/gpu.md): the tree is packed on the device by the generated kernels, the
 //! rays traced with one thread per ray, and every hit compared bit for bit with the runtime's
 //! reference traversal of the same logical tree (for a quantized layout such as `pbrt-q16`,
-//! with the boxes it decodes: `scion_host::quantized`). Input: the trace arguments; output: the
+//! with the boxes it decodes, which the kit names: `PtxKit::reference_tree`). Input: the trace arguments; output: the
 //! report of `scion trace` with the kernel's Mrays/s and a `check` line, or the PTX kit
 //! (`scion_cuda::kit`) that `scion-gpu` runs on machines without LLVM.
 
@@ -16,7 +16,6 @@ use scion_cuda::kit::PtxKit;
 use scion_cuda::trace::GpuPipeline;
 use scion_cuda::Device;
 use scion_host::jit::{library_lo, LoOptions};
-use scion_host::mem_interp::layout_boxes;
 use scion_host::mem_interp::LIBRARY_LAYOUTS;
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::reference::closest_hit::closest_hits_tree;
@@ -40,7 +39,7 @@ pub fn compile_kit(
 ) -> Result<(PtxKit, Duration), CliError> {
     let start = Instant::now();
     let stem = layout.replace('-', "_");
-    let Some(&(stem, name, _)) = LIBRARY_LAYOUTS.iter().find(|l| l.0 == stem) else {
+    let Some(&(stem, name, boxes)) = LIBRARY_LAYOUTS.iter().find(|l| l.0 == stem) else {
         let names: Vec<&str> = LAYOUTS.iter().map(|(n, _)| *n).collect();
         return Err(
             CliError::new(format!("unknown layout `{layout}` for the GPU"))
@@ -73,7 +72,10 @@ pub fn compile_kit(
     let ptx = scion_llvm::emit(&m, &opts, scion_llvm::Output::Asm)
         .map_err(|e| fail("LLVM", e.to_string()))?;
     let ptx = String::from_utf8(ptx).map_err(|_| fail("LLVM", "PTX is not UTF-8".into()))?;
-    Ok((PtxKit::new(name, ALGORITHM, buffers, &ptx), start.elapsed()))
+    Ok((
+        PtxKit::new(name, ALGORITHM, buffers, boxes, &ptx),
+        start.elapsed(),
+    ))
 }
 
 /// `scion ptx`: writes the PTX kit of `--layout`.
@@ -175,7 +177,7 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
     progress("tracing the same rays with the reference for the check");
     let driver = BatchDriver::new(args.threads).map_err(CliError::new)?;
     // A quantized layout traverses its decoded (conservative) boxes: that tree is its reference.
-    let decoded = layout_boxes(&kit.layout).decoded_tree(&tree);
+    let decoded = kit.reference_tree(&tree);
     let reference = closest_hits_tree(&decoded, &rays, &driver);
     let check = Comparison::of(&hits, &reference);
 

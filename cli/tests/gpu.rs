@@ -12,6 +12,7 @@ use scion_cuda::trace::{
     MAX_PACK_STACK,
 };
 use scion_cuda::CudaError;
+use scion_ir::tree::quant::Boxes;
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
@@ -76,6 +77,7 @@ fn ptx_kits_have_the_contract_kernels() {
             (name, "closest_hit")
         );
         assert_eq!(kit.buffers, ["globals", "primitives", "nodes"], "{layout}");
+        assert_eq!(kit.boxes, Boxes::Exact, "{layout}");
         assert_eq!(kernel_shapes(&kit).unwrap(), root, "{layout}");
         assert_eq!(ptx::directive(&kit.ptx, ".target"), Some("sm_90"));
         // The reference's arithmetic: one rounding per operation, no contraction.
@@ -90,6 +92,8 @@ fn ptx_kits_have_the_contract_kernels() {
         ("PbrtQ16", "closest_hit")
     );
     assert_eq!(kit.buffers, ["globals", "primitives", "nodes"]);
+    // Its reference is the traversal of the decoded boxes, also where no LLVM is (scion-gpu).
+    assert_eq!(kit.boxes, Boxes::GlobalQ16);
     assert_eq!(kernel_shapes(&kit).unwrap(), RootRef::U32);
     assert!(kit.ptx.contains("fma.rn.f32"), "pbrt-q16: no decoder FMA");
     assert!(

@@ -22,7 +22,7 @@ use scion_host::contract::LayoutBackend;
 use scion_host::jit::JitClosestHit;
 use scion_host::mem_interp::{MemInterpBackend, LIBRARY_LAYOUTS};
 use scion_host::oracle::tree_depth;
-use scion_host::quantized::Boxes;
+use scion_host::quantized::{Boxes, DecodedTree};
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Hit, Ray};

@@ -145,7 +145,16 @@ fn run(a: &Args) -> Result<bool, String> {
     let (hits, times) = p
         .trace_runs(&packed, &on_device, a.runs)
         .map_err(|e| e.to_string())?;
-    let reference = closest_hits_tree(&tree, &rays, &BatchDriver::new(0)?);
+    // A quantized layout traverses its decoded (conservative) boxes: that tree is its reference.
+    let decoded = tree
+        .root_box()
+        .and_then(|root| kit.boxes.decoder(&root))
+        .map(|decode| tree.map_boxes(decode));
+    let reference = closest_hits_tree(
+        decoded.as_ref().unwrap_or(&tree),
+        &rays,
+        &BatchDriver::new(0)?,
+    );
     let cmp = Comparison::of(&hits, &reference);
     let drop = a.runs.saturating_sub(1) / 4;
     let kernel = trimmed_mean(&times, drop, drop);

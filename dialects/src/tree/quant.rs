@@ -136,6 +136,65 @@ fn next_up(x: f32) -> f32 {
     crate::interp::lo::next_f32(x, true)
 }
 
+/// How a layout stores node boxes, as far as the bits a traversal sees go. A quantized layout
+/// widens every box to grid planes, so its bit-for-bit reference is the reference traversal of
+/// the tree whose boxes are the decoded ones ([`Boxes::decoder`]), not of the exact tree.
+/// Boxes are `[lo.x, lo.y, lo.z, hi.x, hi.y, hi.z]`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Boxes {
+    /// The logical tree's `f32` boxes, unchanged.
+    Exact,
+    /// 16-bit codes against one frame written from the root's box (`pbrt-q16`):
+    /// `wlo = frame_origin(root.low)`, `wstep = frame_step(wlo, root.high, 65535)`, each box
+    /// `quant_lo(low)` / `quant_hi(high)`, decoded with `fma(q, wstep, wlo)`.
+    GlobalQ16,
+}
+
+/// The codes' upper bound of [`Boxes::GlobalQ16`].
+const Q16: u32 = 65535;
+
+impl Boxes {
+    /// The name in PTX kits and messages: `exact`, `global-q16`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Boxes::Exact => "exact",
+            Boxes::GlobalQ16 => "global-q16",
+        }
+    }
+
+    /// The boxes named `name` (see [`Boxes::name`]).
+    pub fn from_name(name: &str) -> Option<Boxes> {
+        [Boxes::Exact, Boxes::GlobalQ16]
+            .into_iter()
+            .find(|b| b.name() == name)
+    }
+
+    /// For a tree whose root box is `root`, the map from a node's exact box to the box a
+    /// traversal of this layout sees; `None` when that is the exact box itself.
+    pub fn decoder(self, root: &[f32; 6]) -> Option<impl Fn(&[f32; 6]) -> [f32; 6]> {
+        match self {
+            Boxes::Exact => None,
+            Boxes::GlobalQ16 => {
+                let origin: [f32; 3] = std::array::from_fn(|k| frame_origin(root[k]));
+                let step: [f32; 3] =
+                    std::array::from_fn(|k| frame_step(origin[k], root[k + 3], Q16));
+                Some(move |b: &[f32; 6]| {
+                    std::array::from_fn(|i| {
+                        let k = i % 3;
+                        let (o, s) = (origin[k], step[k]);
+                        let q = if i < 3 {
+                            quant_lo(b[i], o, s, Q16)
+                        } else {
+                            quant_hi(b[i], o, s, Q16)
+                        };
+                        decode(q, o, s)
+                    })
+                })
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

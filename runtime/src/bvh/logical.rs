@@ -128,6 +128,21 @@ impl LogicalTree {
         self.root == NO_NODE
     }
 
+    /// The root's box (`[lo.x, lo.y, lo.z, hi.x, hi.y, hi.z]`), `None` for the empty tree.
+    pub fn root_box(&self) -> Option<[f32; 6]> {
+        self.nodes.get(self.root as usize).map(|n| n.bounds)
+    }
+
+    /// The same tree with every node's box replaced by `f` of it: the tree a layout that
+    /// stores boxes differently (quantized) really traverses.
+    pub fn map_boxes(&self, f: impl Fn(&[f32; 6]) -> [f32; 6]) -> LogicalTree {
+        let mut out = self.clone();
+        for n in &mut out.nodes {
+            n.bounds = f(&n.bounds);
+        }
+        out
+    }
+
     /// The primitives of leaf `node`.
     pub fn leaf_primitives(&self, node: &LogicalNode) -> &[Triangle] {
         let start = node.prim_offset as usize;
