@@ -77,6 +77,8 @@ say ""
 
 start=$(date +%s)
 failures=0
+TSV=$RESULTS/traces.tsv
+printf 'scene\tlayout\trays\ttriangles\tpack_s\tmrays\tcheck\n' > "$TSV"
 table=$(printf '%-18s %-8s %-10s %10s %9s %12s  %s' scene layout rays triangles "pack s" "Mrays/s" check)
 rows=()
 # Smallest scenes first, so a spent budget leaves out the largest.
@@ -118,6 +120,7 @@ for obj in "${objs[@]}"; do
       row=$(printf '%-18s %-8s %-10s %10s %9s %12s  %s' "$scene" "$layout" "$rays" "${tris:--}" "${pack:--}" "${mrays:--}" "$verdict")
       rows+=("$row")
       echo "$row"
+      printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$scene" "$layout" "$rays" "${tris:--}" "${pack:--}" "${mrays:--}" "$verdict" >> "$TSV"
     done
   done
 done
@@ -146,5 +149,29 @@ for r in "${rows[@]}"; do say "$r"; done
 say ""
 total=${#rows[@]}
 say "gpu-check: $((total - failures)) of $total traces identical to the reference; $tests_failed test binaries failed"
-say "gpu-check: logs in $RESULTS/logs, this summary in $SUMMARY"
+# The Mrays/s as the Markdown table of docs/benchmarks.md: one row per scene, the kernel's
+# throughput per layout and ray kind, and pbrt-q16 and ptr as ratios to pbrt in the same run.
+awk -F'\t' -v device="$(printf '%s' "$info" | head -1)" '
+  NR == 1 { next }
+  { key = $1 SUBSEP $2 SUBSEP $3; m[key] = $6; ok[key] = ($7 == "ok"); tris[$1] = $4
+    if (!($1 in seen)) { seen[$1] = 1; order[++n] = $1 } }
+  function cell(s, l, r,   k) { k = s SUBSEP l SUBSEP r; return (k in m && m[k] != "-") ? m[k] (ok[k] ? "" : " (!)") : "-" }
+  function ratio(s, l, r,   a, b) { a = m[s SUBSEP l SUBSEP r]; b = m[s SUBSEP "pbrt" SUBSEP r]
+    return (a + 0 > 0 && b + 0 > 0) ? sprintf("%.2f", a / b) : "-" }
+  END {
+    print "GPU: " device ", closest hit, 2^20 rays, kernel Mrays/s (trimmed mean of the timed runs); (!) = not identical to the reference"
+    print ""
+    print "| scene | triangles | pbrt primary | pbrt secondary | ptr primary | ptr secondary | pbrt-q16 primary | pbrt-q16 secondary | ptr/pbrt prim, sec | q16/pbrt prim, sec |"
+    print "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    for (i = 1; i <= n; i++) { s = order[i]
+      printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s, %s | %s, %s |\n", s, tris[s],
+        cell(s, "pbrt", "primary"), cell(s, "pbrt", "secondary"), cell(s, "ptr", "primary"), cell(s, "ptr", "secondary"),
+        cell(s, "pbrt-q16", "primary"), cell(s, "pbrt-q16", "secondary"),
+        ratio(s, "ptr", "primary"), ratio(s, "ptr", "secondary"), ratio(s, "pbrt-q16", "primary"), ratio(s, "pbrt-q16", "secondary") }
+  }' "$TSV" > "$RESULTS/benchmarks.md"
+say ""
+say "== For docs/benchmarks.md ($RESULTS/benchmarks.md) =="
+cat "$RESULTS/benchmarks.md" | tee -a "$SUMMARY"
+say ""
+say "gpu-check: logs in $RESULTS/logs, traces.tsv and this summary in $RESULTS"
 [ $no_device -eq 0 ] && [ $total -gt 0 ] && [ $failures -eq 0 ] && [ $tests_failed -eq 0 ]
