@@ -169,9 +169,11 @@ awk -F'\t' -v device="$(printf '%s' "$info" | head -1)" '
         cell(s, "pbrt-q16", "primary"), cell(s, "pbrt-q16", "secondary"),
         ratio(s, "ptr", "primary"), ratio(s, "ptr", "secondary"), ratio(s, "pbrt-q16", "primary"), ratio(s, "pbrt-q16", "secondary") }
   }' "$TSV" > "$RESULTS/benchmarks.md"
-say ""
-say "== For docs/benchmarks.md ($RESULTS/benchmarks.md) =="
-cat "$RESULTS/benchmarks.md" | tee -a "$SUMMARY"
+if [ "$total" -gt 0 ]; then
+  say ""
+  say "== For docs/benchmarks.md ($RESULTS/benchmarks.md) =="
+  tee -a "$SUMMARY" < "$RESULTS/benchmarks.md"
+fi
 say ""
 say "gpu-check: logs in $RESULTS/logs, traces.tsv and this summary in $RESULTS"
 [ $no_device -eq 0 ] && [ $total -gt 0 ] && [ $failures -eq 0 ] && [ $tests_failed -eq 0 ]
