@@ -33,6 +33,10 @@ impl<'d> Module<'d> {
     pub fn load(device: &'d Device, ptx: &str) -> Result<Module<'d>, CudaError> {
         let entries = ptx::entries(ptx)
             .map_err(|e| CudaError::Host(format!("cannot read the PTX's kernels: {e}")))?;
+        if let Some(target) = ptx::directive(ptx, ".target") {
+            ptx::target_runs_on(target, device.compute_capability)
+                .map_err(|why| CudaError::Host(format!("{}: {why}", device.name)))?;
+        }
         let image = CString::new(ptx)
             .map_err(|_| CudaError::Host("the PTX text contains a NUL byte".into()))?;
         device.bind()?;

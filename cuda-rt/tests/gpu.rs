@@ -136,6 +136,20 @@ fn bad_ptx_is_rejected_with_the_jit_log() {
 }
 
 #[test]
+fn ptx_for_a_newer_gpu_is_refused_before_the_jit() {
+    let Some(dev) = device_or_skip("ptx_for_a_newer_gpu_is_refused_before_the_jit") else {
+        return;
+    };
+    let newer = format!("sm_{}0", dev.compute_capability.0 + 1);
+    let ptx = PROBE_PTX.replacen(".target sm_75", &format!(".target {newer}"), 1);
+    let e = Module::load(&dev, &ptx).err().expect("PTX for a newer GPU loaded");
+    let m = e.to_string();
+    println!("{m}");
+    assert!(m.contains(&format!("the PTX is for {newer} but the device is sm_")), "{m}");
+    assert!(m.contains("compile for it with --cpu sm_"), "{m}");
+}
+
+#[test]
 fn kernels_are_looked_up_and_arguments_checked() {
     let Some(dev) = device_or_skip("kernels_are_looked_up_and_arguments_checked") else {
         return;
