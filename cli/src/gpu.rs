@@ -132,7 +132,12 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
             progress(&format!(
                 "compiling closest hit for layout `{layout}` to PTX"
             ));
-            let (kit, t) = compile_kit(layout, args.stack_size, args.cpu.as_deref())?;
+            // Without --cpu, the device's own architecture when LLVM knows it.
+            let (major, minor) = device.compute_capability;
+            let own = format!("sm_{major}{minor}");
+            let known = scion_llvm::target::cpus::NVPTX64_CPUS.contains(&own.as_str());
+            let cpu = args.cpu.as_deref().or(known.then_some(own.as_str()));
+            let (kit, t) = compile_kit(layout, args.stack_size, cpu)?;
             (kit, Some(t))
         }
     };
@@ -203,9 +208,13 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
         device.compute_capability.1,
         scion_cuda::error::version_text(device.driver.version)
     );
+    let target = scion_cuda::ptx::directive(&kit.ptx, ".target").unwrap_or("?");
     match compile_time {
-        Some(t) => println!("compile time {} (front end + LLVM -O3 to PTX)", secs(t)),
-        None => println!("compile time none (PTX kit read from a file)"),
+        Some(t) => println!(
+            "compile time {} (front end + LLVM -O3 to PTX for {target})",
+            secs(t)
+        ),
+        None => println!("compile time none (PTX kit for {target} read from a file)"),
     }
     println!("module load  {} (PTX JIT by the driver)", secs(module_time));
     println!(

@@ -158,7 +158,8 @@ pub struct TraceArgs {
     /// `--device gpu`: also write the PTX kit that runs to this file.
     #[arg(long, value_name = "KIT.ptx")]
     pub emit_ptx: Option<PathBuf>,
-    /// `--device gpu`: the GPU architecture to compile for (`sm_XX`; default sm_90).
+    /// `--device gpu`: the GPU architecture to compile for (`sm_XX`; default: the device's own,
+    /// e.g. sm_90 on an H100 or H200).
     #[arg(long, value_name = "sm_XX")]
     pub cpu: Option<String>,
     /// The compiler's tree/mem -O level for `--backend jit|llvm` (scionc -O0..-O3; default 3;

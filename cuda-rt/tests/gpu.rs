@@ -142,10 +142,15 @@ fn ptx_for_a_newer_gpu_is_refused_before_the_jit() {
     };
     let newer = format!("sm_{}0", dev.compute_capability.0 + 1);
     let ptx = PROBE_PTX.replacen(".target sm_75", &format!(".target {newer}"), 1);
-    let e = Module::load(&dev, &ptx).err().expect("PTX for a newer GPU loaded");
+    let e = Module::load(&dev, &ptx)
+        .err()
+        .expect("PTX for a newer GPU loaded");
     let m = e.to_string();
     println!("{m}");
-    assert!(m.contains(&format!("the PTX is for {newer} but the device is sm_")), "{m}");
+    assert!(
+        m.contains(&format!("the PTX is for {newer} but the device is sm_")),
+        "{m}"
+    );
     assert!(m.contains("compile for it with --cpu sm_"), "{m}");
 }
 
