@@ -7,6 +7,8 @@
 #     llvm-config names): the LLVM backend (compiler/backend-llvm, through inkwell/llvm-sys)
 #     links against them; .cargo/config.toml points llvm-sys at /usr/lib/llvm-22.
 #   - g++ and make: the test suite builds and runs the C++ example (examples/cpp).
+#   - On x86-64: the AArch64 cross C compiler (gcc-aarch64-linux-gnu, libc6-dev-arm64-cross)
+#     and qemu-user: the test suite runs the AArch64 code scionc emits under qemu.
 #   - NVIDIA's PTX assembler `ptxas` (CUDA 13.5, from the Python package registry's
 #     nvidia-cuda-nvcc wheel, only the one binary, into ~/.cache/scion): the lit suite assembles
 #     the emitted PTX for sm_75..sm_90 with it, so PTX is checked on machines without a GPU.
@@ -25,21 +27,36 @@ command -v python3 >/dev/null || need_apt+=(python3)
 # The C++ example's test (tests/tests/cpp_example.rs) builds examples/cpp with make and g++.
 command -v g++ >/dev/null || need_apt+=(g++)
 command -v make >/dev/null || need_apt+=(make)
+# AArch64 code is run, not only disassembled (tests/tests/aarch64_qemu.rs): a cross C compiler
+# with the arm64 C library links it with tests/replay/replay.c, and qemu-user runs it.
+# (Installed without recommends: qemu-user's would register binfmt handlers on the machine.)
+need_cross=()
+if [ "$(uname -m)" = x86_64 ]; then
+  command -v aarch64-linux-gnu-gcc >/dev/null || need_cross+=(gcc-aarch64-linux-gnu)
+  dpkg -s libc6-dev-arm64-cross >/dev/null 2>&1 || need_cross+=(libc6-dev-arm64-cross)
+  command -v qemu-aarch64 >/dev/null || need_cross+=(qemu-user)
+fi
 
-if [ ${#need_apt[@]} -gt 0 ]; then
-  pkgs=$(printf '%s\n' "${need_apt[@]}" | sort -u | tr '\n' ' ')
-  echo "setup: installing ${pkgs}(Debian packages)" >&2
+if [ ${#need_apt[@]} -gt 0 ] || [ ${#need_cross[@]} -gt 0 ]; then
   SUDO=""
   [ "$(id -u)" -eq 0 ] || SUDO="sudo"
   $SUDO apt-get update -q >/dev/null
+fi
+if [ ${#need_apt[@]} -gt 0 ]; then
+  pkgs=$(printf '%s\n' "${need_apt[@]}" | sort -u | tr '\n' ' ')
+  echo "setup: installing ${pkgs}(Debian packages)" >&2
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q $pkgs >/dev/null
+fi
+if [ ${#need_cross[@]} -gt 0 ]; then
+  echo "setup: installing ${need_cross[*]} (Debian packages, without recommends)" >&2
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${need_cross[@]}" >/dev/null
 fi
 
 if ! command -v cargo >/dev/null; then
   echo "setup: cargo not found; install the Rust toolchain (rustup) first" >&2
   exit 1
 fi
-# ptxas: the same places compiler/tests/lit.rs looks in.
+# ptxas: the same places lit-tests/lit.cfg.py and scion_cuda::ptxas::find look in.
 PTXAS_VERSION=13.5.37
 ptxas_cache="${HOME}/.cache/scion/cuda-${PTXAS_VERSION}/bin/ptxas"
 ptxas=""

@@ -13,54 +13,14 @@ use scion_runtime::bvh::{build_sah_binned, SahOptions};
 use scion_runtime::query::{hits_checksum, primary_rays_n};
 use scion_runtime::reference::closest_hits_tree;
 use scion_runtime::scene::{load_obj, manifest::scenes_dir};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
+use tools::{build_tools, have, repo};
+
+mod tools;
 
 const RAYS: u64 = 20_000;
 const SEED: u64 = 3;
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn have(tool: &str) -> bool {
-    Command::new(tool)
-        .arg("--version")
-        .output()
-        .is_ok_and(|o| o.status.success())
-}
-
-/// Builds `scionc` and `libscion_runtime.a` (release) and returns the target folder.
-fn build_tools() -> PathBuf {
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
-    for args in [
-        &[
-            "build",
-            "--release",
-            "-p",
-            "scion-compiler",
-            "--bin",
-            "scionc",
-        ][..],
-        &["build", "--release", "-p", "scion-runtime-c", "--lib"][..],
-    ] {
-        let out = Command::new(&cargo)
-            .current_dir(repo())
-            .args(args)
-            .output()
-            .expect("runs cargo");
-        assert!(
-            out.status.success(),
-            "cargo {}: {}",
-            args.join(" "),
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
-    match std::env::var_os("CARGO_TARGET_DIR") {
-        Some(d) => PathBuf::from(d).join("release"),
-        None => repo().join("target").join("release"),
-    }
-}
 
 /// The checksum of the Rust path for `scene`: binned SAH with the defaults, the primary rays
 /// of `scion trace --n RAYS --seed SEED`, the reference closest hits.
@@ -85,7 +45,7 @@ fn cpp_example_prints_the_rust_checksum() {
         eprintln!("skip: no shared/scenes (set SCION_SCENES); examples/cpp needs a real scene");
         return;
     };
-    let target = build_tools();
+    let target = build_tools(true);
     let build = std::env::temp_dir().join(format!("scion-cpp-example-{}", std::process::id()));
     for (layout, file, scene) in [("LinearBVH", "pbrt", "teapot"), ("PtrBVH", "ptr", "pine")] {
         let scene = scenes.join(format!("{scene}.obj"));
