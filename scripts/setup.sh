@@ -27,6 +27,17 @@ command -v python3 >/dev/null || need_apt+=(python3)
 # The C++ example's test (tests/tests/cpp_example.rs) builds examples/cpp with make and g++.
 command -v g++ >/dev/null || need_apt+=(g++)
 command -v make >/dev/null || need_apt+=(make)
+# ptxas: the same places lit-tests/lit.cfg.py and scion_cuda::ptxas::find look in. It comes
+# from the Python package registry through pip (Debian's python3 may lack pip: python3-pip).
+PTXAS_VERSION=13.5.37
+ptxas_cache="${HOME}/.cache/scion/cuda-${PTXAS_VERSION}/bin/ptxas"
+find_ptxas() {
+  local p
+  for p in "${SCION_PTXAS:-}" "$(command -v ptxas || true)" /usr/local/cuda/bin/ptxas "$ptxas_cache"; do
+    if [ -n "$p" ] && [ -x "$p" ]; then echo "$p"; return; fi
+  done
+}
+if [ -z "$(find_ptxas)" ] && ! python3 -m pip --version >/dev/null 2>&1; then need_apt+=(python3-pip); fi
 # AArch64 code is run, not only disassembled (tests/tests/aarch64_qemu.rs): a cross C compiler
 # with the arm64 C library links it with tests/replay/replay.c, and qemu-user runs it.
 # (Installed without recommends: qemu-user's would register binfmt handlers on the machine.)
@@ -56,13 +67,7 @@ if ! command -v cargo >/dev/null; then
   echo "setup: cargo not found; install the Rust toolchain (rustup) first" >&2
   exit 1
 fi
-# ptxas: the same places lit-tests/lit.cfg.py and scion_cuda::ptxas::find look in.
-PTXAS_VERSION=13.5.37
-ptxas_cache="${HOME}/.cache/scion/cuda-${PTXAS_VERSION}/bin/ptxas"
-ptxas=""
-for p in "${SCION_PTXAS:-}" "$(command -v ptxas || true)" /usr/local/cuda/bin/ptxas "$ptxas_cache"; do
-  if [ -n "$p" ] && [ -x "$p" ]; then ptxas=$p; break; fi
-done
+ptxas=$(find_ptxas)
 if [ -z "$ptxas" ]; then
   echo "setup: installing ptxas ${PTXAS_VERSION} (nvidia-cuda-nvcc wheel, Python package registry) into ${ptxas_cache%/bin/ptxas}" >&2
   tmp=$(mktemp -d)
