@@ -5,32 +5,16 @@
 //! unknown layout, an empty scene) as clear messages with exit status 1 (2 for clap's usage
 //! errors), never a panic.
 
+mod common;
+
+use common::{scion, text, CUBE};
 use scion_runtime::geom::{Ray, Vec3};
 use scion_runtime::query::{read_hits, write_rays};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 fn scratch(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("scion-cli-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("create scratch folder");
-    dir
+    common::scratch("cli", test)
 }
-
-fn scion(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_scion"))
-        .args(args)
-        .output()
-        .expect("run scion")
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
-
-/// A unit cube's six faces as 12 triangles.
-const CUBE: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n\
-f 1 2 3 4\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
 
 fn write(dir: &Path, name: &str, body: &str) -> String {
     let p = dir.join(name);

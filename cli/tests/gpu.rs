@@ -5,6 +5,9 @@
 //! architecture; without a GPU, `--device gpu` is one clear error line and exit status 1; with
 //! one, the GPU's hits are the reference's for both layouts (else one `skip:` line).
 
+mod common;
+
+use common::{scion, text, CUBE};
 use scion_cuda::kit::PtxKit;
 use scion_cuda::ptx;
 use scion_cuda::trace::{
@@ -14,29 +17,10 @@ use scion_cuda::trace::{
 use scion_cuda::CudaError;
 use scion_ir::tree::quant::Boxes;
 use std::path::PathBuf;
-use std::process::{Command, Output};
 
 fn scratch(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("scion-gpu-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("create scratch folder");
-    dir
+    common::scratch("gpu", test)
 }
-
-fn scion(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_scion"))
-        .args(args)
-        .output()
-        .expect("run scion")
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
-
-/// A unit cube's six faces as 12 triangles.
-const CUBE: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n\
-f 1 2 3 4\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
 
 /// `scion ptx --layout layout [--cpu cpu]` into `dir`, read back as a kit.
 fn make_kit(dir: &std::path::Path, layout: &str, cpu: Option<&str>) -> PtxKit {

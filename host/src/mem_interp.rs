@@ -16,7 +16,7 @@
 //! too.
 
 use crate::backend::Backend;
-use crate::oracle::{in_threads, ray_val, tree_depth, CLOSEST_HIT, CLOSEST_HIT_NAME};
+use crate::oracle::{closest_hit_in, in_threads, tree_depth, CLOSEST_HIT, CLOSEST_HIT_NAME};
 use crate::quantized::Boxes;
 use scion_compiler::abi::EntrySig;
 use scion_compiler::driver::cli::Emit;
@@ -237,22 +237,10 @@ impl MemClosestHit {
         let mut hits = Vec::with_capacity(rays.len());
         for (j, ray) in rays.iter().enumerate() {
             let i = first + j;
-            let best = it.alloc(Val::Tuple(vec![
-                Val::F32(ray.tmax),
-                Val::Int(i128::from(u32::MAX), IntTy::U32),
-            ]));
-            it.call(
-                "closest_hit",
-                vec![ptr(b), ray_val(ray), root.clone(), best.clone()],
-            )
-            .map_err(|e| format!("ray {i}: {e}"))?;
-            hits.push(match it.read(&best) {
-                Some(Val::Tuple(p)) => match &p[..] {
-                    [Val::F32(t), Val::Int(id, _)] => Hit::from_best(*t, *id as u32),
-                    _ => return Err(format!("ray {i}: bad `best`")),
-                },
-                _ => return Err(format!("ray {i}: bad `best`")),
-            });
+            hits.push(
+                closest_hit_in(&mut it, vec![ptr(b)], ray, root.clone())
+                    .map_err(|e| format!("ray {i}: {e}"))?,
+            );
         }
         Ok(hits)
     }

@@ -127,22 +127,8 @@ impl ClosestHit {
         let mut hits = Vec::with_capacity(rays.len());
         for (k, ray) in rays.iter().enumerate() {
             let i = first + k;
-            let best = it.alloc(Val::Tuple(vec![
-                Val::F32(ray.tmax),
-                Val::Int(i128::from(u32::MAX), IntTy::U32),
-            ]));
-            it.call(
-                "closest_hit",
-                vec![ray_val(ray), root.clone(), best.clone()],
-            )
-            .map_err(|e| format!("ray {i}: {e}"))?;
-            let hit = match it.read(&best) {
-                Some(Val::Tuple(p)) => match &p[..] {
-                    [Val::F32(t), Val::Int(id, _)] => Hit::from_best(*t, *id as u32),
-                    _ => return Err(format!("ray {i}: `best` holds {}", Val::Tuple(p.clone()))),
-                },
-                other => return Err(format!("ray {i}: `best` is not a pair: {other:?}")),
-            };
+            let hit = closest_hit_in(&mut it, vec![], ray, root.clone())
+                .map_err(|e| format!("ray {i}: {e}"))?;
             hits.push(hit);
         }
         Ok(hits)
@@ -302,6 +288,31 @@ pub fn triangle_val(t: &Triangle) -> Val {
             Val::Int(i128::from(t.id), IntTy::U32),
         ],
     }))
+}
+
+/// Runs the interpreter's `closest_hit(before.., ray, root, best)` for one ray with `best`
+/// starting at `(ray.tmax, u32::MAX)`, and reads `best` back as a [`Hit`]. `before` are the
+/// arguments ahead of the ray (the buffer table at the mem level, none over the logical tree).
+pub fn closest_hit_in(
+    it: &mut Interp<'_>,
+    before: Vec<Val>,
+    ray: &Ray,
+    root: Val,
+) -> Result<Hit, String> {
+    let best = it.alloc(Val::Tuple(vec![
+        Val::F32(ray.tmax),
+        Val::Int(i128::from(u32::MAX), IntTy::U32),
+    ]));
+    let mut args = before;
+    args.extend([ray_val(ray), root, best.clone()]);
+    it.call("closest_hit", args).map_err(|e| e.to_string())?;
+    match it.read(&best) {
+        Some(Val::Tuple(p)) => match &p[..] {
+            [Val::F32(t), Val::Int(id, _)] => Ok(Hit::from_best(*t, *id as u32)),
+            _ => Err(format!("`best` holds {}", Val::Tuple(p.clone()))),
+        },
+        other => Err(format!("`best` is not a pair: {other:?}")),
+    }
 }
 
 /// The prelude's `Ray(origin, direction, tmin, tmax)`.
