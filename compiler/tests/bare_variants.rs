@@ -4,9 +4,8 @@
 //! `tree` interpreter and give the same values as the spelled-out `Em()` forms; a bare variant
 //! with fields is E0234 with a span, never an internal error.
 
-use scion_compiler::driver::cli::Emit;
-use scion_compiler::frontend::{compile, Frontend, PassOptions};
-use scion_ir::diag::SourceMap;
+mod common;
+
 use scion_ir::interp::{Interp, Val};
 use scion_ir::Module;
 
@@ -40,22 +39,7 @@ func tag_called() -> u32 = tag(Em()) + tag(Other())
 
 /// Compiles `text` (no prelude) to the `tree` module, or its rendered diagnostics.
 fn tree_module(text: &str) -> Result<Module, String> {
-    let mut sources = SourceMap::new();
-    let input = sources.add("bare.scion", text.to_string());
-    let fe = Frontend {
-        sources: &sources,
-        prelude: &[],
-        inputs: &[input],
-    };
-    let out = compile(&fe, Emit::Tree, &[], &PassOptions::default());
-    if let Some(ice) = out.internal_error {
-        panic!("internal compiler error: {ice}");
-    }
-    if out.diagnostics.has_errors() {
-        return Err(out.diagnostics.render(&sources));
-    }
-    let file = sources.add("<tree>", out.output.clone().expect("tree text"));
-    Ok(scion_ir::parse_module(&out.output.expect("tree text"), file).expect("tree parses back"))
+    common::tree_module_of(&[("bare.scion", text)], false)
 }
 
 fn run(m: &Module, name: &str, args: Vec<Val>) -> Vec<Val> {

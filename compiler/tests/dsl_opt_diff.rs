@@ -6,12 +6,11 @@
 //! `match` arms, returns from unit functions writing a `mut` parameter), with the default
 //! inlining threshold and with one large enough to inline everything that is not recursive.
 
+mod common;
+
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
-use scion_compiler::driver::cli::Emit;
 use scion_compiler::driver::pipelines::for_level;
-use scion_compiler::frontend::{compile, Frontend, PassOptions};
-use scion_ir::diag::{FileId, SourceMap};
 use scion_ir::interp::{AdtVal, Interp, Val};
 use scion_ir::pass::{PassCx, PassManager};
 use scion_ir::types::{FloatTy, IntTy, Type};
@@ -78,23 +77,7 @@ const FUNCS: &[&str] = &[
 
 /// The `tree` module of the functions above, unoptimized.
 fn tree_module() -> Module {
-    let mut sources = SourceMap::new();
-    let prelude_path = concat!(env!("CARGO_MANIFEST_DIR"), "/../library/prelude.scion");
-    let prelude = std::fs::read_to_string(prelude_path).expect("prelude");
-    let p = sources.add("prelude.scion", prelude);
-    let u = sources.add("uses.scion", USES);
-    let fe = Frontend {
-        sources: &sources,
-        prelude: &[p],
-        inputs: &[u],
-    };
-    let out = compile(&fe, Emit::Tree, &[], &PassOptions::default());
-    assert!(
-        !out.diagnostics.has_errors() && out.internal_error.is_none(),
-        "{}",
-        out.diagnostics.render(&sources)
-    );
-    scion_ir::parse_module(&out.output.expect("tree text"), FileId(0)).expect("parse tree")
+    common::tree_module_of(&[("uses.scion", USES)], true).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// `m` after the `-O3` tree/mem passes, with `mem-inline:max-ops` set to `max_ops`.

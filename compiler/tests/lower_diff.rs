@@ -5,13 +5,13 @@
 //! and LLVM at -O0 and -O3), on random inputs rich in NaN (with payloads), signed zeros,
 //! infinities and subnormals.
 
+mod common;
+
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 use scion_clif::JitModule;
-use scion_compiler::driver::cli::Emit;
-use scion_compiler::frontend::{compile, Frontend, PassOptions};
 use scion_compiler::passes::mem_to_lo::lower_module;
-use scion_ir::diag::{FileId, SourceMap};
+use scion_ir::diag::FileId;
 use scion_ir::entity::TypeId;
 use scion_ir::interp::lo::LoInterp;
 use scion_ir::interp::{AdtVal, Interp, Val};
@@ -37,23 +37,7 @@ const FUNCS: &[&str] = &[
 
 /// The `tree` module of the prelude functions above.
 fn tree_module() -> Module {
-    let mut sources = SourceMap::new();
-    let prelude_path = concat!(env!("CARGO_MANIFEST_DIR"), "/../library/prelude.scion");
-    let prelude = std::fs::read_to_string(prelude_path).expect("prelude");
-    let p = sources.add("prelude.scion", prelude);
-    let u = sources.add("uses.scion", USES);
-    let fe = Frontend {
-        sources: &sources,
-        prelude: &[p],
-        inputs: &[u],
-    };
-    let out = compile(&fe, Emit::Tree, &[], &PassOptions::default());
-    assert!(
-        !out.diagnostics.has_errors() && out.internal_error.is_none(),
-        "{}",
-        out.diagnostics.render(&sources)
-    );
-    scion_ir::parse_module(&out.output.expect("tree text"), FileId(0)).expect("parse tree")
+    common::tree_module_of(&[("uses.scion", USES)], true).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// A value of `ty` drawn from `src` (floats; integers from their bits).

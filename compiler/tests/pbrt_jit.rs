@@ -4,6 +4,8 @@
 //! hand-packed LinearBVH buffers, must find exactly the hit the `tree` interpreter finds on the
 //! same BVH as an algebraic value (paper Figure 4 / Figure 11).
 
+mod common;
+
 use scion_clif::JitModule;
 use scion_compiler::driver::cli::Emit;
 use scion_compiler::frontend::{compile, Frontend, PassOptions};
@@ -23,24 +25,9 @@ type V3 = [f32; 3];
 type Tri = (V3, V3, V3, u32);
 
 fn tree_module() -> Module {
-    let mut sources = SourceMap::new();
-    let lib = concat!(env!("CARGO_MANIFEST_DIR"), "/../library");
-    let prelude = std::fs::read_to_string(format!("{lib}/prelude.scion")).unwrap();
-    let alg = std::fs::read_to_string(format!("{lib}/algorithms/closest_hit.scion")).unwrap();
-    let p = sources.add("prelude.scion", prelude);
-    let a = sources.add("closest_hit.scion", alg);
-    let fe = Frontend {
-        sources: &sources,
-        prelude: &[p],
-        inputs: &[a],
-    };
-    let out = compile(&fe, Emit::Tree, &[], &PassOptions::default());
-    assert!(
-        !out.diagnostics.has_errors(),
-        "{}",
-        out.diagnostics.render(&sources)
-    );
-    scion_ir::parse_module(&out.output.unwrap(), FileId(0)).unwrap()
+    let alg = std::fs::read_to_string(common::library_dir().join("algorithms/closest_hit.scion"))
+        .expect("closest_hit.scion");
+    common::tree_module_of(&[("closest_hit.scion", &alg)], true).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn lo_module() -> Module {

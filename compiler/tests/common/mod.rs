@@ -83,3 +83,36 @@ pub fn strip_positions(debug: &str) -> String {
     out.push_str(rest);
     out
 }
+
+/// The `tree` module of `inputs` (name, text), after the library's prelude when `prelude`,
+/// unoptimized, printed and parsed back; `Err` holds the rendered diagnostics.
+pub fn tree_module_of(inputs: &[(&str, &str)], prelude: bool) -> Result<scion_ir::Module, String> {
+    use scion_compiler::driver::cli::Emit;
+    use scion_compiler::frontend::{compile, Frontend, PassOptions};
+    let mut sources = SourceMap::new();
+    let prelude: Vec<_> = if prelude {
+        let text = std::fs::read_to_string(library_dir().join("prelude.scion")).expect("prelude");
+        vec![sources.add("prelude.scion", text)]
+    } else {
+        vec![]
+    };
+    let files: Vec<_> = inputs
+        .iter()
+        .map(|(name, text)| sources.add(*name, text.to_string()))
+        .collect();
+    let fe = Frontend {
+        sources: &sources,
+        prelude: &prelude,
+        inputs: &files,
+    };
+    let out = compile(&fe, Emit::Tree, &[], &PassOptions::default());
+    if let Some(ice) = out.internal_error {
+        panic!("internal compiler error: {ice}");
+    }
+    if out.diagnostics.has_errors() {
+        return Err(out.diagnostics.render(&sources));
+    }
+    let text = out.output.expect("tree text");
+    let file = sources.add("<tree>", text.clone());
+    Ok(scion_ir::parse_module(&text, file).expect("the printed tree parses back"))
+}
