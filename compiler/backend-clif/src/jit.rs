@@ -15,7 +15,7 @@ use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
 use cranelift_jit::{JITBuilder, JITModule};
 use cranelift_module::{FuncId as ClFuncId, Linkage, Module as _};
 use scion_ir::interp::Val;
-use scion_ir::lo::backend::{from_slot, is_called, to_slot};
+use scion_ir::lo::backend::{call_through_slots, is_called, Trampoline};
 use scion_ir::types::Type;
 use scion_ir::{FuncId, Module};
 use std::collections::HashMap;
@@ -123,36 +123,14 @@ impl JitModule {
             .entries
             .get(name)
             .ok_or_else(|| ClifError(format!("no function `@{name}`")))?;
-        if args.len() != e.params.len() {
-            return Err(ClifError(format!(
-                "`@{name}` takes {} arguments, given {}",
-                e.params.len(),
-                args.len()
-            )));
-        }
-        let mut slots = Vec::with_capacity(args.len().max(1));
-        for (a, t) in args.iter().zip(&e.params) {
-            slots.push(to_slot(a, t).ok_or_else(|| {
-                ClifError(format!(
-                    "`@{name}`: argument {a:?} does not have type {t:?}"
-                ))
-            })?);
-        }
-        slots.push(0);
-        let mut results = vec![0u64; e.results.len().max(1)];
         let code = self.module.get_finalized_function(e.entry);
         // SAFETY: `code` is the finalized trampoline built by `trampoline` with the signature
         // `(ptr, ptr) -> ()` in the host's default (C) calling convention. It reads exactly
-        // `params.len()` u64 slots from `args` (we pass at least that many, checked above) and
-        // writes `results.len()` slots (we allocate that many), and the module, hence the code,
-        // lives as long as `self`.
-        let f: extern "C" fn(*const u64, *mut u64) = unsafe { std::mem::transmute(code) };
-        f(slots.as_ptr(), results.as_mut_ptr());
-        Ok(e.results
-            .iter()
-            .zip(results)
-            .map(|(t, raw)| from_slot(raw, t))
-            .collect())
+        // `params.len()` u64 slots from its first argument and writes `results.len()` slots (at
+        // least one) through the second, as `call_through_slots` provides; the module, hence
+        // the code, lives as long as `self`.
+        let f: Trampoline = unsafe { std::mem::transmute(code) };
+        call_through_slots(name, &e.params, &e.results, args, f).map_err(ClifError)
     }
 }
 

@@ -20,7 +20,7 @@ use inkwell::execution_engine::ExecutionEngine;
 use inkwell::module::Linkage;
 use inkwell::values::{BasicMetadataValueEnum, BasicValueEnum, ValueKind};
 use scion_ir::interp::Val;
-use scion_ir::lo::backend::{from_slot, is_called, to_slot};
+use scion_ir::lo::backend::{call_through_slots, is_called, Trampoline};
 use scion_ir::types::Type;
 use scion_ir::Module;
 use std::collections::HashMap;
@@ -242,35 +242,13 @@ impl JitModule {
             .entries
             .get(name)
             .ok_or_else(|| LlvmError(format!("no function `@{name}`")))?;
-        if args.len() != e.params.len() {
-            return Err(LlvmError(format!(
-                "`@{name}` takes {} arguments, given {}",
-                e.params.len(),
-                args.len()
-            )));
-        }
-        let mut slots = Vec::with_capacity(args.len() + 1);
-        for (a, t) in args.iter().zip(&e.params) {
-            slots.push(to_slot(a, t).ok_or_else(|| {
-                LlvmError(format!(
-                    "`@{name}`: argument {a:?} does not have type {t:?}"
-                ))
-            })?);
-        }
-        slots.push(0);
-        let mut results = vec![0u64; e.results.len().max(1)];
         // SAFETY: `e.entry` is the address of the trampoline `name$entry`, compiled with the
         // signature `void (ptr, ptr)` in the host's C calling convention. It reads exactly
-        // `params.len()` u64 slots from its first argument (we pass at least that many,
-        // checked above) and writes `results.len()` slots through the second (we allocate
-        // that many); the code lives as long as `self`.
-        let f: extern "C" fn(*const u64, *mut u64) = unsafe { std::mem::transmute(e.entry) };
-        f(slots.as_ptr(), results.as_mut_ptr());
-        Ok(e.results
-            .iter()
-            .zip(results)
-            .map(|(t, raw)| from_slot(raw, t))
-            .collect())
+        // `params.len()` u64 slots from its first argument and writes `results.len()` slots
+        // (at least one) through the second, as `call_through_slots` provides; the code lives
+        // as long as `self`.
+        let f: Trampoline = unsafe { std::mem::transmute(e.entry) };
+        call_through_slots(name, &e.params, &e.results, args, f).map_err(LlvmError)
     }
 }
 

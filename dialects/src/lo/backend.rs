@@ -81,6 +81,43 @@ pub fn from_slot(raw: u64, t: &Type) -> Val {
     }
 }
 
+/// A JIT-compiled trampoline `name$entry(args, results)`: reads one 64-bit slot per parameter
+/// from `args` and writes one per result (at least one) through `results`.
+pub type Trampoline = extern "C" fn(*const u64, *mut u64);
+
+/// Calls `@name` (parameters `params`, results `results`) through its trampoline `entry` on
+/// `args`: the arity and every argument's type are checked before the call.
+pub fn call_through_slots(
+    name: &str,
+    params: &[Type],
+    results: &[Type],
+    args: &[Val],
+    entry: Trampoline,
+) -> Result<Vec<Val>, String> {
+    if args.len() != params.len() {
+        return Err(format!(
+            "`@{name}` takes {} arguments, given {}",
+            params.len(),
+            args.len()
+        ));
+    }
+    let mut slots = Vec::with_capacity(args.len() + 1);
+    for (a, t) in args.iter().zip(params) {
+        slots.push(
+            to_slot(a, t)
+                .ok_or_else(|| format!("`@{name}`: argument {a:?} does not have type {t:?}"))?,
+        );
+    }
+    slots.push(0);
+    let mut raw = vec![0u64; results.len().max(1)];
+    entry(slots.as_ptr(), raw.as_mut_ptr());
+    Ok(results
+        .iter()
+        .zip(raw)
+        .map(|(t, r)| from_slot(r, t))
+        .collect())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
