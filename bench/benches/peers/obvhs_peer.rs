@@ -50,33 +50,26 @@ trait Traversable: Send + Sync {
     fn node_bytes(&self) -> usize;
 }
 
-impl Traversable for obvhs::bvh2::Bvh2 {
-    fn closest(&self, ray: ORay, hit: &mut RayHit, tris: &[OTriangle]) -> bool {
-        self.ray_traverse(ray, hit, |r, id| {
-            tris[self.primitive_indices[id] as usize].intersect(r)
-        })
-    }
-    fn primitive_indices(&self) -> &[u32] {
-        &self.primitive_indices
-    }
-    fn node_bytes(&self) -> usize {
-        std::mem::size_of_val(self.nodes.as_slice())
-    }
+/// The same three methods for both obvhs trees (their fields and traversal share names).
+macro_rules! traversable {
+    ($($t:ty),*) => {$(
+        impl Traversable for $t {
+            fn closest(&self, ray: ORay, hit: &mut RayHit, tris: &[OTriangle]) -> bool {
+                self.ray_traverse(ray, hit, |r, id| {
+                    tris[self.primitive_indices[id] as usize].intersect(r)
+                })
+            }
+            fn primitive_indices(&self) -> &[u32] {
+                &self.primitive_indices
+            }
+            fn node_bytes(&self) -> usize {
+                std::mem::size_of_val(self.nodes.as_slice())
+            }
+        }
+    )*};
 }
 
-impl Traversable for obvhs::cwbvh::CwBvh {
-    fn closest(&self, ray: ORay, hit: &mut RayHit, tris: &[OTriangle]) -> bool {
-        self.ray_traverse(ray, hit, |r, id| {
-            tris[self.primitive_indices[id] as usize].intersect(r)
-        })
-    }
-    fn primitive_indices(&self) -> &[u32] {
-        &self.primitive_indices
-    }
-    fn node_bytes(&self) -> usize {
-        std::mem::size_of_val(self.nodes.as_slice())
-    }
-}
+traversable!(obvhs::bvh2::Bvh2, obvhs::cwbvh::CwBvh);
 
 /// The contender named `name` over the tree `build` makes from the converted triangles (its
 /// time is the setup).
