@@ -54,6 +54,8 @@ pub fn host_isa() -> Result<std::sync::Arc<dyn cranelift_codegen::isa::TargetIsa
 /// The Cranelift IR of every function of the `lo` module `m`, as text (one `function` each, in
 /// module order; declarations are left out).
 pub fn print_clif(m: &scion_ir::Module) -> Result<String, ClifError> {
+    let expanded = scion_ir::lo::directed::expanded(m);
+    let m = &*expanded;
     let builder =
         cranelift_jit::JITBuilder::with_isa(host_isa()?, cranelift_module::default_libcall_names());
     let mut cl = cranelift_jit::JITModule::new(builder);

@@ -9,7 +9,9 @@
 //! whether it is a NaN); Cranelift never contracts `a*b+c`,
 //! and `fma` is emitted only for `lo.fma`; `min`/`max` are compare-and-select (Cranelift's
 //! `fmin`/`fmax` propagate NaN, `lo` wants the non-NaN operand); `rem` calls the C library's
-//! `fmodf`/`fmod`; `next_up`/`next_down` step the bit pattern. Blocks are translated in reverse
+//! `fmodf`/`fmod`; `next_up`/`next_down` step the bit pattern; directed rounding (`lo.add_rd`
+//! ...) was expanded into round-to-nearest ops by the callers ([`scion_ir::lo::directed`]).
+//! Blocks are translated in reverse
 //! post-order so every definition is translated before its uses.
 
 use cranelift_codegen::ir::condcodes::{FloatCC, IntCC};
@@ -304,6 +306,12 @@ impl Fx<'_, '_> {
             L::Ctz => Some(self.b.ins().ctz(args[0])),
             L::Min | L::Max => Some(self.min_max(kind == L::Max, args[0], args[1], ct()?, signed)),
             L::NextUp | L::NextDown => Some(self.next(kind == L::NextUp, args[0], ct()?)),
+            L::AddRd | L::AddRu | L::MulRd | L::MulRu => {
+                return Err(format!(
+                    "`lo.{}` reached Cranelift unexpanded (scion_ir::lo::directed::expanded)",
+                    kind.mnemonic()
+                ))
+            }
             L::Cmp => {
                 let pred = o
                     .str_attr("pred")

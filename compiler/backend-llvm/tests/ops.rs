@@ -39,6 +39,17 @@ fn functions() -> Vec<String> {
                 &format!("%r = \"lo.{op}\"(%a0, %a1) : ({t}, {t}) -> {t}"),
             );
         }
+        // Directed rounding (f32 only): expanded on CPUs (`scion_ir::lo::directed`).
+        if t == "f32" {
+            for op in ["add_rd", "add_ru", "mul_rd", "mul_ru"] {
+                add(
+                    format!("{op}_{t}"),
+                    &[t, t],
+                    t,
+                    &format!("%r = \"lo.{op}\"(%a0, %a1) : ({t}, {t}) -> {t}"),
+                );
+            }
+        }
         for op in [
             "neg",
             "abs",
@@ -263,6 +274,10 @@ fn special_f32() -> impl Strategy<Value = u32> {
         Just((-129.5f32).to_bits()),
         any::<u32>(),
         any::<f32>().prop_map(f32::to_bits),
+        // Either sign in [1, 2) and near the top of the range: sums that round (directed
+        // rounding has something to do) and that approach overflow.
+        any::<u32>().prop_map(|b| (b & 0x807f_ffff) | 0x3f80_0000),
+        any::<u32>().prop_map(|b| (b & 0x807f_ffff) | 0x7f00_0000),
     ]
 }
 

@@ -22,6 +22,8 @@ enum Want {
     FloatVec,
     /// `f32` vectors (the quantization builtins).
     F32Vec,
+    /// `f32` and `f32` vectors (directed rounding).
+    F32,
     /// 3-lane float vectors.
     FloatVec3,
     /// Any vector.
@@ -39,6 +41,7 @@ impl Want {
             Want::Float => "a float or a float vector",
             Want::FloatVec => "a float vector",
             Want::F32Vec => "an f32 vector",
+            Want::F32 => "an f32 or an f32 vector",
             Want::FloatVec3 => "a 3-lane float vector",
             Want::Vector => "a vector",
             Want::Collection => "an array, slice or set",
@@ -66,6 +69,9 @@ impl Checker<'_> {
             Want::Float => class == Class::Float || matches!(s, Ty::Vector(p, _) if p.is_float()),
             Want::FloatVec => matches!(s, Ty::Vector(p, _) if p.is_float()),
             Want::F32Vec => matches!(s, Ty::Vector(Prim::F32, _)),
+            // A float literal not yet typed may still become f32.
+            Want::F32 if matches!(s, Ty::Var(_)) => return None,
+            Want::F32 => matches!(s, Ty::Prim(Prim::F32) | Ty::Vector(Prim::F32, _)),
             Want::FloatVec3 => matches!(s, Ty::Vector(p, 3) if p.is_float()),
             Want::Vector => matches!(s, Ty::Vector(..)),
             Want::Collection => matches!(s, Ty::Array(..) | Ty::Slice(_) | Ty::Set(_)),
@@ -88,9 +94,8 @@ impl Checker<'_> {
         let all = args.len();
         let (want, shared, ints): (Want, usize, &[usize]) = match kind {
             Min | Max | Clamp | Abs => (Want::Numeric, all, &[]),
-            Sqrt | Floor | Ceil | Fma | FaddRd | FaddRu | FsubRd | FsubRu | FmulRd | FmulRu => {
-                (Want::Float, all, &[])
-            }
+            Sqrt | Floor | Ceil | Fma => (Want::Float, all, &[]),
+            FaddRd | FaddRu | FsubRd | FsubRu | FmulRd | FmulRu => (Want::F32, all, &[]),
             Dot | Length | Normalize => (Want::FloatVec, all, &[]),
             FrameOrigin => (Want::F32Vec, all, &[]),
             Cross => (Want::FloatVec3, all, &[]),
@@ -126,6 +131,10 @@ impl Checker<'_> {
                     });
                 }
             }
+        }
+        if force && matches!(want, Want::F32) && self.class(&first) == Class::Float {
+            // Only f32 fits: an untyped float literal becomes one.
+            self.unify(&first, &Ty::Prim(Prim::F32)).ok();
         }
         match self.belongs(&first, want) {
             None if !force => return Progress::Wait,

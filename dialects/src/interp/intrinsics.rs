@@ -7,12 +7,14 @@
 //! each lane by the length, `cross` is the usual 3-lane formula, `hmin`/`hmax`/`hsum` fold the
 //! lanes left to right. `sqrt` and `fma` are correctly rounded; `exp`, `log`, `sin` and `cos`
 //! come from the host's math library. The quantization builtins (`frame_origin`, `frame_step`,
-//! `quant_lo`, `quant_hi`) are [`crate::tree::quant`]'s reference functions, lane by lane.
+//! `quant_lo`, `quant_hi`) are [`crate::tree::quant`]'s reference functions, lane by lane; the
+//! directed-rounding ones (`fadd_rd` .. `fmul_ru`, `f32` lanes) [`crate::tree::directed`]'s.
 
 use super::tree::{lanewise1, lanewise2, scalar_type};
 use super::Val;
 use crate::entity::TypeId;
 use crate::module::Module;
+use crate::tree::directed;
 use crate::tree::quant;
 use crate::tree::scalar::Scalar;
 use crate::types::{IntTy, Type};
@@ -145,6 +147,23 @@ pub fn eval(m: &Module, name: &str, args: &[Val], result: TypeId) -> R {
             [a, b, c] => fma3(a, b, c),
             _ => Err("`fma` needs three operands".into()),
         },
+        "fadd_rd" | "fadd_ru" | "fsub_rd" | "fsub_ru" | "fmul_rd" | "fmul_ru" => {
+            let (a, b) = two()?;
+            let dir = if name.ends_with("_ru") {
+                directed::Round::Up
+            } else {
+                directed::Round::Down
+            };
+            let f = match &name[..4] {
+                "fadd" => directed::add,
+                "fsub" => directed::sub,
+                _ => directed::mul,
+            };
+            lanewise2(a, b, &|x, y| match (x, y) {
+                (Scalar::F32(x), Scalar::F32(y)) => Ok(Scalar::F32(f(x, y, dir))),
+                _ => Err("directed rounding takes f32 lanes".into()),
+            })
+        }
         "frame_origin" => lanewise1(one()?, &|x| match x {
             Scalar::F32(v) => Ok(Scalar::F32(quant::frame_origin(v))),
             _ => Err("expects f32 lanes".into()),

@@ -15,6 +15,7 @@ use crate::entity::{BlockId, FuncId, OpId, TypeId, ValueId};
 use crate::lo::Op;
 use crate::module::Module;
 use crate::op::OpKind;
+use crate::tree::directed;
 use crate::tree::scalar::{self, Scalar};
 use crate::tree::CmpPred;
 use crate::types::{FloatTy, IntTy, Type};
@@ -271,6 +272,14 @@ impl<'m> LoInterp<'m> {
                 match sc(0)? {
                     Scalar::F32(x) => Val::F32(next_f32(x, up)),
                     Scalar::F64(x) => Val::F64(next_f64(x, up)),
+                    _ => return Err(bad()),
+                }
+            }
+            Op::AddRd | Op::AddRu | Op::MulRd | Op::MulRu => {
+                let (mul, dir) = kind.directed().ok_or_else(bad)?;
+                match (sc(0)?, sc(1)?) {
+                    (Scalar::F32(a), Scalar::F32(b)) if mul => Val::F32(directed::mul(a, b, dir)),
+                    (Scalar::F32(a), Scalar::F32(b)) => Val::F32(directed::add(a, b, dir)),
                     _ => return Err(bad()),
                 }
             }

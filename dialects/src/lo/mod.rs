@@ -8,9 +8,11 @@
 //! `lo.stack_slot` for frame memory (explicit traversal stacks, `mut` cells). Each op maps to
 //! one or a few Cranelift instructions (`scion-clif`) and later LLVM instructions. Scalar
 //! semantics are `tree`'s ([`crate::tree::scalar`]); `min`/`max` are IEEE `minNum`/`maxNum`;
-//! directed rounding is a round-to-nearest op followed by `next_up`/`next_down`.
+//! directed rounding (`add_rd` .. `mul_ru`, `f32`) is exact ([`crate::tree::directed`]), kept
+//! as ops for NVPTX and expanded into round-to-nearest ops for CPUs ([`directed`]).
 
 pub mod backend;
+pub mod directed;
 pub mod nan;
 pub mod ops;
 pub mod verify;

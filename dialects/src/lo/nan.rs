@@ -1,7 +1,8 @@
 //! Where a backend may skip the canonicalization of an arithmetic NaN. Input: the blocks of a
 //! `lo` function; output: the float results whose NaN payload nothing can observe.
 //!
-//! `lo` float `add sub mul div rem` produce the canonical quiet NaN ([`crate::tree::scalar`]):
+//! `lo` float `add sub mul div rem` (and the directed `add_rd` .. `mul_ru`) produce the
+//! canonical quiet NaN ([`crate::tree::scalar`]):
 //! the interpreters canonicalize after every such op, the backends with a compare and a
 //! select. That is needed only where the payload can be seen. A use that is another float
 //! `add sub mul div rem` or a compare ([`payload_blind_use`]) sees only whether its operand is
@@ -30,7 +31,7 @@ pub fn payload_blind_use(m: &Module, op: OpId) -> bool {
             .results
             .first()
             .is_some_and(|&r| matches!(m.types.get(m.values[r].ty), Type::Float(_))),
-        OpKind::Lo(L::Cmp) => true,
+        OpKind::Lo(L::Cmp | L::AddRd | L::AddRu | L::MulRd | L::MulRu) => true,
         _ => false,
     }
 }
@@ -47,6 +48,7 @@ pub fn payload_blind_results(m: &Module, blocks: &[BlockId]) -> ValueSet {
             if matches!(
                 o.kind,
                 OpKind::Lo(L::Add | L::Sub | L::Mul | L::Div | L::Rem)
+                    | OpKind::Lo(L::AddRd | L::AddRu | L::MulRd | L::MulRu)
             ) {
                 arith.extend(o.results.iter().copied());
             }

@@ -65,11 +65,19 @@ pub enum Op {
     /// `lo.fma` `(T, T, T) -> T`: `a * b + c` rounded once.
     Fma,
     /// `lo.next_up` `(T) -> T`, floats: the next float toward `+inf` (NaN and `+inf` stay;
-    /// `±0` gives the smallest positive subnormal). Emulates round-up after a round-to-nearest
-    /// operation, one ulp outward unconditionally (layout catalog §3.8).
+    /// `±0` gives the smallest positive subnormal).
     NextUp,
     /// `lo.next_down` `(T) -> T`: the next float toward `-inf`.
     NextDown,
+    /// `lo.add_rd` `(f32, f32) -> f32`: addition rounded toward `-inf`
+    /// ([`crate::tree::directed`]: exact IEEE directed rounding, canonical NaN).
+    AddRd,
+    /// `lo.add_ru` `(f32, f32) -> f32`: addition rounded toward `+inf`.
+    AddRu,
+    /// `lo.mul_rd` `(f32, f32) -> f32`: multiplication rounded toward `-inf`.
+    MulRd,
+    /// `lo.mul_ru` `(f32, f32) -> f32`: multiplication rounded toward `+inf`.
+    MulRu,
     /// `lo.popcount` `(T) -> T`, integers: the number of one bits.
     Popcount,
     /// `lo.clz` `(T) -> T`, integers: leading zero bits within the width (the width for 0).
@@ -102,7 +110,7 @@ pub enum Op {
 
 impl Op {
     /// Every op, in declaration order.
-    pub const ALL: [Op; 40] = [
+    pub const ALL: [Op; 44] = [
         Op::Const,
         Op::Add,
         Op::Sub,
@@ -131,6 +139,10 @@ impl Op {
         Op::Fma,
         Op::NextUp,
         Op::NextDown,
+        Op::AddRd,
+        Op::AddRu,
+        Op::MulRd,
+        Op::MulRu,
         Op::Popcount,
         Op::Clz,
         Op::Ctz,
@@ -176,6 +188,10 @@ impl Op {
             Op::Fma => "fma",
             Op::NextUp => "next_up",
             Op::NextDown => "next_down",
+            Op::AddRd => "add_rd",
+            Op::AddRu => "add_ru",
+            Op::MulRd => "mul_rd",
+            Op::MulRu => "mul_ru",
             Op::Popcount => "popcount",
             Op::Clz => "clz",
             Op::Ctz => "ctz",
@@ -246,6 +262,29 @@ impl Op {
             Op::Not => T::Not,
             _ => return None,
         })
+    }
+
+    /// For the directed-rounding ops: whether it multiplies (else adds), and the direction.
+    pub fn directed(self) -> Option<(bool, crate::tree::directed::Round)> {
+        use crate::tree::directed::Round;
+        Some(match self {
+            Op::AddRd => (false, Round::Down),
+            Op::AddRu => (false, Round::Up),
+            Op::MulRd => (true, Round::Down),
+            Op::MulRu => (true, Round::Up),
+            _ => return None,
+        })
+    }
+
+    /// The directed-rounding op for `mul` (else `add`) in direction `dir`.
+    pub fn with_rounding(mul: bool, dir: crate::tree::directed::Round) -> Op {
+        use crate::tree::directed::Round;
+        match (mul, dir) {
+            (false, Round::Down) => Op::AddRd,
+            (false, Round::Up) => Op::AddRu,
+            (true, Round::Down) => Op::MulRd,
+            (true, Round::Up) => Op::MulRu,
+        }
     }
 
     /// True for the float-only unary intrinsics.

@@ -134,6 +134,13 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
                 format!("`{name}` needs a float")
             })
         }
+        Op::AddRd | Op::AddRu | Op::MulRd | Op::MulRu => {
+            counts(2, 1)?;
+            let f32t = matches!(t.get(rt[0]), Type::Float(FloatTy::F32));
+            require(all_same() && f32t, || {
+                format!("`{name}` needs two f32 of the result type (directed rounding is f32 only)")
+            })
+        }
         Op::Fma => {
             counts(3, 1)?;
             require(all_same() && is_float(rt[0]), || {

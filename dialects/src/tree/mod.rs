@@ -11,6 +11,7 @@
 //!
 //! [`ops`] lists the op kinds, [`verify`] their rules; this module adds builder shorthands.
 
+pub mod directed;
 pub mod ops;
 pub mod quant;
 pub mod scalar;

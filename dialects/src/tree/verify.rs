@@ -633,6 +633,7 @@ pub fn intrinsic_signature(m: &Module, name: &str, args: &[TypeId], result: Type
     let f32_vec = |ty: TypeId| {
         t.lanes(ty).is_some() && matches!(t.get(t.scalar_of(ty)), Type::Float(FloatTy::F32))
     };
+    let is_f32 = |ty: TypeId| matches!(t.get(t.scalar_of(ty)), Type::Float(FloatTy::F32));
     let sig = |n: usize, ok: bool| -> VResult {
         if args.len() != n {
             return Err(format!("`{name}` takes {n} operands, found {}", args.len()));
@@ -655,7 +656,7 @@ pub fn intrinsic_signature(m: &Module, name: &str, args: &[TypeId], result: Type
         }
         "fma" => sig(3, all_same(3) && is_float(result)),
         "fadd_rd" | "fadd_ru" | "fsub_rd" | "fsub_ru" | "fmul_rd" | "fmul_ru" => {
-            sig(2, all_same(2) && is_float(result))
+            sig(2, all_same(2) && is_f32(result))
         }
         "with_axis" => sig(
             3,

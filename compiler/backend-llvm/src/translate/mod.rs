@@ -19,9 +19,9 @@
 //! compare-and-select (minNum/maxNum, first operand on ties, never `llvm.minnum`, whose zero
 //! and NaN-payload cases are looser); `rem` is `frem` (C `fmod`; an error on NVPTX, whose
 //! `frem` is not exact); float-to-int casts are the
-//! saturating `llvm.fpto[su]i.sat`; `next_up`/`next_down` step the bit pattern (the portable
-//! sequence: NVVM's directed-rounding intrinsics round an *operation*, they cannot step a
-//! given value, so they would not be bit-identical to the interpreters' `next_up`). Integer
+//! saturating `llvm.fpto[su]i.sat`; `next_up`/`next_down` step the bit pattern; directed rounding
+//! (`lo.add_rd` ...) is `llvm.nvvm.{add,mul}.{rm,rp}.f` on NVPTX and, for CPUs, expanded into
+//! round-to-nearest ops before translation (`scion_ir::lo::directed`). Integer
 //! division never traps (by zero divides by 1, `MIN / -1` wraps) and shift amounts are taken
 //! modulo the width, as in `scion-clif`. Loads and stores: on CPUs `align 1` (x86-64 and
 //! AArch64 access unaligned scalars at full speed, so nothing is assumed); on NVPTX, where an
@@ -144,6 +144,15 @@ pub fn translate<'c>(
     target: Target,
     internalize: bool,
 ) -> R<(LModule<'c>, HashMap<String, FunctionValue<'c>>)> {
+    // CPUs round per instruction only through a global mode: expand directed rounding into
+    // round-to-nearest ops; NVPTX keeps it for `add.rp.f32` and friends.
+    let expanded;
+    let m = if target == Target::Nvptx64 {
+        m
+    } else {
+        expanded = scion_ir::lo::directed::expanded(m);
+        &*expanded
+    };
     let lm = cx.create_module(name);
     let exports = internalize && has_exports(m);
     let mut funcs = HashMap::new();
@@ -460,6 +469,22 @@ impl<'c> Fn<'_, 'c> {
                     _ => b.build_float_rem(x, y, ""),
                 }
                 .map_err(be)?;
+                if self.blind.contains(&o.results[0]) {
+                    Some(r.into())
+                } else {
+                    Some(self.canon(r)?)
+                }
+            }
+            L::AddRd | L::AddRu | L::MulRd | L::MulRu => {
+                // Only NVPTX gets here (elsewhere `translate` expanded them): PTX rounds per
+                // instruction, `add.rm.f32` ... (non-ftz, so subnormals are kept).
+                let name = match kind {
+                    L::AddRd => "llvm.nvvm.add.rm.f",
+                    L::AddRu => "llvm.nvvm.add.rp.f",
+                    L::MulRd => "llvm.nvvm.mul.rm.f",
+                    _ => "llvm.nvvm.mul.rp.f",
+                };
+                let r = self.call_intr(name, &[], &args)?.into_float_value();
                 if self.blind.contains(&o.results[0]) {
                     Some(r.into())
                 } else {

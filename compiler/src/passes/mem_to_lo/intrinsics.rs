@@ -2,9 +2,10 @@
 //! order (`dot` sums the lane products left to right without fusing; `cross` is
 //! `a[i]*b[j] - a[j]*b[i]`; `hmin`/`hmax`/`hsum` fold left to right).
 //!
-//! `min`/`max` are `lo.min`/`lo.max` (IEEE minNum/maxNum). Directed rounding (`fadd_rd` ...)
-//! is the round-to-nearest op followed by one ulp outward, unconditionally (`lo.next_down` /
-//! `lo.next_up`, layout catalog §3.8). `isnan` is `x != x`; `rsqrt` is `1 / sqrt`; `length`
+//! `min`/`max` are `lo.min`/`lo.max` (IEEE minNum/maxNum). Directed rounding keeps its exact
+//! ops (`fadd_rd` is `lo.add_rd`, `fsub_ru(a, b)` is `lo.add_ru(a, -b)`, `fmul_rd` is
+//! `lo.mul_rd`): NVPTX has them per instruction, CPU backends expand them
+//! (`scion_ir::lo::directed`). `isnan` is `x != x`; `rsqrt` is `1 / sqrt`; `length`
 //! is `sqrt(dot(v, v))`; `normalize` divides each lane by the length. Intrinsics without a
 //! scalar form here (transcendentals, `round`, options, sets) are reported, never guessed; the
 //! quantization builtins are [`super::quant`]'s.
@@ -38,17 +39,15 @@ pub(super) fn lower(
             })
             .collect())
     };
-    let lanewise2 = |cx: &mut FnLower<'_>, ops: &[L]| -> R<Vec<ValueId>> {
+    // `op` on the two operands' lanes, the second one negated first when `negate`.
+    let lanewise2 = |cx: &mut FnLower<'_>, op: L, negate: bool| -> R<Vec<ValueId>> {
         let (a, b) = (arg(0)?, arg(1)?);
         Ok(a.iter()
             .zip(&b)
             .map(|(&x, &y)| {
                 let ty = cx.ty_of(x);
-                let mut v = cx.e1(cur, ops[0], &[x, y], ty);
-                for &op in &ops[1..] {
-                    v = cx.e1(cur, op, &[v], ty);
-                }
-                v
+                let y = if negate { cx.e1(cur, L::Neg, &[y], ty) } else { y };
+                cx.e1(cur, op, &[x, y], ty)
             })
             .collect())
     };
@@ -64,14 +63,14 @@ pub(super) fn lower(
         "popcount" => lanewise1(cx, L::Popcount)?,
         "clz" => lanewise1(cx, L::Clz)?,
         "ctz" => lanewise1(cx, L::Ctz)?,
-        "min" => lanewise2(cx, &[L::Min])?,
-        "max" => lanewise2(cx, &[L::Max])?,
-        "fadd_rd" => lanewise2(cx, &[L::Add, L::NextDown])?,
-        "fadd_ru" => lanewise2(cx, &[L::Add, L::NextUp])?,
-        "fsub_rd" => lanewise2(cx, &[L::Sub, L::NextDown])?,
-        "fsub_ru" => lanewise2(cx, &[L::Sub, L::NextUp])?,
-        "fmul_rd" => lanewise2(cx, &[L::Mul, L::NextDown])?,
-        "fmul_ru" => lanewise2(cx, &[L::Mul, L::NextUp])?,
+        "min" => lanewise2(cx, L::Min, false)?,
+        "max" => lanewise2(cx, L::Max, false)?,
+        "fadd_rd" => lanewise2(cx, L::AddRd, false)?,
+        "fadd_ru" => lanewise2(cx, L::AddRu, false)?,
+        "fsub_rd" => lanewise2(cx, L::AddRd, true)?,
+        "fsub_ru" => lanewise2(cx, L::AddRu, true)?,
+        "fmul_rd" => lanewise2(cx, L::MulRd, false)?,
+        "fmul_ru" => lanewise2(cx, L::MulRu, false)?,
         "fma" => {
             let (a, b, c) = (arg(0)?, arg(1)?, arg(2)?);
             (0..a.len())

@@ -186,6 +186,11 @@ fn builtins() {
         "func f(v: f64x3) -> u32x3 = quant_lo(v, v, v, 65535)",
         "E0231",
     );
+    // Directed rounding is exact on f32 (scion_ir::tree::directed); a float literal becomes f32.
+    ok("func f(a: f32, b: f32x2) -> f32 = fadd_ru(a, 1.5) + fmul_rd(b, b).x + fsub_ru(a, a)");
+    ok("func f() -> f32 = fadd_rd(0.1, 0.2)");
+    err("func f(a: f64) -> f64 = fadd_ru(a, a)", "E0231");
+    err("func f(a: f64x3) -> f64x3 = fmul_rd(a, a)", "E0231");
 }
 
 #[test]
