@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
 # The GPU check (issue 4 part 5, docs/gpu.md): on a machine with an NVIDIA GPU, trace every
-# scene of the scenes folder with closest hit for layouts pbrt, ptr and pbrt-q16 on the GPU,
-# primary and secondary rays, each hit compared bit for bit with the CPU reference (pbrt-q16's
-# is the reference traversal of its decoded boxes, in both modes: the kit names its boxes);
-# then run the GPU tests of scion-cuda. Prints one summary table and exits 0 only when everything passed.
+# scene of the scenes folder with closest hit for layouts pbrt, ptr, pbrt-q16 and sg-eq on the
+# GPU, primary and secondary rays, each hit compared bit for bit with the CPU reference (the
+# quantized layouts' is the reference traversal of their decoded boxes, in both modes: the kit
+# names its boxes; sg-eq decodes with PTX's directed rounding, add.rm/mul.rm/sub.rp);
+# then run the GPU tests of scion-cuda. Prints one summary table and exits 0 only when
+# everything that ran passed and pbrt and ptr ran on every scene. Layout by layout, smallest
+# scene first: a spent budget leaves out the last layouts' largest scenes (NOT RUN rows).
 #
 # Runs from the kit made by scripts/gpu-kit.sh (no Rust toolchain needed):
 #   gpu-kit/gpu-check.sh                   # or: GPU_KIT=gpu-kit scripts/gpu-check.sh
@@ -16,6 +19,8 @@
 #                      PTX kits with scion-gpu), or auto (scion when it starts, else kit)
 #   GPU_CHECK_TIMEOUT  seconds per run (default 60)
 #   GPU_CHECK_BUDGET   seconds for all the traces (default 300): later ones are not started
+#   GPU_CHECK_LAYOUTS  the layouts, in order (default "pbrt ptr pbrt-q16 sg-eq"); pbrt and ptr
+#                      must run on every scene, the others as the budget allows
 #   OUT                where logs and summary.txt go (default: <kit>/results)
 set -uo pipefail
 
@@ -26,6 +31,7 @@ N=${GPU_CHECK_N:-1048576}
 RUNS=${GPU_CHECK_RUNS:-9}
 TIMEOUT=${GPU_CHECK_TIMEOUT:-60}
 BUDGET=${GPU_CHECK_BUDGET:-300}
+LAYOUTS=${GPU_CHECK_LAYOUTS:-pbrt ptr pbrt-q16 sg-eq}
 RESULTS=${OUT:-$KIT/results}
 mkdir -p "$RESULTS/logs"
 SUMMARY=$RESULTS/summary.txt
@@ -77,21 +83,26 @@ say ""
 
 start=$(date +%s)
 failures=0
+not_run=0
+identical=0
 TSV=$RESULTS/traces.tsv
 printf 'scene\tlayout\trays\ttriangles\tpack_s\tmrays\tcheck\n' > "$TSV"
 table=$(printf '%-18s %-8s %-10s %10s %9s %12s  %s' scene layout rays triangles "pack s" "Mrays/s" check)
 rows=()
 # Smallest scenes first, so a spent budget leaves out the largest.
 mapfile -t objs < <(ls -Sr "$scenes"/*.obj)
-for obj in "${objs[@]}"; do
+for layout in $LAYOUTS; do
   [ $no_device -eq 0 ] || break
-  scene=$(basename "$obj" .obj)
-  for layout in pbrt ptr pbrt-q16; do
+  [ -f "$KIT/ptx/$layout.ptx" ] || [ "$mode" = scion ] || { say "gpu-check: no kit for $layout"; failures=$((failures + 1)); continue; }
+  for obj in "${objs[@]}"; do
+    scene=$(basename "$obj" .obj)
     for rays in primary secondary; do
       log=$RESULTS/logs/$scene-$layout-$rays.log
       if [ $(( $(date +%s) - start )) -ge "$BUDGET" ]; then
         row=$(printf '%-18s %-8s %-10s %10s %9s %12s  %s' "$scene" "$layout" "$rays" - - - "NOT RUN (GPU_CHECK_BUDGET ${BUDGET}s spent)")
-        rows+=("$row"); echo "$row"; failures=$((failures + 1))
+        rows+=("$row"); echo "$row"; not_run=$((not_run + 1))
+        case $layout in pbrt|ptr) failures=$((failures + 1));; esac
+        printf '%s\t%s\t%s\t-\t-\t-\tNOT RUN\n' "$scene" "$layout" "$rays" >> "$TSV"
         continue
       fi
       if [ "$mode" = scion ]; then
@@ -109,7 +120,7 @@ for obj in "${objs[@]}"; do
       pack=$(awk '/^pack time/ {print $3}' "$log" | head -1)
       check=$(sed -n 's/^check *//p' "$log" | head -1)
       if [ $rc -eq 0 ] && [[ "$check" == identical* ]]; then
-        verdict="ok"
+        verdict="ok"; identical=$((identical + 1))
       elif [ $rc -eq 124 ]; then
         verdict="TIMEOUT after ${TIMEOUT}s"; failures=$((failures + 1))
       elif [ -n "$check" ]; then
@@ -148,26 +159,30 @@ say "$table"
 for r in "${rows[@]}"; do say "$r"; done
 say ""
 total=${#rows[@]}
-say "gpu-check: $((total - failures)) of $total traces identical to the reference; $tests_failed test binaries failed"
-# The Mrays/s as the Markdown table of docs/benchmarks.md: one row per scene, the kernel's
-# throughput per layout and ray kind, and pbrt-q16 and ptr as ratios to pbrt in the same run.
-awk -F'\t' -v device="$(printf '%s' "$info" | head -1)" '
+ran=$((total - not_run))
+say "gpu-check: $identical of $ran traces identical to the reference; $not_run not run (budget spent; a failure for pbrt and ptr); $tests_failed test binaries failed"
+# The Mrays/s as the Markdown table of docs/benchmarks.md: one row per scene and ray kind, the
+# kernel's throughput per layout, and each other layout as a ratio to pbrt in the same run.
+awk -F'\t' -v device="$(printf '%s' "$info" | head -1)" -v layouts="$LAYOUTS" '
   NR == 1 { next }
-  { key = $1 SUBSEP $2 SUBSEP $3; m[key] = $6; ok[key] = ($7 == "ok"); tris[$1] = $4
+  { key = $1 SUBSEP $2 SUBSEP $3; m[key] = $6; ok[key] = ($7 == "ok"); if ($4 != "-") tris[$1] = $4
     if (!($1 in seen)) { seen[$1] = 1; order[++n] = $1 } }
   function cell(s, l, r,   k) { k = s SUBSEP l SUBSEP r; return (k in m && m[k] != "-") ? m[k] (ok[k] ? "" : " (!)") : "-" }
   function ratio(s, l, r,   a, b) { a = m[s SUBSEP l SUBSEP r]; b = m[s SUBSEP "pbrt" SUBSEP r]
     return (a + 0 > 0 && b + 0 > 0) ? sprintf("%.2f", a / b) : "-" }
   END {
+    nl = split(layouts, L, " ")
     print "GPU: " device ", closest hit, 2^20 rays, kernel Mrays/s (trimmed mean of the timed runs); (!) = not identical to the reference"
     print ""
-    print "| scene | triangles | pbrt primary | pbrt secondary | ptr primary | ptr secondary | pbrt-q16 primary | pbrt-q16 secondary | ptr/pbrt prim, sec | q16/pbrt prim, sec |"
-    print "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
-    for (i = 1; i <= n; i++) { s = order[i]
-      printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s, %s | %s, %s |\n", s, tris[s],
-        cell(s, "pbrt", "primary"), cell(s, "pbrt", "secondary"), cell(s, "ptr", "primary"), cell(s, "ptr", "secondary"),
-        cell(s, "pbrt-q16", "primary"), cell(s, "pbrt-q16", "secondary"),
-        ratio(s, "ptr", "primary"), ratio(s, "ptr", "secondary"), ratio(s, "pbrt-q16", "primary"), ratio(s, "pbrt-q16", "secondary") }
+    head = "| scene | triangles | rays |"; rule = "|---|---:|---|"
+    for (j = 1; j <= nl; j++) { head = head " " L[j] " |"; rule = rule "---:|" }
+    for (j = 1; j <= nl; j++) if (L[j] != "pbrt") { head = head " " L[j] "/pbrt |"; rule = rule "---:|" }
+    print head; print rule
+    for (i = 1; i <= n; i++) for (k = 1; k <= 2; k++) { s = order[i]; r = (k == 1 ? "primary" : "secondary")
+      line = "| " s " | " (s in tris ? tris[s] : "-") " | " r " |"
+      for (j = 1; j <= nl; j++) line = line " " cell(s, L[j], r) " |"
+      for (j = 1; j <= nl; j++) if (L[j] != "pbrt") line = line " " ratio(s, L[j], r) " |"
+      print line }
   }' "$TSV" > "$RESULTS/benchmarks.md"
 if [ "$total" -gt 0 ]; then
   say ""

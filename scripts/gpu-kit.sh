@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Prepares gpu-kit/: everything scripts/gpu-check.sh runs on a GPU machine that has the NVIDIA
 # driver but no Rust toolchain (and maybe no LLVM 22): release binaries, the GPU test binaries
-# of scion-cuda, PTX kits for pbrt, ptr and pbrt-q16 (so the check also runs where `scion`
+# of scion-cuda, PTX kits for pbrt, ptr, pbrt-q16 and sg-eq (so the check also runs where `scion`
 # cannot start for lack of libLLVM) and the scenes, gzipped. Run it here, from the repository root; carry
 # `gpu-kit` (about 31 MB, git-ignored) to the GPU machine. See docs/gpu.md.
 set -euo pipefail
@@ -32,7 +32,7 @@ for line in sys.stdin:
         print("test binary", dest)
 ' "$KIT"
 
-for layout in pbrt ptr pbrt-q16; do
+for layout in pbrt ptr pbrt-q16 sg-eq; do
   target/release/scion ptx --layout "$layout" -o "$KIT/ptx/$layout.ptx"
 done
 cp scripts/gpu-check.sh "$KIT/"

@@ -105,7 +105,7 @@ pub struct TraceArgs {
     #[arg(long, value_name = "PATH.obj")]
     pub scene: PathBuf,
     /// The layout for `--backend jit|llvm|mem-interp` (a name from library/layouts, e.g. pbrt,
-    /// ptr, pbrt-align16, pbrt-soaos, pbrt-q16; default pbrt). Layout-free
+    /// ptr, pbrt-align16, pbrt-soaos, pbrt-q16, sg-eq; default pbrt). Layout-free
     /// backends trace the logical tree and ignore it.
     #[arg(long)]
     pub layout: Option<String>,

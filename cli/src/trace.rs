@@ -33,6 +33,7 @@ pub const LAYOUTS: &[(&str, &str)] = &[
     ("pbrt-align16", "library/layouts/pbrt_align16.scion"),
     ("pbrt-soaos", "library/layouts/pbrt_soaos.scion"),
     ("pbrt-q16", "library/layouts/pbrt_q16.scion"),
+    ("sg-eq", "library/layouts/sg_eq.scion"),
 ];
 
 /// Runs `scion trace`.

@@ -84,6 +84,14 @@ fn ptx_kits_have_the_contract_kernels() {
         !kit.ptx.contains("fma.rn.ftz"),
         "pbrt-q16: flush-to-zero decoder"
     );
+    // sg-eq decodes with directed rounding: one PTX instruction each, never flushed to zero.
+    let kit = make_kit(&dir, "sg-eq", None);
+    assert_eq!(kit.layout, "SgEq");
+    assert_eq!(kit.boxes, Boxes::SnappedQ10);
+    for op in ["mul.rm.f32", "add.rm.f32", "sub.rp.f32"] {
+        assert!(kit.ptx.contains(op), "sg-eq: no {op}");
+    }
+    assert!(!kit.ptx.contains(".ftz"), "sg-eq: flush-to-zero decoder");
     let kit = make_kit(&dir, "pbrt", Some("sm_80"));
     assert_eq!(ptx::directive(&kit.ptx, ".target"), Some("sm_80"));
 }
@@ -99,7 +107,14 @@ fn ptxas_assembles_the_kits_and_its_log_sizes_the_packing_stack() {
         return;
     };
     let dir = scratch("ptxas");
-    for layout in ["pbrt", "ptr", "pbrt-q16", "pbrt-align16", "pbrt-soaos"] {
+    for layout in [
+        "pbrt",
+        "ptr",
+        "pbrt-q16",
+        "pbrt-align16",
+        "pbrt-soaos",
+        "sg-eq",
+    ] {
         let kit = make_kit(&dir, layout, None);
         let log = scion_cuda::ptxas::assemble(&ptxas, &kit.ptx, "sm_90")
             .unwrap_or_else(|e| panic!("{layout}: {e}"));

@@ -1,5 +1,5 @@
 //! The quantization builtins (`frame_origin`, `frame_step`, `quant_lo`, `quant_hi`, layout
-//! catalog §2.4):
+//! catalog §2.4, and the snapped-grid `sg_bins`, `sg_code_up`, `sg_code_down`, §3.8):
 //!
 //! * differential: the `tree` interpreter (which calls `scion_ir::tree::quant`), the `lo`
 //!   interpreter after `mem-to-lo`, the Cranelift JIT and LLVM at -O0 and -O3 give the same bits
@@ -49,6 +49,26 @@ func @q(%v: vector<3xf32>, %o: vector<3xf32>, %s: vector<3xf32>) -> (vector<3xu3
 func @qm(%v: vector<3xf32>, %o: vector<3xf32>, %s: vector<3xf32>, %m: u32) -> (vector<3xu32>, vector<3xu32>) {
   %a = "tree.intrinsic"(%v, %o, %s, %m) {name = "quant_lo"} : (vector<3xf32>, vector<3xf32>, vector<3xf32>, u32) -> vector<3xu32>
   %b = "tree.intrinsic"(%v, %o, %s, %m) {name = "quant_hi"} : (vector<3xf32>, vector<3xf32>, vector<3xf32>, u32) -> vector<3xu32>
+  "tree.return"(%a, %b) : (vector<3xu32>, vector<3xu32>) -> ()
+}
+func @sgb(%lo: vector<3xf32>, %hi: vector<3xf32>) -> vector<3xf32> {
+  %m = "tree.const"() {value = 1023} : () -> u32
+  %r = "tree.intrinsic"(%lo, %hi, %m) {name = "sg_bins"} : (vector<3xf32>, vector<3xf32>, u32) -> vector<3xf32>
+  "tree.return"(%r) : (vector<3xf32>) -> ()
+}
+func @sgbm(%lo: vector<3xf32>, %hi: vector<3xf32>, %m: u32) -> vector<3xf32> {
+  %r = "tree.intrinsic"(%lo, %hi, %m) {name = "sg_bins"} : (vector<3xf32>, vector<3xf32>, u32) -> vector<3xf32>
+  "tree.return"(%r) : (vector<3xf32>) -> ()
+}
+func @sgc(%v: vector<3xf32>, %lo: vector<3xf32>, %hi: vector<3xf32>) -> (vector<3xu32>, vector<3xu32>) {
+  %m = "tree.const"() {value = 1023} : () -> u32
+  %a = "tree.intrinsic"(%v, %lo, %hi, %m) {name = "sg_code_up"} : (vector<3xf32>, vector<3xf32>, vector<3xf32>, u32) -> vector<3xu32>
+  %b = "tree.intrinsic"(%v, %lo, %hi, %m) {name = "sg_code_down"} : (vector<3xf32>, vector<3xf32>, vector<3xf32>, u32) -> vector<3xu32>
+  "tree.return"(%a, %b) : (vector<3xu32>, vector<3xu32>) -> ()
+}
+func @sgcm(%v: vector<3xf32>, %lo: vector<3xf32>, %hi: vector<3xf32>, %m: u32) -> (vector<3xu32>, vector<3xu32>) {
+  %a = "tree.intrinsic"(%v, %lo, %hi, %m) {name = "sg_code_up"} : (vector<3xf32>, vector<3xf32>, vector<3xf32>, u32) -> vector<3xu32>
+  %b = "tree.intrinsic"(%v, %lo, %hi, %m) {name = "sg_code_down"} : (vector<3xf32>, vector<3xf32>, vector<3xf32>, u32) -> vector<3xu32>
   "tree.return"(%a, %b) : (vector<3xu32>, vector<3xu32>) -> ()
 }
 "#;
@@ -239,6 +259,18 @@ fn builtins_agree_in_every_engine_on_adversarial_inputs() {
                 "qm",
                 vec![v3(a), v3(o), v3(s), Val::Int(m as i128, IntTy::U32)],
             )?;
+            // Snapped grid (sg-eq): frames from nonsense and from real worlds, codes of any
+            // value against them.
+            let mu = Val::Int(m as i128, IntTy::U32);
+            e.agree("sgb", vec![v3(a), v3(b)])?;
+            e.agree("sgbm", vec![v3(a), v3(b), mu.clone()])?;
+            let (wlo, whi) = if real_frame {
+                ([0, 1, 2].map(|i| w[i].0), [0, 1, 2].map(|i| w[i].1))
+            } else {
+                (b, c)
+            };
+            e.agree("sgc", vec![v3(a), v3(wlo), v3(whi)])?;
+            e.agree("sgcm", vec![v3(a), v3(wlo), v3(whi), mu])?;
             Ok(())
         };
         check().map_err(TestCaseError::fail)

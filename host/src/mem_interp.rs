@@ -39,6 +39,7 @@ pub const LIBRARY_LAYOUTS: &[(&str, &str, Boxes)] = &[
     ("pbrt_align16", "PbrtAlign16", Boxes::Exact),
     ("pbrt_soaos", "PbrtSoAoS", Boxes::Exact),
     ("pbrt_q16", "PbrtQ16", Boxes::GlobalQ16),
+    ("sg_eq", "SgEq", Boxes::SnappedQ10),
 ];
 
 /// How the library layout named `layout` (or with file stem `layout`) stores boxes;
@@ -58,6 +59,7 @@ pub fn layout_source(stem: &str) -> Option<&'static str> {
         "pbrt_align16" => include_str!("../../library/layouts/pbrt_align16.scion"),
         "pbrt_soaos" => include_str!("../../library/layouts/pbrt_soaos.scion"),
         "pbrt_q16" => include_str!("../../library/layouts/pbrt_q16.scion"),
+        "sg_eq" => include_str!("../../library/layouts/sg_eq.scion"),
         _ => return None,
     })
 }

@@ -1,7 +1,7 @@
 //! Differential tests: every backend's closest hits equal the runtime's reference traversal bit
 //! for bit (same `t` bits, same primitive id), and brute force except where pruning provably
 //! drops the brute-force hit (docs/runtime.md, "Brute force and traversal"). A quantized layout
-//! (`pbrt_q16`) traverses wider, conservative boxes, which can break a tie in `t` differently
+//! (`pbrt_q16`, `sg_eq`) traverses wider, conservative boxes, which can break a tie in `t` differently
 //! or keep a grazing hit that the exact boxes prune; its reference is the traversal of the tree
 //! with the decoded boxes (`scion_host::quantized`), and brute force is checked the same way.
 //!
@@ -59,11 +59,15 @@ const BACKENDS: &[BackendKind] = &[
         stem: "pbrt_q16",
         stack: JIT_STACK,
     },
+    BackendKind::Llvm {
+        stem: "sg_eq",
+        stack: JIT_STACK,
+    },
 ];
 
 /// The backends of [`BACKENDS`] and the layouts run through the runtime contract: the
 /// hand-written `flat32` of `common`, and closest hit specialized to each library layout that
-/// (every one; the quantized `pbrt_q16` against the reference traversal of its decoded boxes,
+/// (every one; the quantized `pbrt_q16` and `sg_eq` against the reference traversal of their decoded boxes,
 /// `Boxes::decoded_tree`), run by the interpreter at the mem level (scenes up to 2 k triangles)
 /// and compiled by the Cranelift JIT (every scene).
 fn backends() -> Vec<Box<dyn Backend>> {

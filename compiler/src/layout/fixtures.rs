@@ -18,30 +18,8 @@ pub const PBRT_SOAOS: &str = include_str!("../../../library/layouts/pbrt_soaos.s
 /// library/layouts/pbrt_q16.scion (catalog §3.6, §8.3): 16 B.
 pub const PBRT_Q16: &str = include_str!("../../../library/layouts/pbrt_q16.scion");
 
-/// Catalog §8.4: `sg-eq` (12 B).
-pub const SG_EQ: &str = r#"
-layout SgEq(I: u32) {
-  P: u32; N: u32; primitives: Triangle[P];
-  wlo: f32x3; whi: f32x3; bins: f32x3;
-  group nodes[size=N] by I {
-    qlo: u32;
-    qhi: u32;
-    w: u32;
-    lo = f32x3(fadd_rd(wlo.x, fmul_rd(qlo[20:30] as f32, bins.x)),
-               fadd_rd(wlo.y, fmul_rd(qlo[10:20] as f32, bins.y)),
-               fadd_rd(wlo.z, fmul_rd(qlo[0:10]  as f32, bins.z)));
-    hi = f32x3(fsub_ru(whi.x, fmul_rd(qhi[20:30] as f32, bins.x)),
-               fsub_ru(whi.y, fmul_rd(qhi[10:20] as f32, bins.y)),
-               fsub_ru(whi.z, fmul_rd(qhi[0:10]  as f32, bins.z)));
-    bounds = AABB(lo, hi);
-    split w[28:32] {
-      0 -> Interior { left = I + 1; right = I + w[0:28]; };
-      _ -> Leaf     { nprims = w[28:32] as u16;
-                      data = primitives[w[0:28] : w[0:28] + nprims]; };
-    };
-  };
-};
-"#;
+/// library/layouts/sg_eq.scion (catalog §3.8, §8.4): 12 B.
+pub const SG_EQ: &str = include_str!("../../../library/layouts/sg_eq.scion");
 
 /// The eight-wide ADT of catalog §2.1.
 pub const BVH8_TYPE: &str = r#"

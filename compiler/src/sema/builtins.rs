@@ -99,8 +99,8 @@ impl Checker<'_> {
             Dot | Length | Normalize => (Want::FloatVec, all, &[]),
             FrameOrigin => (Want::F32Vec, all, &[]),
             Cross => (Want::FloatVec3, all, &[]),
-            FrameStep => (Want::F32Vec, 2, &[2]),
-            QuantLo | QuantHi => (Want::F32Vec, 3, &[3]),
+            FrameStep | SgBins => (Want::F32Vec, 2, &[2]),
+            QuantLo | QuantHi | SgCodeUp | SgCodeDown => (Want::F32Vec, 3, &[3]),
             WithAxis => (Want::Vector, 1, &[1]),
             Len | Append => (Want::Collection, 1, &[]),
             Insert => (Want::Set, 1, &[]),
@@ -186,7 +186,7 @@ impl Checker<'_> {
                 self.expect(&x, &elem, xs, "the vector's element type");
                 first
             }
-            QuantLo | QuantHi => match self.shallow(&first) {
+            QuantLo | QuantHi | SgCodeUp | SgCodeDown => match self.shallow(&first) {
                 Ty::Vector(_, n) => Ty::Vector(Prim::U32, n),
                 _ => Ty::Error,
             },

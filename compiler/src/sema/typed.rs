@@ -104,6 +104,15 @@ pub enum Builtin {
     /// `quant_hi(v, origin, step, m)`: the smallest code in `[0, m]` whose decoded plane is at
     /// or above `v`, lane-wise (`u32` lanes).
     QuantHi,
+    /// `sg_bins(wlo, whi, m)`: the bin width of a snapped-grid frame with `m` bins (Howard's
+    /// `sg-eq`), lane-wise.
+    SgBins,
+    /// `sg_code_up(v, wlo, whi, m)`: the bins from `wlo` up to low plane `v`, conservative for
+    /// the decoder `RD(wlo + RD(q * bins))` (`u32` lanes).
+    SgCodeUp,
+    /// `sg_code_down(v, wlo, whi, m)`: the bins from `whi` down to high plane `v`, conservative
+    /// for the decoder `RU(whi - RD(q * bins))` (`u32` lanes).
+    SgCodeDown,
     /// `insert(s, x)`: adds `x` to the set `s`, a `mut` parameter (passed by reference).
     Insert,
     /// Build language: `append(x, n)` appends `n` elements of logical array `x` to the array the
@@ -113,7 +122,7 @@ pub enum Builtin {
 
 impl Builtin {
     /// Every builtin of the traversal and layout languages (not `append`).
-    pub const TRAVERSAL: [Builtin; 25] = [
+    pub const TRAVERSAL: [Builtin; 28] = [
         Builtin::Min,
         Builtin::Max,
         Builtin::Clamp,
@@ -139,6 +148,9 @@ impl Builtin {
         Builtin::FrameStep,
         Builtin::QuantLo,
         Builtin::QuantHi,
+        Builtin::SgBins,
+        Builtin::SgCodeUp,
+        Builtin::SgCodeDown,
     ];
 
     /// The name as written.
@@ -169,6 +181,9 @@ impl Builtin {
             Builtin::FrameStep => "frame_step",
             Builtin::QuantLo => "quant_lo",
             Builtin::QuantHi => "quant_hi",
+            Builtin::SgBins => "sg_bins",
+            Builtin::SgCodeUp => "sg_code_up",
+            Builtin::SgCodeDown => "sg_code_down",
             Builtin::Append => "append",
         }
     }
@@ -189,8 +204,12 @@ impl Builtin {
             | Builtin::Normalize
             | Builtin::Len
             | Builtin::FrameOrigin => 1,
-            Builtin::Clamp | Builtin::Fma | Builtin::WithAxis | Builtin::FrameStep => 3,
-            Builtin::QuantLo | Builtin::QuantHi => 4,
+            Builtin::Clamp
+            | Builtin::Fma
+            | Builtin::WithAxis
+            | Builtin::FrameStep
+            | Builtin::SgBins => 3,
+            Builtin::QuantLo | Builtin::QuantHi | Builtin::SgCodeUp | Builtin::SgCodeDown => 4,
             _ => 2,
         }
     }

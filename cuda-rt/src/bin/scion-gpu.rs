@@ -137,8 +137,14 @@ fn run(a: &Args) -> Result<bool, String> {
             .ok_or_else(|| format!("--n: {} is not a valid ray count", a.n))?
     };
     let t = Instant::now();
-    let p = GpuPipeline::new(&device, &kit.ptx, &kit.layout, &kit.algorithm, kit.buffers)
-        .map_err(|e| e.to_string())?;
+    let p = GpuPipeline::new(
+        &device,
+        &kit.ptx,
+        &kit.layout,
+        &kit.algorithm,
+        kit.buffers.clone(),
+    )
+    .map_err(|e| e.to_string())?;
     let load = t.elapsed();
     let packed = p.pack(&tree, stats.depth).map_err(|e| e.to_string())?;
     let on_device = p.upload_rays(&rays).map_err(|e| e.to_string())?;
@@ -146,15 +152,7 @@ fn run(a: &Args) -> Result<bool, String> {
         .trace_runs(&packed, &on_device, a.runs)
         .map_err(|e| e.to_string())?;
     // A quantized layout traverses its decoded (conservative) boxes: that tree is its reference.
-    let decoded = tree
-        .root_box()
-        .and_then(|root| kit.boxes.decoder(&root))
-        .map(|decode| tree.map_boxes(decode));
-    let reference = closest_hits_tree(
-        decoded.as_ref().unwrap_or(&tree),
-        &rays,
-        &BatchDriver::new(0)?,
-    );
+    let reference = closest_hits_tree(&kit.reference_tree(&tree), &rays, &BatchDriver::new(0)?);
     let cmp = Comparison::of(&hits, &reference);
     let drop = a.runs.saturating_sub(1) / 4;
     let kernel = trimmed_mean(&times, drop, drop);

@@ -8,7 +8,8 @@
 //! lanes left to right. `sqrt` and `fma` are correctly rounded; `exp`, `log`, `sin` and `cos`
 //! come from the host's math library. The quantization builtins (`frame_origin`, `frame_step`,
 //! `quant_lo`, `quant_hi`) are [`crate::tree::quant`]'s reference functions, lane by lane; the
-//! directed-rounding ones (`fadd_rd` .. `fmul_ru`, `f32` lanes) [`crate::tree::directed`]'s.
+//! directed-rounding ones (`fadd_rd` .. `fmul_ru`, `f32` lanes) [`crate::tree::directed`]'s,
+//! the snapped-grid ones (`sg_bins`, `sg_code_up`, `sg_code_down`) [`crate::tree::snapped`]'s.
 
 use super::tree::{lanewise1, lanewise2, scalar_type};
 use super::Val;
@@ -17,6 +18,7 @@ use crate::module::Module;
 use crate::tree::directed;
 use crate::tree::quant;
 use crate::tree::scalar::Scalar;
+use crate::tree::snapped;
 use crate::types::{IntTy, Type};
 use std::rc::Rc;
 
@@ -168,25 +170,29 @@ pub fn eval(m: &Module, name: &str, args: &[Val], result: TypeId) -> R {
             Scalar::F32(v) => Ok(Scalar::F32(quant::frame_origin(v))),
             _ => Err("expects f32 lanes".into()),
         }),
-        "frame_step" => match args {
+        "frame_step" | "sg_bins" => match args {
             [o, hi, m] => {
                 let m = quant_bound(m)?;
+                let f = if name == "frame_step" {
+                    quant::frame_step
+                } else {
+                    snapped::sg_bins
+                };
                 lanewise2(o, hi, &|x, y| match (x, y) {
-                    (Scalar::F32(o), Scalar::F32(hi)) => {
-                        Ok(Scalar::F32(quant::frame_step(o, hi, m)))
-                    }
+                    (Scalar::F32(o), Scalar::F32(hi)) => Ok(Scalar::F32(f(o, hi, m))),
                     _ => Err("expects f32 lanes".into()),
                 })
             }
-            _ => Err("`frame_step` needs three operands".into()),
+            _ => Err(format!("`{name}` needs three operands")),
         },
-        "quant_lo" | "quant_hi" => match args {
+        "quant_lo" | "quant_hi" | "sg_code_up" | "sg_code_down" => match args {
             [v, o, s, m] => {
                 let m = quant_bound(m)?;
-                let f = if name == "quant_lo" {
-                    quant::quant_lo
-                } else {
-                    quant::quant_hi
+                let f = match name {
+                    "quant_lo" => quant::quant_lo,
+                    "quant_hi" => quant::quant_hi,
+                    "sg_code_up" => snapped::sg_code_up,
+                    _ => snapped::sg_code_down,
                 };
                 let (v, o, s) = (lanes(v)?, lanes(o)?, lanes(s)?);
                 if v.len() != o.len() || o.len() != s.len() {

@@ -96,7 +96,12 @@ fn expand_add(bld: &mut Builder, a: ValueId, b: ValueId, dir: Round) -> ValueId 
     let err = bld.lo1(L::Add, &[ea, eb], f);
     let zero = bld.lo_float(f, 0.0);
     let (pred, step, against, largest) = match dir {
-        Round::Up => (CmpPred::Gt, L::NextUp, f64::NEG_INFINITY, -f64::from(f32::MAX)),
+        Round::Up => (
+            CmpPred::Gt,
+            L::NextUp,
+            f64::NEG_INFINITY,
+            -f64::from(f32::MAX),
+        ),
         Round::Down => (CmpPred::Lt, L::NextDown, f64::INFINITY, f64::from(f32::MAX)),
     };
     let inexact = bld.lo_cmp(pred, err, zero);
@@ -228,7 +233,9 @@ func @mul_ru(%a: f32, %b: f32) -> (f32) {
                         directed::add(a, b, dir)
                     };
                     let got = interp.call(name, vec![Val::F32(a), Val::F32(b)]).unwrap();
-                    let Val::F32(g) = got[0] else { panic!("{got:?}") };
+                    let Val::F32(g) = got[0] else {
+                        panic!("{got:?}")
+                    };
                     assert_eq!(
                         g.to_bits(),
                         want.to_bits(),

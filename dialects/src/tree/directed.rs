@@ -47,14 +47,18 @@ pub fn add(a: f32, b: f32, dir: Round) -> f32 {
         };
         return if negative { -0.0 } else { 0.0 };
     }
-    settle(hi as f32, |r| {
-        let r = f64::from(r);
-        if r == hi {
-            0.0f64.partial_cmp(&lo)
-        } else {
-            r.partial_cmp(&hi)
-        }
-    }, dir)
+    settle(
+        hi as f32,
+        |r| {
+            let r = f64::from(r);
+            if r == hi {
+                0.0f64.partial_cmp(&lo)
+            } else {
+                r.partial_cmp(&hi)
+            }
+        },
+        dir,
+    )
 }
 
 /// `a - b` rounded in direction `dir`: `add(a, -b, dir)`.
@@ -175,7 +179,10 @@ mod tests {
         let nan = f32::from_bits(0xffc0_1234);
         for dir in [Round::Down, Round::Up] {
             assert_eq!(bits(add(nan, 1.0, dir)), 0x7fc0_0000);
-            assert_eq!(bits(add(f32::INFINITY, f32::NEG_INFINITY, dir)), 0x7fc0_0000);
+            assert_eq!(
+                bits(add(f32::INFINITY, f32::NEG_INFINITY, dir)),
+                0x7fc0_0000
+            );
             assert_eq!(bits(mul(0.0, f32::INFINITY, dir)), 0x7fc0_0000);
             assert_eq!(bits(mul(nan, 2.0, dir)), 0x7fc0_0000);
             assert_eq!(add(f32::INFINITY, -MAX, dir), f32::INFINITY);
@@ -186,7 +193,17 @@ mod tests {
     #[test]
     fn agrees_with_exact_f64_arithmetic_on_a_grid_of_values() {
         // Sums whose exponents are close enough to be exact in f64, and all products.
-        let mut xs = vec![0.0f32, -0.0, TINY, -TINY, 1.0, -1.0, MAX, -MAX, f32::MIN_POSITIVE];
+        let mut xs = vec![
+            0.0f32,
+            -0.0,
+            TINY,
+            -TINY,
+            1.0,
+            -1.0,
+            MAX,
+            -MAX,
+            f32::MIN_POSITIVE,
+        ];
         let mut s = 0x2545_f491_4f6c_dd1du64;
         for _ in 0..400 {
             s ^= s << 13;

@@ -15,6 +15,7 @@ pub mod directed;
 pub mod ops;
 pub mod quant;
 pub mod scalar;
+pub mod snapped;
 pub mod verify;
 
 pub use ops::{CmpPred, Op};

@@ -85,7 +85,7 @@ const CANONICAL_NAN32: u32 = 0x7fc0_0000;
 
 /// The largest `q ∈ [0, m]` with `pred(q)`, for a predicate true on a prefix of `[0, m]`
 /// (`0` when it holds nowhere): 32 bit-by-bit steps from the top bit down.
-fn last_true(m: u32, pred: impl Fn(u32) -> bool) -> u32 {
+pub(crate) fn last_true(m: u32, pred: impl Fn(u32) -> bool) -> u32 {
     let mut r = 0u32;
     for k in (0..32).rev() {
         let t = r | (1 << k);
@@ -148,37 +148,48 @@ pub enum Boxes {
     /// `wlo = frame_origin(root.low)`, `wstep = frame_step(wlo, root.high, 65535)`, each box
     /// `quant_lo(low)` / `quant_hi(high)`, decoded with `fma(q, wstep, wlo)`.
     GlobalQ16,
+    /// 10-bit snapped-grid codes against the root's box (`sg-eq`, [`super::snapped`]):
+    /// `wlo = root.low`, `whi = root.high`, `bins = sg_bins(wlo, whi, 1023)`, each box
+    /// `sg_code_up(low)` / `sg_code_down(high)`, decoded with directed rounding.
+    SnappedQ10,
 }
+
+/// A map from a node's exact box to the box a layout's traversal sees ([`Boxes::decoder`]).
+pub type BoxMap = Box<dyn Fn(&[f32; 6]) -> [f32; 6]>;
 
 /// The codes' upper bound of [`Boxes::GlobalQ16`].
 const Q16: u32 = 65535;
 
+/// The codes' upper bound of [`Boxes::SnappedQ10`].
+const Q10: u32 = 1023;
+
 impl Boxes {
-    /// The name in PTX kits and messages: `exact`, `global-q16`.
+    /// The name in PTX kits and messages: `exact`, `global-q16`, `snapped-q10`.
     pub fn name(self) -> &'static str {
         match self {
             Boxes::Exact => "exact",
             Boxes::GlobalQ16 => "global-q16",
+            Boxes::SnappedQ10 => "snapped-q10",
         }
     }
 
     /// The boxes named `name` (see [`Boxes::name`]).
     pub fn from_name(name: &str) -> Option<Boxes> {
-        [Boxes::Exact, Boxes::GlobalQ16]
+        [Boxes::Exact, Boxes::GlobalQ16, Boxes::SnappedQ10]
             .into_iter()
             .find(|b| b.name() == name)
     }
 
     /// For a tree whose root box is `root`, the map from a node's exact box to the box a
     /// traversal of this layout sees; `None` when that is the exact box itself.
-    pub fn decoder(self, root: &[f32; 6]) -> Option<impl Fn(&[f32; 6]) -> [f32; 6]> {
+    pub fn decoder(self, root: &[f32; 6]) -> Option<BoxMap> {
         match self {
             Boxes::Exact => None,
             Boxes::GlobalQ16 => {
                 let origin: [f32; 3] = std::array::from_fn(|k| frame_origin(root[k]));
                 let step: [f32; 3] =
                     std::array::from_fn(|k| frame_step(origin[k], root[k + 3], Q16));
-                Some(move |b: &[f32; 6]| {
+                Some(Box::new(move |b: &[f32; 6]| {
                     std::array::from_fn(|i| {
                         let k = i % 3;
                         let (o, s) = (origin[k], step[k]);
@@ -189,7 +200,23 @@ impl Boxes {
                         };
                         decode(q, o, s)
                     })
-                })
+                }))
+            }
+            Boxes::SnappedQ10 => {
+                use super::snapped::{decode_hi, decode_lo, sg_bins, sg_code_down, sg_code_up};
+                let (wlo, whi) = (*root, *root);
+                let bins: [f32; 3] = std::array::from_fn(|k| sg_bins(wlo[k], whi[k + 3], Q10));
+                Some(Box::new(move |b: &[f32; 6]| {
+                    std::array::from_fn(|i| {
+                        let k = i % 3;
+                        let (lo, hi) = (wlo[k], whi[k + 3]);
+                        if i < 3 {
+                            decode_lo(sg_code_up(b[i], lo, hi, Q10), lo, bins[k])
+                        } else {
+                            decode_hi(sg_code_down(b[i], lo, hi, Q10), hi, bins[k])
+                        }
+                    })
+                }))
             }
         }
     }

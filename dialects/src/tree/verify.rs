@@ -623,7 +623,8 @@ fn verify_match(m: &Module, o: &Operation, ot: &[TypeId], rt: &[TypeId]) -> VRes
 /// `normalize`, `hmin hmax hsum` (lanes to element). Containers: `len` (array to any integer),
 /// `some none is_some unwrap` on `option<T>`, `set_empty set_insert set_contains` on `set<T>`.
 /// Quantization (`f32` vectors only): `frame_origin`, `frame_step(o, hi, int)`,
-/// `quant_lo`/`quant_hi(v, o, s, int)` giving `u32` lanes.
+/// `quant_lo`/`quant_hi(v, o, s, int)` giving `u32` lanes; `sg_bins` as `frame_step`,
+/// `sg_code_up`/`sg_code_down` as `quant_lo`.
 pub fn intrinsic_signature(m: &Module, name: &str, args: &[TypeId], result: TypeId) -> VResult {
     let t = &m.types;
     let show = |ty: TypeId| t.display(ty).to_string();
@@ -667,7 +668,7 @@ pub fn intrinsic_signature(m: &Module, name: &str, args: &[TypeId], result: Type
                 && t.scalar_of(result) == args[2],
         ),
         "frame_origin" => sig(1, all_same(1) && f32_vec(result)),
-        "frame_step" => sig(
+        "frame_step" | "sg_bins" => sig(
             3,
             args.len() == 3
                 && args[0] == result
@@ -675,7 +676,7 @@ pub fn intrinsic_signature(m: &Module, name: &str, args: &[TypeId], result: Type
                 && f32_vec(result)
                 && t.as_int(args[2]).is_some(),
         ),
-        "quant_lo" | "quant_hi" => sig(
+        "quant_lo" | "quant_hi" | "sg_code_up" | "sg_code_down" => sig(
             4,
             args.len() == 4
                 && args[0] == args[1]

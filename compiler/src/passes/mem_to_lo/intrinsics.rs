@@ -46,7 +46,11 @@ pub(super) fn lower(
             .zip(&b)
             .map(|(&x, &y)| {
                 let ty = cx.ty_of(x);
-                let y = if negate { cx.e1(cur, L::Neg, &[y], ty) } else { y };
+                let y = if negate {
+                    cx.e1(cur, L::Neg, &[y], ty)
+                } else {
+                    y
+                };
                 cx.e1(cur, op, &[x, y], ty)
             })
             .collect())

@@ -1,6 +1,7 @@
-//! The quantization builtins (`frame_origin`, `frame_step`, `quant_lo`, `quant_hi`) as `lo`
-//! ops, lane by lane, computing the same bits as the reference functions of
-//! [`scion_ir::tree::quant`] (layout catalog §2.4): the same comparisons in the same order,
+//! The quantization builtins (`frame_origin`, `frame_step`, `quant_lo`, `quant_hi`, and the
+//! snapped-grid `sg_bins`, `sg_code_up`, `sg_code_down`) as `lo` ops, lane by lane, computing
+//! the same bits as the reference functions of [`scion_ir::tree::quant`] and
+//! [`scion_ir::tree::snapped`] (layout catalog §2.4, §3.8): the same comparisons in the same order,
 //! the same `f64` step arithmetic, and the same bit-by-bit code search, unrolled with selects
 //! (no branches). When the bound `m` is a constant the search skips the bits above its top bit,
 //! where no candidate can be `≤ m`; the result is the same.
@@ -66,6 +67,23 @@ pub(super) fn lower(
                         b
                     }
                 })
+                .collect())
+        })(),
+        "sg_bins" => (|| {
+            let (wlo, whi) = (arg(0)?, arg(1)?);
+            let m = q.bound(scalar(2)?);
+            Ok(wlo
+                .iter()
+                .zip(&whi)
+                .map(|(&lo, &hi)| q.sg_frame(lo, hi, m.0).1)
+                .collect())
+        })(),
+        "sg_code_up" | "sg_code_down" => (|| {
+            let (v, wlo, whi) = (arg(0)?, arg(1)?, arg(2)?);
+            let m = q.bound(scalar(3)?);
+            let up = name == "sg_code_up";
+            Ok((0..v.len().min(wlo.len()).min(whi.len()))
+                .map(|i| q.sg_code(v[i], wlo[i], whi[i], m, up))
                 .collect())
         })(),
         _ => return None,
@@ -225,5 +243,91 @@ impl Q<'_, '_> {
         let next = self.op(L::Add, &[r, one], u32t);
         let b = self.select(more, next, m.0);
         self.select(below0, b, zero)
+    }
+
+    /// Directed `a - b` (`lo.add_rd`/`lo.add_ru` of `a` and `-b`).
+    fn sub_dir(&mut self, a: ValueId, b: ValueId, up: bool) -> ValueId {
+        let f32t = self.f32t();
+        let nb = self.op(L::Neg, &[b], f32t);
+        self.op(if up { L::AddRu } else { L::AddRd }, &[a, nb], f32t)
+    }
+
+    /// The largest `f32` at or below the `f64` value `x`, stepped one ulp down when
+    /// `check(r)` fails (`snapped::down_to_f32`).
+    fn down_to_f32(
+        &mut self,
+        x: ValueId,
+        check: &mut dyn FnMut(&mut Self, ValueId) -> ValueId,
+    ) -> ValueId {
+        let (f32t, f64t) = (self.f32t(), self.f64t());
+        let r = self.cast(x, f32t);
+        let r64 = self.cast(r, f64t);
+        let above = self.cmp(CmpPred::Gt, r64, x);
+        let down = self.op(L::NextDown, &[r], f32t);
+        let r = self.select(above, down, r);
+        let ok = check(self, r);
+        let down = self.op(L::NextDown, &[r], f32t);
+        self.select(ok, r, down)
+    }
+
+    /// Howard's frame `(bininv, bins)` for `[wlo, whi]` with `m` bins (`snapped::frame`).
+    fn sg_frame(&mut self, wlo: ValueId, whi: ValueId, m: ValueId) -> (ValueId, ValueId) {
+        let (u32t, f32t, f64t) = (self.u32t(), self.f32t(), self.f64t());
+        let one = self.konst(u32t, Attr::Int(1));
+        let mu = self.op(L::Max, &[m, one], u32t);
+        let mf = self.cast(mu, f32t);
+        let l = self.sub_dir(whi, wlo, true);
+        let zero = self.konst(f32t, Attr::float(0.0));
+        let pos = self.cmp(CmpPred::Gt, l, zero);
+        let onef = self.konst(f32t, Attr::float(1.0));
+        let l = self.select(pos, l, onef);
+        let inf = self.konst(f32t, Attr::float(f64::INFINITY));
+        let is_inf = self.cmp(CmpPred::Eq, l, inf);
+        let max = self.konst(f32t, Attr::float(f32::MAX as f64));
+        let l = self.select(is_inf, max, l);
+        let (l64, m64) = (self.cast(l, f64t), self.cast(mf, f64t));
+        let quot = self.op(L::Div, &[m64, l64], f64t);
+        let bininv = self.down_to_f32(quot, &mut |q, r| {
+            let r64 = q.cast(r, f64t);
+            let p = q.op(L::Mul, &[r64, l64], f64t);
+            q.cmp(CmpPred::Le, p, m64)
+        });
+        let b64 = self.cast(bininv, f64t);
+        let one64 = self.konst(f64t, Attr::float(1.0));
+        let quot = self.op(L::Div, &[one64, b64], f64t);
+        let bins = self.down_to_f32(quot, &mut |q, r| {
+            let r64 = q.cast(r, f64t);
+            let p = q.op(L::Mul, &[r64, b64], f64t);
+            q.cmp(CmpPred::Le, p, one64)
+        });
+        (bininv, bins)
+    }
+
+    /// `sg_code_up(v, wlo, whi, m)` (`up`) or `sg_code_down` on one lane: Howard's closed form,
+    /// clamped, and no larger than the largest code the decoder keeps conservative.
+    fn sg_code(&mut self, v: ValueId, wlo: ValueId, whi: ValueId, m: Bound, up: bool) -> ValueId {
+        let (u32t, f32t) = (self.u32t(), self.f32t());
+        let (bininv, bins) = self.sg_frame(wlo, whi, m.0);
+        let d = if up {
+            self.sub_dir(v, wlo, false)
+        } else {
+            self.sub_dir(whi, v, false)
+        };
+        let p = self.op(L::MulRd, &[d, bininv], f32t);
+        let fl = self.op(L::Floor, &[p], f32t);
+        let c = self.cast(fl, u32t);
+        let closed = self.op(L::Min, &[c, m.0], u32t);
+        let search = self.last_true(m, &mut |q, t| {
+            let tf = q.cast(t, f32t);
+            let s = q.op(L::MulRd, &[tf, bins], f32t);
+            if up {
+                let plane = q.op(L::AddRd, &[wlo, s], f32t);
+                q.cmp(CmpPred::Le, plane, v)
+            } else {
+                let plane = q.sub_dir(whi, s, true);
+                q.cmp(CmpPred::Ge, plane, v)
+            }
+        });
+        self.op(L::Min, &[closed, search], u32t)
     }
 }
