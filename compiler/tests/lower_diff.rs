@@ -1,6 +1,7 @@
 //! Differential tests of the lowering to `lo` and of the Cranelift JIT: the prelude's geometric
 //! functions (`hit_distance`, the slab test, `closest_point` on boxes and triangles, the
-//! triangle-triangle separating-axis test) give bit-identical results in the `tree`
+//! triangle-triangle separating-axis test), `with_axis` (a lane index in and out of range) and
+//! the directed-rounding builtins give bit-identical results in the `tree`
 //! interpreter, the `lo` interpreter (after `mem-to-lo`) and the JIT-compiled code (Cranelift,
 //! and LLVM at -O0 and -O3), on random inputs rich in NaN (with payloads), signed zeros,
 //! infinities and subnormals.
@@ -29,10 +30,14 @@ func t_cpt(p: f32x3, tri: Triangle) -> f32x3 = closest_point(p, tri)
 func t_sat(a: Triangle, b: Triangle) -> bool = intersects(a, b)
 func t_bb(a: AABB, b: AABB) -> bool = intersects(a, b)
 func t_d2(p: f32x3, box: AABB) -> f32 = distance_squared(p, box)
+func t_axis(v: f32x3, k: u32, x: f32) -> f32x3 = with_axis(v, k % 4, x)
+func t_dir(a: f32x3, b: f32x3) -> (f32x3, f32x3, f32x3) =
+  (fadd_rd(a, b), fsub_ru(a, b), fmul_rd(a, b) - fmul_ru(b, a))
 "#;
 
 const FUNCS: &[&str] = &[
-    "t_hit", "t_slab", "t_box", "t_tri", "t_cpb", "t_cpt", "t_sat", "t_bb", "t_d2",
+    "t_hit", "t_slab", "t_box", "t_tri", "t_cpb", "t_cpt", "t_sat", "t_bb", "t_d2", "t_axis",
+    "t_dir",
 ];
 
 /// The `tree` module of the prelude functions above.

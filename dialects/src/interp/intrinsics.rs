@@ -166,6 +166,17 @@ pub fn eval(m: &Module, name: &str, args: &[Val], result: TypeId) -> R {
                 _ => Err("directed rounding takes f32 lanes".into()),
             })
         }
+        "with_axis" => match args {
+            // A lane index outside the vector changes nothing (as the lowering's selects).
+            [Val::Vector(v), Val::Int(k, _), x] => {
+                let mut out = v.clone();
+                if let Some(slot) = usize::try_from(*k).ok().and_then(|i| out.get_mut(i)) {
+                    *slot = x.clone();
+                }
+                Ok(Val::Vector(out))
+            }
+            _ => Err("`with_axis` takes a vector, an integer lane index and an element".into()),
+        },
         "frame_origin" => lanewise1(one()?, &|x| match x {
             Scalar::F32(v) => Ok(Scalar::F32(quant::frame_origin(v))),
             _ => Err("expects f32 lanes".into()),

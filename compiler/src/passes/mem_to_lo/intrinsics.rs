@@ -6,7 +6,8 @@
 //! ops (`fadd_rd` is `lo.add_rd`, `fsub_ru(a, b)` is `lo.add_ru(a, -b)`, `fmul_rd` is
 //! `lo.mul_rd`): NVPTX has them per instruction, CPU backends expand them
 //! (`scion_ir::lo::directed`). `isnan` is `x != x`; `rsqrt` is `1 / sqrt`; `length`
-//! is `sqrt(dot(v, v))`; `normalize` divides each lane by the length. Intrinsics without a
+//! is `sqrt(dot(v, v))`; `normalize` divides each lane by the length; `with_axis(v, k, x)`
+//! selects `x` into lane `k` (a `k` outside the lanes changes nothing). Intrinsics without a
 //! scalar form here (transcendentals, `round`, options, sets) are reported, never guessed; the
 //! quantization builtins are [`super::quant`]'s.
 
@@ -98,6 +99,26 @@ pub(super) fn lower(
             .map(|x| cx.cmp(cur, CmpPred::Ne, x, x))
             .collect(),
         "dot" => vec![dot(cx, cur, &arg(0)?, &arg(1)?)?],
+        "with_axis" => {
+            // Lane `i` is `k == i ? x : v[i]`; a `k` outside the lanes changes nothing.
+            let (v, k, x) = (arg(0)?, arg(1)?, arg(2)?);
+            let (&[k], &[x]) = (k.as_slice(), x.as_slice()) else {
+                return Err((
+                    "`with_axis` takes one lane index and one element".into(),
+                    None,
+                ));
+            };
+            let kt = cx.ty_of(k);
+            v.iter()
+                .enumerate()
+                .map(|(i, &lane)| {
+                    let c = cx.int_const(cur, kt, i as i128);
+                    let here = cx.cmp(cur, CmpPred::Eq, k, c);
+                    let ty = cx.ty_of(lane);
+                    cx.e1(cur, L::Select, &[here, x, lane], ty)
+                })
+                .collect()
+        }
         "length" => {
             let a = arg(0)?;
             let d = dot(cx, cur, &a, &a)?;
