@@ -181,7 +181,7 @@ impl JitModule {
         }
         lm.verify()
             .map_err(|e| LlvmError(format!("invalid LLVM module (a backend bug): {e}")))?;
-        target::optimize(&lm, &tm, opt_level)?;
+        target::optimize(&lm, &tm, opt_level, false)?;
         let engine = lm
             .create_jit_execution_engine(target::llvm_level(opt_level))
             .map_err(|e| LlvmError(format!("JIT: {e}")))?;

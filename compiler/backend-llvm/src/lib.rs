@@ -96,7 +96,7 @@ pub fn emit(m: &scion_ir::Module, opts: &Options, out: Output) -> Result<Vec<u8>
     lm.set_data_layout(&tm.get_target_data().get_data_layout());
     lm.verify()
         .map_err(|e| LlvmError(format!("invalid LLVM module (a backend bug): {e}")))?;
-    target::optimize(&lm, &tm, opts.opt_level)?;
+    target::optimize(&lm, &tm, opts.opt_level, opts.target.is_gpu())?;
     match out {
         Output::LlvmIr => Ok(lm.print_to_string().to_bytes().to_vec()),
         Output::Asm => target::codegen(&lm, &tm, FileType::Assembly),

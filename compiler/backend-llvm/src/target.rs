@@ -262,11 +262,26 @@ pub fn host_cpu() -> (String, String) {
     )
 }
 
-/// Runs LLVM's `default<O{level}>` pipeline on `lm`.
-pub(crate) fn optimize(lm: &LModule, tm: &TargetMachine, level: u8) -> Result<(), LlvmError> {
+/// Runs LLVM's `default<O{level}>` pipeline on `lm`. For a GPU (`gpu`) at `-O1` and above,
+/// address-space inference runs first, while the `assume(isspacep.global(p))` the translation
+/// puts after each layout buffer's base pointer is still there (LLVM 22's pipeline drops such
+/// assumes as unused before its own, later, inference): the accesses derived from a buffer
+/// become global ones (`ld.global`), and the later inference carries that through inlining.
+pub(crate) fn optimize(
+    lm: &LModule,
+    tm: &TargetMachine,
+    level: u8,
+    gpu: bool,
+) -> Result<(), LlvmError> {
     let opts = PassBuilderOptions::create();
     opts.set_verify_each(cfg!(debug_assertions));
-    lm.run_passes(&format!("default<O{}>", level.min(3)), tm, opts)
+    let level = level.min(3);
+    let pipeline = if gpu && level > 0 {
+        format!("function(infer-address-spaces),default<O{level}>")
+    } else {
+        format!("default<O{level}>")
+    };
+    lm.run_passes(&pipeline, tm, opts)
         .map_err(|e| LlvmError(format!("optimization pipeline: {e}")))
 }
 

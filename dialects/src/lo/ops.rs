@@ -84,7 +84,10 @@ pub enum Op {
     Clz,
     /// `lo.ctz` `(T) -> T`, integers: trailing zero bits (the width for 0).
     Ctz,
-    /// `lo.load {offset}` `(ptr) -> T`: the scalar at `ptr + offset` (little-endian).
+    /// `lo.load {offset}` `(ptr) -> T`: the scalar at `ptr + offset` (little-endian). A `ptr`
+    /// load may carry `global = true`: the loaded pointer addresses a layout buffer, which the
+    /// runtime always allocates in the device's global memory (`mem.buffer`), so a GPU backend
+    /// may use global-space accesses through it; CPUs and the interpreter ignore it.
     Load,
     /// `lo.store {offset}` `(ptr, T) -> ()`.
     Store,

@@ -180,7 +180,14 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
         Op::Load => {
             counts(1, 1)?;
             offset()?;
-            require(is_ptr(ot[0]), || format!("`{name}` loads through a ptr"))
+            require(is_ptr(ot[0]), || format!("`{name}` loads through a ptr"))?;
+            match o.attr("global") {
+                None => Ok(()),
+                Some(Attr::Bool(_)) => require(is_ptr(rt[0]), || {
+                    format!("`{name}`: `global` marks a loaded ptr, not {}", show(rt[0]))
+                }),
+                Some(_) => Err(format!("`{name}`: `global` is a bool")),
+            }
         }
         Op::Store => {
             counts(2, 0)?;

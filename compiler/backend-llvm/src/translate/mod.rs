@@ -589,6 +589,17 @@ impl<'c> Fn<'_, 'c> {
                     b.build_int_compare(IntPredicate::NE, v.into_int_value(), zero, "")
                         .map_err(be)?
                         .into()
+                } else if self.target == Target::Nvptx64
+                    && o.attr("global") == Some(&scion_ir::attr::Attr::Bool(true))
+                {
+                    // A layout buffer's base: `assume(isspacep.global(p))` lets LLVM's
+                    // address-space inference turn the accesses derived from it into
+                    // `ld.global`/`st.global` instead of generic ones (a round trip of
+                    // address-space casts would be folded away before it looks).
+                    let global = self.call_intr("llvm.nvvm.isspacep.global", &[], &[v])?;
+                    let assume = self.intrinsic("llvm.assume", &[])?;
+                    b.build_call(assume, &[global.into()], "").map_err(be)?;
+                    v
                 } else {
                     v
                 })

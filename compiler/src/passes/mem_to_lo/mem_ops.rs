@@ -1,7 +1,8 @@
 //! The `mem` ops in `mem-to-lo` (design note §2): address arithmetic and one scalar load or
 //! store per leaf.
 //!
-//! * `mem.buffer {index}` `(%B)` is the `ptr` at byte `8 * index` of the buffer table.
+//! * `mem.buffer {index}` `(%B)` is the `ptr` at byte `8 * index` of the buffer table, loaded
+//!   with `global = true` (buffers live in the device's global memory on a GPU).
 //! * `mem.load/store/addr {offset, stride}` `(%base, %i?)` address `base + i * stride + offset`
 //!   (the index converted to `u64`; a signed index wraps as two's complement); a record, vector
 //!   or tuple is one access per leaf at `offset +` its layout offset.
@@ -100,7 +101,8 @@ impl FnLower<'_> {
                     OpSpec::new(L::Load)
                         .operands(&[b])
                         .results(&[ptrt])
-                        .attr("offset", Attr::Int(8 * index)),
+                        .attr("offset", Attr::Int(8 * index))
+                        .attr("global", Attr::Bool(true)),
                 );
                 vec![self.dst.ops[l].results[0]]
             }
