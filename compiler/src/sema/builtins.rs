@@ -69,8 +69,13 @@ impl Checker<'_> {
             Want::Float => class == Class::Float || matches!(s, Ty::Vector(p, _) if p.is_float()),
             Want::FloatVec => matches!(s, Ty::Vector(p, _) if p.is_float()),
             Want::F32Vec => matches!(s, Ty::Vector(Prim::F32, _)),
-            // A float literal not yet typed may still become f32.
-            Want::F32 if matches!(s, Ty::Var(_)) => return None,
+            // A float literal not yet typed may still become f32; an integer one cannot.
+            Want::F32 if matches!(s, Ty::Var(_)) => {
+                if class == Class::Float {
+                    return None;
+                }
+                false
+            }
             Want::F32 => matches!(s, Ty::Prim(Prim::F32) | Ty::Vector(Prim::F32, _)),
             Want::FloatVec3 => matches!(s, Ty::Vector(p, 3) if p.is_float()),
             Want::Vector => matches!(s, Ty::Vector(..)),

@@ -191,6 +191,7 @@ fn builtins() {
     ok("func f() -> f32 = fadd_rd(0.1, 0.2)");
     err("func f(a: f64) -> f64 = fadd_ru(a, a)", "E0231");
     err("func f(a: f64x3) -> f64x3 = fmul_rd(a, a)", "E0231");
+    err("func f() -> f32 = fadd_ru(1, 2)", "E0231");
 }
 
 #[test]
