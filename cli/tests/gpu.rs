@@ -11,7 +11,7 @@ use common::{scion, text, CUBE};
 use scion_cuda::kit::PtxKit;
 use scion_cuda::ptx;
 use scion_cuda::trace::{
-    check_kernels, packing_stack, per_level_frame, stack_frames, KernelNames, RootRef,
+    check_ptx_kernels, packing_stack, per_level_frame, stack_frames, KernelNames, RootRef,
     MAX_PACK_STACK,
 };
 use scion_cuda::CudaError;
@@ -35,17 +35,7 @@ fn make_kit(dir: &std::path::Path, layout: &str, cpu: Option<&str>) -> PtxKit {
 }
 
 fn kernel_shapes(kit: &PtxKit) -> Result<RootRef, CudaError> {
-    let entries = ptx::entries(&kit.ptx).map_err(CudaError::Host)?;
-    check_kernels(&KernelNames::new(&kit.layout, &kit.algorithm), |k| {
-        entries
-            .iter()
-            .find(|e| e.name == k)
-            .map(|e| e.params.iter().map(|p| p.bytes).collect())
-            .ok_or_else(|| CudaError::MissingKernel {
-                kernel: k.into(),
-                available: entries.iter().map(|e| e.name.clone()).collect(),
-            })
-    })
+    check_ptx_kernels(&kit.ptx, &KernelNames::new(&kit.layout, &kit.algorithm))
 }
 
 #[test]

@@ -177,22 +177,6 @@ fn run(m: &Module, name: &str, floats: &[f32]) -> Result<Vec<(u8, u64)>, String>
     Ok(out)
 }
 
-fn special_f32() -> impl Strategy<Value = f32> {
-    prop_oneof![
-        3 => -8.0f32..8.0,
-        1 => Just(0.0f32),
-        1 => Just(-0.0f32),
-        1 => Just(f32::INFINITY),
-        1 => Just(f32::NEG_INFINITY),
-        1 => Just(f32::NAN),
-        1 => Just(f32::from_bits(0x7fa0_1234)),
-        1 => Just(f32::from_bits(0xffc0_0001)),
-        1 => Just(f32::from_bits(1)),
-        1 => Just(1.0f32),
-        2 => any::<f32>(),
-    ]
-}
-
 #[test]
 fn dsl_optimizations_keep_every_result_bit() {
     let base = tree_module();
@@ -219,20 +203,23 @@ fn dsl_optimizations_keep_every_result_bit() {
         cases,
         ..Config::default()
     });
-    let result = runner.run(&prop::collection::vec(special_f32(), 24), |floats| {
-        for name in FUNCS {
-            let want = run(&base, name, &floats).map_err(TestCaseError::fail)?;
-            for (label, m) in [("default threshold", &small), ("inline all", &all)] {
-                let got = run(m, name, &floats).map_err(TestCaseError::fail)?;
-                if got != want {
-                    return Err(TestCaseError::fail(format!(
-                        "{name}({floats:?}) {label}: {got:?}, unoptimized {want:?}"
-                    )));
+    let result = runner.run(
+        &prop::collection::vec(common::special_f32(), 24),
+        |floats| {
+            for name in FUNCS {
+                let want = run(&base, name, &floats).map_err(TestCaseError::fail)?;
+                for (label, m) in [("default threshold", &small), ("inline all", &all)] {
+                    let got = run(m, name, &floats).map_err(TestCaseError::fail)?;
+                    if got != want {
+                        return Err(TestCaseError::fail(format!(
+                            "{name}({floats:?}) {label}: {got:?}, unoptimized {want:?}"
+                        )));
+                    }
                 }
             }
-        }
-        Ok(())
-    });
+            Ok(())
+        },
+    );
     if let Err(e) = result {
         panic!("{e}");
     }

@@ -78,36 +78,8 @@ fn flatten(v: &Val, out: &mut Vec<Val>) {
     }
 }
 
-/// Bits and kind, so that NaN payloads and signed zeros count.
-fn key(v: &Val) -> (u8, u64) {
-    match *v {
-        Val::Bool(b) => (0, u64::from(b)),
-        Val::Int(x, _) => (1, x as u64),
-        Val::F32(x) => (2, u64::from(x.to_bits())),
-        Val::F64(x) => (3, x.to_bits()),
-        _ => (9, 0),
-    }
-}
-
 fn keys(vs: &[Val]) -> Vec<(u8, u64)> {
-    vs.iter().map(key).collect()
-}
-
-fn special_f32() -> impl Strategy<Value = f32> {
-    prop_oneof![
-        3 => -8.0f32..8.0,
-        1 => Just(0.0f32),
-        1 => Just(-0.0f32),
-        1 => Just(f32::INFINITY),
-        1 => Just(f32::NEG_INFINITY),
-        1 => Just(f32::NAN),
-        1 => Just(f32::from_bits(0x7fa0_1234)),
-        1 => Just(f32::from_bits(0xffc0_0001)),
-        1 => Just(f32::from_bits(1)),
-        1 => Just(-f32::MIN_POSITIVE / 3.0),
-        1 => Just(1.0f32),
-        2 => any::<f32>(),
-    ]
+    vs.iter().map(Val::bits_key).collect()
 }
 
 fn check_all(
@@ -183,9 +155,12 @@ fn prelude_functions_agree_in_tree_lo_cranelift_and_llvm() {
         cases,
         ..Config::default()
     });
-    let result = runner.run(&prop::collection::vec(special_f32(), 24), |floats| {
-        check_all(&tree, &lo, &jit, &[&llvm0, &llvm3], &floats).map_err(TestCaseError::fail)
-    });
+    let result = runner.run(
+        &prop::collection::vec(common::special_f32(), 24),
+        |floats| {
+            check_all(&tree, &lo, &jit, &[&llvm0, &llvm3], &floats).map_err(TestCaseError::fail)
+        },
+    );
     if let Err(e) = result {
         panic!("{e}");
     }

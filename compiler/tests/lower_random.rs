@@ -73,16 +73,6 @@ fn flatten(v: &Val, out: &mut Vec<Val>) {
     }
 }
 
-fn key(v: &Val) -> (u8, u64) {
-    match *v {
-        Val::Bool(b) => (0, u64::from(b)),
-        Val::Int(x, _) => (1, x as u64),
-        Val::F32(x) => (2, u64::from(x.to_bits())),
-        Val::F64(x) => (3, x.to_bits()),
-        _ => (9, 0),
-    }
-}
-
 /// The bytes of `v` (type `ty`) laid out as `mem-to-lo` lays out a `mut` cell.
 fn encode(m: &Module, ty: TypeId, v: &Val) -> Vec<u8> {
     let (size, _, offs) = layout(m, ty).unwrap();
@@ -203,7 +193,7 @@ fn check_seed(seed: u64) -> Result<usize, String> {
         }
         let jit_out = jit.call(&name, &jargs).map_err(|e| e.to_string())?;
         let llvm_out = llvm.call(&name, &llvm_args).map_err(|e| e.to_string())?;
-        let keys = |v: &[Val]| v.iter().map(key).collect::<Vec<_>>();
+        let keys = |v: &[Val]| v.iter().map(Val::bits_key).collect::<Vec<_>>();
         if keys(&lo_out) != keys(&want_flat)
             || keys(&jit_out) != keys(&want_flat)
             || keys(&llvm_out) != keys(&want_flat)

@@ -111,15 +111,6 @@ fn flatten(v: &Val, out: &mut Vec<Val>) {
     }
 }
 
-/// Kind and bits, so that NaN payloads and signed zeros count.
-fn key(v: &Val) -> (u8, u64) {
-    match *v {
-        Val::Int(x, _) => (1, x as u64),
-        Val::F32(x) => (2, u64::from(x.to_bits())),
-        _ => (9, 0),
-    }
-}
-
 impl Engines {
     /// Runs `name` everywhere; the flattened results of the tree interpreter, after checking
     /// that every other engine gives the same bits.
@@ -131,7 +122,7 @@ impl Engines {
             .map_err(|e| format!("{name}: tree interpreter: {e}"))?;
         let mut want_flat = Vec::new();
         want.iter().for_each(|v| flatten(v, &mut want_flat));
-        let want_keys: Vec<_> = want_flat.iter().map(key).collect();
+        let want_keys: Vec<_> = want_flat.iter().map(Val::bits_key).collect();
         let mut got = vec![(
             "lo interpreter",
             LoInterp::new(&self.lo)
@@ -147,7 +138,7 @@ impl Engines {
         }
         for (label, out) in got {
             let out = out.map_err(|e| format!("{name}: {label}: {e}"))?;
-            let keys: Vec<_> = out.iter().map(key).collect();
+            let keys: Vec<_> = out.iter().map(Val::bits_key).collect();
             if keys != want_keys {
                 return Err(format!(
                     "{name}({flat:?}): tree interpreter {want_flat:?} but {label} {out:?}"

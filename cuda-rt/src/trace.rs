@@ -103,6 +103,22 @@ pub enum RootRef {
     U64,
 }
 
+/// [`check_kernels`] on PTX text, without a device: the parameter sizes come from the PTX's
+/// `.entry` declarations ([`crate::ptx::entries`]).
+pub fn check_ptx_kernels(ptx: &str, names: &KernelNames) -> Result<RootRef, CudaError> {
+    let entries = crate::ptx::entries(ptx).map_err(CudaError::Host)?;
+    check_kernels(names, |k| {
+        entries
+            .iter()
+            .find(|e| e.name == k)
+            .map(|e| e.params.iter().map(|p| p.bytes).collect())
+            .ok_or_else(|| CudaError::MissingKernel {
+                kernel: k.into(),
+                available: entries.iter().map(|e| e.name.clone()).collect(),
+            })
+    })
+}
+
 /// Checks the four kernels' parameter sizes against backends.md §1 and returns the reference
 /// width. `sizes`: 2 pointers; `build`, `root`: 3 pointers; batch: `(ptr, ptr, ptr, u64, R,
 /// ptr)`.

@@ -6,26 +6,14 @@ mod common;
 
 use common::PROBE_PTX;
 use scion_cuda::ptx;
-use scion_cuda::trace::{check_kernels, KernelNames, RootRef};
-use scion_cuda::CudaError;
+use scion_cuda::trace::{check_ptx_kernels, KernelNames, RootRef};
 use std::path::Path;
 use std::process::Command;
 
 #[test]
 fn the_fixture_kernels_have_the_contract_shapes() {
-    let entries = ptx::entries(PROBE_PTX).unwrap();
     let names = KernelNames::new("Fixture", "probe");
-    let params = |k: &str| -> Result<Vec<usize>, CudaError> {
-        entries
-            .iter()
-            .find(|e| e.name == k)
-            .map(|e| e.params.iter().map(|p| p.bytes).collect())
-            .ok_or_else(|| CudaError::MissingKernel {
-                kernel: k.into(),
-                available: vec![],
-            })
-    };
-    assert_eq!(check_kernels(&names, params).unwrap(), RootRef::U32);
+    assert_eq!(check_ptx_kernels(PROBE_PTX, &names).unwrap(), RootRef::U32);
     assert_eq!(ptx::directive(PROBE_PTX, ".target"), Some("sm_75"));
 }
 

@@ -16,7 +16,7 @@
 //! too.
 
 use crate::backend::Backend;
-use crate::oracle::{closest_hit_in, in_threads, tree_depth, CLOSEST_HIT, CLOSEST_HIT_NAME};
+use crate::oracle::{closest_hits_in, in_threads, tree_depth, CLOSEST_HIT, CLOSEST_HIT_NAME};
 use crate::quantized::Boxes;
 use scion_compiler::abi::EntrySig;
 use scion_compiler::driver::cli::Emit;
@@ -235,16 +235,8 @@ impl MemClosestHit {
         }
         let mut it = self.interp(tree);
         let Packing { b, root, .. } = self.pack(&mut it, tree)?;
-        let ptr = |a: u64| Val::Int(i128::from(a), IntTy::U64);
-        let mut hits = Vec::with_capacity(rays.len());
-        for (j, ray) in rays.iter().enumerate() {
-            let i = first + j;
-            hits.push(
-                closest_hit_in(&mut it, vec![ptr(b)], ray, root.clone())
-                    .map_err(|e| format!("ray {i}: {e}"))?,
-            );
-        }
-        Ok(hits)
+        let table = Val::Int(i128::from(b), IntTy::U64);
+        closest_hits_in(&mut it, &[table], rays, &root, first)
     }
 }
 

@@ -124,14 +124,7 @@ impl ClosestHit {
         let mut nodes = NodeProvider::new(tree, self.interior, self.leaf);
         it.set_adt_provider(Box::new(move |h| nodes.node(h)));
         let root = Val::Extern(u64::from(tree.root));
-        let mut hits = Vec::with_capacity(rays.len());
-        for (k, ray) in rays.iter().enumerate() {
-            let i = first + k;
-            let hit = closest_hit_in(&mut it, vec![], ray, root.clone())
-                .map_err(|e| format!("ray {i}: {e}"))?;
-            hits.push(hit);
-        }
-        Ok(hits)
+        closest_hits_in(&mut it, &[], rays, &root, first)
     }
 
     /// Closest hits of `rays` on `threads` threads (at least one), each with a stack sized for
@@ -313,6 +306,23 @@ pub fn closest_hit_in(
         },
         other => Err(format!("`best` is not a pair: {other:?}")),
     }
+}
+
+/// [`closest_hit_in`] for each of `rays`; an error names ray `first + i` for `rays[i]`.
+pub fn closest_hits_in(
+    it: &mut Interp<'_>,
+    before: &[Val],
+    rays: &[Ray],
+    root: &Val,
+    first: usize,
+) -> Result<Vec<Hit>, String> {
+    rays.iter()
+        .enumerate()
+        .map(|(k, ray)| {
+            closest_hit_in(it, before.to_vec(), ray, root.clone())
+                .map_err(|e| format!("ray {}: {e}", first + k))
+        })
+        .collect()
 }
 
 /// The prelude's `Ray(origin, direction, tmin, tmax)`.

@@ -299,16 +299,6 @@ fn val(t: &Type, f32b: u32, f64b: u64, int: u64, pick: u8) -> Val {
     }
 }
 
-fn key(v: &Val) -> (u8, u64) {
-    match *v {
-        Val::Bool(b) => (0, u64::from(b)),
-        Val::Int(x, _) => (1, x as u64),
-        Val::F32(x) => (2, u64::from(x.to_bits())),
-        Val::F64(x) => (3, x.to_bits()),
-        _ => (9, 0),
-    }
-}
-
 type Input = Vec<(u32, u64, u64, u8)>;
 
 #[test]
@@ -374,7 +364,7 @@ fn every_op_agrees_with_the_interpreter_and_cranelift() {
                         .map(|x| match x {
                             Val::F32(f) if loose && f.is_nan() => (4, 0),
                             Val::F64(f) if loose && f.is_nan() => (4, 0),
-                            _ => key(x),
+                            _ => x.bits_key(),
                         })
                         .collect::<Vec<_>>()
                 };

@@ -1,6 +1,7 @@
 //! Helpers shared by the parser's integration tests.
 #![allow(dead_code)]
 
+use proptest::prelude::*;
 use scion_compiler::syntax::ast::Program;
 use scion_compiler::syntax::parse_file;
 use scion_ir::diag::{Diagnostics, SourceMap};
@@ -115,4 +116,23 @@ pub fn tree_module_of(inputs: &[(&str, &str)], prelude: bool) -> Result<scion_ir
     let text = out.output.expect("tree text");
     let file = sources.add("<tree>", text.clone());
     Ok(scion_ir::parse_module(&text, file).expect("the printed tree parses back"))
+}
+
+/// Floats rich in edge cases for differential tests: NaNs with payloads and signs, signed
+/// zeros, infinities, subnormals, small values and anything.
+pub fn special_f32() -> impl Strategy<Value = f32> {
+    prop_oneof![
+        3 => -8.0f32..8.0,
+        1 => Just(0.0f32),
+        1 => Just(-0.0f32),
+        1 => Just(f32::INFINITY),
+        1 => Just(f32::NEG_INFINITY),
+        1 => Just(f32::NAN),
+        1 => Just(f32::from_bits(0x7fa0_1234)),
+        1 => Just(f32::from_bits(0xffc0_0001)),
+        1 => Just(f32::from_bits(1)),
+        1 => Just(-f32::MIN_POSITIVE / 3.0),
+        1 => Just(1.0f32),
+        2 => any::<f32>(),
+    ]
 }

@@ -86,6 +86,18 @@ impl Val {
         })
     }
 
+    /// A scalar's kind and bits, so that NaN payloads and signed zeros count: what the
+    /// differential tests compare between engines. Anything else is `(9, 0)`.
+    pub fn bits_key(&self) -> (u8, u64) {
+        match *self {
+            Val::Bool(b) => (0, u64::from(b)),
+            Val::Int(x, _) => (1, x as u64),
+            Val::F32(x) => (2, u64::from(x.to_bits())),
+            Val::F64(x) => (3, x.to_bits()),
+            _ => (9, 0),
+        }
+    }
+
     /// The value of a scalar.
     pub fn from_scalar(s: Scalar) -> Val {
         match s {
