@@ -278,6 +278,10 @@ fn special_f32() -> impl Strategy<Value = u32> {
         // rounding has something to do) and that approach overflow.
         any::<u32>().prop_map(|b| (b & 0x807f_ffff) | 0x3f80_0000),
         any::<u32>().prop_map(|b| (b & 0x807f_ffff) | 0x7f00_0000),
+        // One binade lower: added to `-MAX`/`MAX` (above), a sum that rounds up to near the
+        // top, where a two-sum in `f32` would overflow (CI found `-1.0168277e38 + MAX`).
+        any::<u32>().prop_map(|b| (b & 0x807f_ffff) | 0x7e80_0000),
+        Just((-1.016_827_7e38f32).to_bits()),
     ]
 }
 

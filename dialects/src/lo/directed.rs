@@ -7,19 +7,22 @@
 //! expansion first; NVPTX has the rounding per instruction (`add.rp.f32` ...) and keeps the
 //! ops. Each op becomes:
 //!
-//! * `add`: `r = a + b`; the exact error `e` of `r` by Knuth's two-sum (`bb = r - a`,
-//!   `e = (a - (r - bb)) + (b - bb)`, exact when `r` is finite); up: `e > 0` steps `r` to
-//!   `next_up(r)`, down: `e < 0` to `next_down(r)`. Then the two cases round-to-nearest gets
-//!   wrong in the direction's favour: an overflow to the infinity against the direction
-//!   (`-inf` rounding up from finite operands) is the largest finite float of that sign, and
-//!   rounding down, an exact zero sum is `-((-a) + (-b))` (so `x + (-x)` is `-0`, and only
-//!   `+0 + +0` stays `+0`).
+//! * `add`: `r = a + b` (round-to-nearest: one of the two floats around the exact sum, or
+//!   the canonical NaN), and the exact sum as the pair `s + e` of Knuth's two-sum on the
+//!   operands widened to `f64` (`bb = s - a`, `e = (a - (s - bb)) + (b - bb)`): no `f32` sum
+//!   overflows `f64`, whereas the same two-sum in `f32` overflows in `s - a` when `a + b`
+//!   rounds up to near the largest float. `r` is on the wrong side of the sum when the widened
+//!   `r` is past `s` (rounding is monotone, so `s` orders it like the exact sum) or equal to
+//!   `s` with `e` pointing past it; then it steps one ulp (`next_up` up, `next_down` down).
+//!   That also turns an overflow against the direction into the largest finite float
+//!   (`next_down(+inf)`). Rounding down, an exact zero sum is `-((-a) + (-b))` (so `x + (-x)`
+//!   is `-0`, and only `+0 + +0` stays `+0`).
 //! * `mul`: `r = a * b`, and the product of the operands widened to `f64`, which is exact; `r`
 //!   steps outward when the widened `r` lies on the wrong side of it. Zero signs and
 //!   infinities need nothing more.
 //!
-//! Sixteen and eight ops respectively, all branch-free, against one for PTX; the paper notes
-//! the cost on architectures without per-instruction rounding (§9.2.3).
+//! About twenty and eight ops respectively, all branch-free, against one for PTX; the paper
+//! notes the cost on architectures without per-instruction rounding (§9.2.3).
 
 use crate::builder::{Builder, InsertPoint};
 use crate::entity::{OpId, ValueId};
@@ -88,45 +91,45 @@ fn directed_ops(m: &Module) -> Vec<OpId> {
 
 fn expand_add(bld: &mut Builder, a: ValueId, b: ValueId, dir: Round) -> ValueId {
     let f = bld.m.types.f32();
+    let d = bld.m.types.float(crate::types::FloatTy::F64);
+    // Round-to-nearest: one of the two floats around the exact sum (and the canonical NaN).
     let r = bld.lo1(L::Add, &[a, b], f);
-    let bb = bld.lo1(L::Sub, &[r, a], f);
-    let t = bld.lo1(L::Sub, &[r, bb], f);
-    let ea = bld.lo1(L::Sub, &[a, t], f);
-    let eb = bld.lo1(L::Sub, &[b, bb], f);
-    let err = bld.lo1(L::Add, &[ea, eb], f);
-    let zero = bld.lo_float(f, 0.0);
-    let (pred, step, against, largest) = match dir {
-        Round::Up => (
-            CmpPred::Gt,
-            L::NextUp,
-            f64::NEG_INFINITY,
-            -f64::from(f32::MAX),
-        ),
-        Round::Down => (CmpPred::Lt, L::NextDown, f64::INFINITY, f64::from(f32::MAX)),
+    // The exact sum as the pair `s + e` (two-sum in f64, where no f32 sum overflows).
+    let wa = bld.lo1(L::Cast, &[a], d);
+    let wb = bld.lo1(L::Cast, &[b], d);
+    let s = bld.lo1(L::Add, &[wa, wb], d);
+    let bb = bld.lo1(L::Sub, &[s, wa], d);
+    let t = bld.lo1(L::Sub, &[s, bb], d);
+    let ea = bld.lo1(L::Sub, &[wa, t], d);
+    let eb = bld.lo1(L::Sub, &[wb, bb], d);
+    let e = bld.lo1(L::Add, &[ea, eb], d);
+    let wr = bld.lo1(L::Cast, &[r], d);
+    let zero = bld.lo_float(d, 0.0);
+    // `r` is on the wrong side of the exact sum: strictly, as `s` orders it (rounding is
+    // monotone), or equal to `s` with the error `e` pointing past it.
+    let (beyond, err_past, step) = match dir {
+        Round::Up => (CmpPred::Lt, CmpPred::Gt, L::NextUp),
+        Round::Down => (CmpPred::Gt, CmpPred::Lt, L::NextDown),
     };
-    let inexact = bld.lo_cmp(pred, err, zero);
-    let stepped = bld.lo1(step, &[r], f);
-    let r1 = bld.lo1(L::Select, &[inexact, stepped, r], f);
-    // Overflow against the direction from finite operands: the largest float of that sign.
-    let inf = bld.lo_float(f, against);
-    let at_inf = bld.lo_cmp(CmpPred::Eq, r, inf);
-    let a_fin = bld.lo_cmp(CmpPred::Ne, a, inf);
-    let b_fin = bld.lo_cmp(CmpPred::Ne, b, inf);
     let i1 = bld.m.types.bool();
-    let operands_fin = bld.lo1(L::And, &[a_fin, b_fin], i1);
-    let overflowed = bld.lo1(L::And, &[at_inf, operands_fin], i1);
-    let big = bld.lo_float(f, largest);
-    let r2 = bld.lo1(L::Select, &[overflowed, big, r1], f);
+    let past = bld.lo_cmp(beyond, wr, s);
+    let on_s = bld.lo_cmp(CmpPred::Eq, wr, s);
+    let e_past = bld.lo_cmp(err_past, e, zero);
+    let tie_past = bld.lo1(L::And, &[on_s, e_past], i1);
+    let wrong = bld.lo1(L::Or, &[past, tie_past], i1);
+    let stepped = bld.lo1(step, &[r], f);
+    let r1 = bld.lo1(L::Select, &[wrong, stepped, r], f);
     if dir == Round::Up {
-        return r2;
+        return r1;
     }
     // Rounding down, an exact zero sum is -0 unless both operands are +0.
-    let is_zero = bld.lo_cmp(CmpPred::Eq, r, zero);
+    let fzero = bld.lo_float(f, 0.0);
+    let is_zero = bld.lo_cmp(CmpPred::Eq, r, fzero);
     let na = bld.lo1(L::Neg, &[a], f);
     let nb = bld.lo1(L::Neg, &[b], f);
     let flipped = bld.lo1(L::Add, &[na, nb], f);
     let signed_zero = bld.lo1(L::Neg, &[flipped], f);
-    bld.lo1(L::Select, &[is_zero, signed_zero, r2], f)
+    bld.lo1(L::Select, &[is_zero, signed_zero, r1], f)
 }
 
 fn expand_mul(bld: &mut Builder, a: ValueId, b: ValueId, dir: Round) -> ValueId {
@@ -189,6 +192,7 @@ func @mul_ru(%a: f32, %b: f32) -> (f32) {
             f32::MAX,
             -f32::MAX,
             f32::MAX.next_down(),
+            -1.016_827_7e38,
             2.0f32.powi(103),
             -2.0f32.powi(103),
             2.0f32.powi(104),
@@ -205,6 +209,9 @@ func @mul_ru(%a: f32, %b: f32) -> (f32) {
             xs.push(f32::from_bits(s as u32));
             // Near the top of the range, where two-sum's intermediates could overflow.
             xs.push(f32::from_bits(0x7f00_0000 | (s >> 40) as u32 & 0x007f_ffff));
+            // One binade lower and negative: added to `MAX`, round-to-nearest can tie upward
+            // and `r - a` then passes `MAX` (CI found `-1.0168277e38 + MAX`).
+            xs.push(f32::from_bits(0xfe80_0000 | (s >> 20) as u32 & 0x007f_ffff));
         }
         xs
     }
