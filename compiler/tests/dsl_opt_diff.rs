@@ -198,7 +198,7 @@ fn dsl_optimizations_keep_every_result_bit() {
             "{name} still calls at max-ops=100000"
         );
     }
-    let cases = if cfg!(debug_assertions) { 200 } else { 2000 };
+    let cases = common::cases(if cfg!(debug_assertions) { 200 } else { 2000 });
     let mut runner = TestRunner::new(Config {
         cases,
         ..Config::default()

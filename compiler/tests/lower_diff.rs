@@ -150,7 +150,7 @@ fn prelude_functions_agree_in_tree_lo_cranelift_and_llvm() {
     let jit = JitModule::compile(&inlined).expect("compiles");
     let llvm0 = scion_llvm::JitModule::compile(&inlined, 0).expect("llvm -O0 compiles");
     let llvm3 = scion_llvm::JitModule::compile(&inlined, 3).expect("llvm -O3 compiles");
-    let cases = if cfg!(debug_assertions) { 300 } else { 3000 };
+    let cases = common::cases(if cfg!(debug_assertions) { 300 } else { 3000 });
     let mut runner = TestRunner::new(Config {
         cases,
         ..Config::default()

@@ -13,6 +13,8 @@
 //!   rounding away from the original, and the step itself is the smallest that reaches the
 //!   frame's high corner, up to one ulp.
 
+mod common;
+
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 use scion_clif::JitModule;
@@ -212,7 +214,7 @@ fn code(v: &Val) -> u32 {
 #[test]
 fn builtins_agree_in_every_engine_on_adversarial_inputs() {
     let e = engines();
-    let cases = if cfg!(debug_assertions) { 200 } else { 2000 };
+    let cases = common::cases(if cfg!(debug_assertions) { 200 } else { 2000 });
     let mut runner = TestRunner::new(Config {
         cases,
         ..Config::default()
@@ -283,7 +285,7 @@ fn ulp(x: f32) -> f64 {
 #[test]
 fn decoded_boxes_enclose_and_are_tight() {
     let e = engines();
-    let cases = if cfg!(debug_assertions) { 1000 } else { 20000 };
+    let cases = common::cases(if cfg!(debug_assertions) { 1000 } else { 20000 });
     let mut runner = TestRunner::new(Config {
         cases,
         ..Config::default()

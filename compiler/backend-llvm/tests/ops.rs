@@ -324,7 +324,11 @@ fn every_op_agrees_with_the_interpreter_and_cranelift() {
             (func.name.clone(), ps)
         })
         .collect();
-    let cases = if cfg!(debug_assertions) { 64 } else { 512 };
+    // `PROPTEST_CASES` (read by `Config::default()`) to fuzz harder.
+    let cases = std::env::var_os("PROPTEST_CASES")
+        .map_or(if cfg!(debug_assertions) { 64 } else { 512 }, |_| {
+            Config::default().cases
+        });
     let mut runner = TestRunner::new(Config {
         cases,
         ..Config::default()

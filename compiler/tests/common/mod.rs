@@ -1,4 +1,4 @@
-//! Helpers shared by the parser's integration tests.
+//! Helpers shared by the compiler's integration tests.
 #![allow(dead_code)]
 
 use proptest::prelude::*;
@@ -135,4 +135,13 @@ pub fn special_f32() -> impl Strategy<Value = f32> {
         1 => Just(1.0f32),
         2 => any::<f32>(),
     ]
+}
+
+/// How many random cases a differential test runs: `default`, or `PROPTEST_CASES` when set
+/// (fuzz harder with e.g. `PROPTEST_CASES=100000`; CI draws new seeds on every run).
+pub fn cases(default: u32) -> u32 {
+    std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|c| c.parse().ok())
+        .unwrap_or(default)
 }
