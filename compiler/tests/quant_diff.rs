@@ -7,7 +7,8 @@
 //!   magnitudes, far-from-origin frames), with the code bound both a constant (the unrolled
 //!   search stops at its top bit) and a parameter (all 32 bits);
 //! * conservative: for a frame built from a world box and any box inside it, the decoded box
-//!   encloses the box on every lane and the low code never passes the high one;
+//!   encloses the box on every lane and the low code never passes the high one; the same for
+//!   the snapped grid's codes of the box against the world (decoded with directed rounding);
 //! * tight: each code is the tightest one the decoder allows (the next code inward decodes past
 //!   the plane, or the plane is hit exactly), so a decoded plane is at most one step plus
 //!   rounding away from the original, and the step itself is the smallest that reaches the
@@ -23,10 +24,13 @@ use scion_ir::diag::FileId;
 use scion_ir::interp::lo::LoInterp;
 use scion_ir::interp::{Interp, Val};
 use scion_ir::tree::quant::{decode, frame_origin, frame_step, quant_hi, quant_lo, MIN_STEP};
+use scion_ir::tree::snapped;
 use scion_ir::types::IntTy;
 use scion_ir::Module;
 
 const M: u32 = 65535;
+/// The snapped grid's code bound in the `sgb`/`sgc` functions below (sg-eq's ten bits).
+const SG_M: u32 = 1023;
 
 const TREE: &str = r#"
 func @fo(%x: vector<3xf32>) -> vector<3xf32> {
@@ -358,6 +362,28 @@ fn decoded_boxes_enclose_and_are_tight() {
                 let slack = s[i] as f64 + 2.0 * ulp(hi[i].abs().max(db.abs()).max(o[i].abs()));
                 if (db as f64 - hi[i] as f64) > slack {
                     return Err(format!("{ctx}: high plane moved out by more than a step"));
+                }
+            }
+            // The snapped grid (sg-eq, 1023 bins) on the same world and box: every engine
+            // gives the same codes, in range, and the directed-rounding decode encloses.
+            let bins = e.agree("sgb", vec![v3(wlo), v3(whi)])?;
+            let ql = e.agree("sgc", vec![v3(lo), v3(wlo), v3(whi)])?;
+            let qh = e.agree("sgc", vec![v3(hi), v3(wlo), v3(whi)])?;
+            for i in 0..3 {
+                let Val::F32(b) = bins[i] else {
+                    unreachable!("sg_bins gives f32")
+                };
+                let (a, c) = (code(&ql[i]), code(&qh[i + 3]));
+                let (da, dc) = (
+                    snapped::decode_lo(a, wlo[i], b),
+                    snapped::decode_hi(c, whi[i], b),
+                );
+                if a > SG_M || c > SG_M || da > lo[i] || dc < hi[i] {
+                    return Err(format!(
+                        "lane {i}: box [{:e}, {:e}] in world [{:e}, {:e}], bins {b:e}: \
+                         sg codes {a}, {c} decode to [{da:e}, {dc:e}]",
+                        lo[i], hi[i], wlo[i], whi[i]
+                    ));
                 }
             }
             Ok(())
