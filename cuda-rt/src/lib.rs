@@ -9,6 +9,8 @@
 //! * [`module`]: PTX modules (with the JIT log) and kernel launches;
 //! * [`args`], [`ptx`]: typed kernel arguments checked against the PTX's `.entry`
 //!   parameters, launch grids;
+//! * [`launcher`]: what the pipeline needs of a device ([`Launcher`]), done by CUDA
+//!   ([`CudaLauncher`]) or by `scion-host`'s emulation on the CPU;
 //! * [`trace`]: the closest-hit pipeline (pack the logical tree on the device, trace rays);
 //! * [`kit`]: self-describing PTX for machines without the compiler (`scion-gpu`);
 //! * [`compare`]: GPU hits against the CPU reference, bit for bit;
@@ -20,6 +22,7 @@ pub mod device;
 pub mod driver;
 pub mod error;
 pub mod kit;
+pub mod launcher;
 pub mod module;
 pub mod ptx;
 pub mod ptxas;
@@ -28,6 +31,7 @@ pub mod trace;
 pub use args::{DevicePtr, Grid, KernelArg};
 pub use device::{Device, DeviceBuffer};
 pub use error::CudaError;
+pub use launcher::{CudaLauncher, Launcher};
 pub use module::{Kernel, Module};
 pub use trace::{GpuPipeline, GpuTrace, PackedTree};
 

@@ -10,9 +10,9 @@
 //! [`Hit`]s in the runtime's convention and the kernel time.
 
 use crate::args::{DevicePtr, Grid, KernelArg, THREADS_PER_BLOCK};
-use crate::device::{Device, DeviceBuffer, DeviceCopy};
+use crate::device::{Device, DeviceCopy};
 use crate::error::CudaError;
-use crate::module::{Kernel, Module};
+use crate::launcher::{CudaLauncher, Launcher};
 use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Hit, Ray};
 use std::time::{Duration, Instant};
@@ -211,10 +211,10 @@ pub fn per_level_frame(info_log: &str, kernels: &[&str]) -> Option<u64> {
     (!seen.is_empty()).then(|| seen.values().sum())
 }
 
-/// A PTX module with the four kernels of one algorithm and layout, ready to pack and trace.
-pub struct GpuPipeline<'d> {
-    device: &'d Device,
-    module: Module<'d>,
+/// The four kernels of one algorithm and layout on a device ([`Launcher`]: CUDA, or the host
+/// emulation), ready to pack and trace.
+pub struct GpuPipeline<L: Launcher> {
+    launcher: L,
     names: KernelNames,
     buffers: Vec<String>,
     root: RootRef,
@@ -223,26 +223,26 @@ pub struct GpuPipeline<'d> {
 }
 
 /// A tree packed on the device.
-pub struct PackedTree<'d> {
+pub struct PackedTree<B> {
     /// The layout's buffers (empty for the empty tree).
-    pub buffers: Vec<DeviceBuffer<'d>>,
+    pub buffers: Vec<B>,
     /// Each buffer's size as `@L.sizes` gave it.
     pub sizes: Vec<u64>,
-    table: Option<DeviceBuffer<'d>>,
+    table: Option<B>,
     root: u64,
     /// Upload, sizes, allocation, build and root, measured on the host.
     pub pack_time: Duration,
     /// The per-thread stack limit used for the packing kernels.
     pub pack_stack: usize,
-    _logical: Vec<DeviceBuffer<'d>>,
+    _logical: Vec<B>,
 }
 
 /// Rays on the device, uploaded once for several traces.
-pub struct DeviceRays<'d> {
+pub struct DeviceRays<B> {
     rays: Vec<Ray>,
-    queries: DeviceBuffer<'d>,
-    results: DeviceBuffer<'d>,
-    status: DeviceBuffer<'d>,
+    queries: B,
+    results: B,
+    status: B,
 }
 
 /// The hits of one trace.
@@ -254,32 +254,41 @@ pub struct GpuTrace {
     pub kernel_time: Duration,
 }
 
-impl<'d> GpuPipeline<'d> {
-    /// Loads `ptx` and checks its kernels for layout `layout` and algorithm `algorithm`;
-    /// `buffers` names the layout's buffers in plan order (their count is what `@L.sizes`
-    /// writes).
+impl<'d> GpuPipeline<CudaLauncher<'d>> {
+    /// Loads `ptx` on `device` and checks its kernels for layout `layout` and algorithm
+    /// `algorithm`; `buffers` names the layout's buffers in plan order (their count is what
+    /// `@L.sizes` writes).
     pub fn new(
         device: &'d Device,
         ptx: &str,
         layout: &str,
         algorithm: &str,
         buffers: Vec<String>,
-    ) -> Result<GpuPipeline<'d>, CudaError> {
-        let module = Module::load(device, ptx)?;
+    ) -> Result<GpuPipeline<CudaLauncher<'d>>, CudaError> {
+        GpuPipeline::with_launcher(CudaLauncher::load(device, ptx)?, layout, algorithm, buffers)
+    }
+}
+
+impl<L: Launcher> GpuPipeline<L> {
+    /// Checks the kernels `launcher` has loaded for layout `layout` and algorithm
+    /// `algorithm`; `buffers` names the layout's buffers in plan order.
+    pub fn with_launcher(
+        launcher: L,
+        layout: &str,
+        algorithm: &str,
+        buffers: Vec<String>,
+    ) -> Result<GpuPipeline<L>, CudaError> {
         let names = KernelNames::new(layout, algorithm);
-        let root = check_kernels(&names, |k| {
-            Ok(module.kernel(k)?.params().iter().map(|p| p.bytes).collect())
-        })?;
+        let root = check_kernels(&names, |k| launcher.params(k))?;
         let kernels = [
             names.sizes.as_str(),
             names.build.as_str(),
             names.root.as_str(),
             names.batch.as_str(),
         ];
-        let frames = per_level_frame(&module.info_log, &kernels);
+        let frames = per_level_frame(launcher.info_log(), &kernels);
         Ok(GpuPipeline {
-            device,
-            module,
+            launcher,
             names,
             buffers,
             root,
@@ -299,15 +308,20 @@ impl<'d> GpuPipeline<'d> {
 
     /// The JIT's info log (registers and stack frames per function).
     pub fn jit_log(&self) -> &str {
-        &self.module.info_log
+        self.launcher.info_log()
     }
 
-    fn kernel(&self, name: &str) -> Result<Kernel<'_>, CudaError> {
-        self.module.kernel(name)
+    /// The device the kernels run on.
+    pub fn launcher(&self) -> &L {
+        &self.launcher
     }
 
     /// Packs `tree` (of depth `depth`, for the packing kernels' stack) on the device.
-    pub fn pack(&self, tree: &LogicalTree, depth: usize) -> Result<PackedTree<'d>, CudaError> {
+    pub fn pack(
+        &self,
+        tree: &LogicalTree,
+        depth: usize,
+    ) -> Result<PackedTree<L::Buffer>, CudaError> {
         let start = Instant::now();
         if tree.is_empty() {
             return Ok(PackedTree {
@@ -320,23 +334,25 @@ impl<'d> GpuPipeline<'d> {
                 _logical: Vec::new(),
             });
         }
-        let dev = self.device;
+        let dev = &self.launcher;
+        let ptr = |b: &L::Buffer| KernelArg::Ptr(dev.address(b));
         let nodes = dev.upload("logical nodes", &tree.nodes)?;
         let prims = dev.upload("logical triangles", &tree.primitives)?;
-        let view = DeviceTreeView::new(tree, nodes.ptr(), prims.ptr())?;
+        let view = DeviceTreeView::new(tree, dev.address(&nodes), dev.address(&prims))?;
         let view = dev.upload("logical tree view", &[view])?;
         let count = self.buffers.len();
         let sizes_buf = dev.alloc("buffer sizes", 8 * count as u64)?;
-        self.kernel(&self.names.sizes)?.run(
+        dev.run(
+            &self.names.sizes,
             Grid::SINGLE,
-            &[KernelArg::Ptr(view.ptr()), KernelArg::Ptr(sizes_buf.ptr())],
+            &[ptr(&view), ptr(&sizes_buf)],
         )?;
-        let sizes: Vec<u64> = sizes_buf.download(count)?;
+        let sizes: Vec<u64> = dev.download(&sizes_buf, count)?;
         let mut buffers = Vec::with_capacity(count);
         for (name, &bytes) in self.buffers.iter().zip(&sizes) {
             buffers.push(dev.alloc(name, bytes)?);
         }
-        let addresses: Vec<u64> = buffers.iter().map(|b| b.ptr().0).collect();
+        let addresses: Vec<u64> = buffers.iter().map(|b| dev.address(b).0).collect();
         let table = dev.upload("buffer table", &addresses)?;
 
         let status = dev.alloc("build status", 4)?;
@@ -345,30 +361,24 @@ impl<'d> GpuPipeline<'d> {
         let stack = packing_stack(depth, self.frames, previous);
         dev.set_stack_limit(stack)?;
         let packed = (|| {
-            self.kernel(&self.names.build)?.run(
+            dev.run(
+                &self.names.build,
                 Grid::SINGLE,
-                &[
-                    KernelArg::Ptr(view.ptr()),
-                    KernelArg::Ptr(table.ptr()),
-                    KernelArg::Ptr(status.ptr()),
-                ],
+                &[ptr(&view), ptr(&table), ptr(&status)],
             )?;
-            let s: Vec<i32> = status.download(1)?;
+            let s: Vec<i32> = dev.download(&status, 1)?;
             if s[0] != 0 {
                 return Err(CudaError::BuildStatus {
                     kernel: self.names.build.clone(),
                     status: s[0],
                 });
             }
-            self.kernel(&self.names.root)?.run(
+            dev.run(
+                &self.names.root,
                 Grid::SINGLE,
-                &[
-                    KernelArg::Ptr(view.ptr()),
-                    KernelArg::Ptr(table.ptr()),
-                    KernelArg::Ptr(root.ptr()),
-                ],
+                &[ptr(&view), ptr(&table), ptr(&root)],
             )?;
-            root.download::<u64>(1)
+            dev.download::<u64>(&root, 1)
         })();
         let restored = dev.set_stack_limit(previous);
         let root = packed?[0];
@@ -389,8 +399,8 @@ impl<'d> GpuPipeline<'d> {
     }
 
     /// Uploads `rays` with room for their results and the status word.
-    pub fn upload_rays(&self, rays: &[Ray]) -> Result<DeviceRays<'d>, CudaError> {
-        let dev = self.device;
+    pub fn upload_rays(&self, rays: &[Ray]) -> Result<DeviceRays<L::Buffer>, CudaError> {
+        let dev = &self.launcher;
         Ok(DeviceRays {
             rays: rays.to_vec(),
             queries: dev.upload("rays", rays)?,
@@ -405,9 +415,10 @@ impl<'d> GpuPipeline<'d> {
     /// overflow.
     pub fn trace(
         &self,
-        tree: &PackedTree<'d>,
-        rays: &DeviceRays<'d>,
+        tree: &PackedTree<L::Buffer>,
+        rays: &DeviceRays<L::Buffer>,
     ) -> Result<GpuTrace, CudaError> {
+        let dev = &self.launcher;
         let n = rays.rays.len();
         let Some(table) = &tree.table else {
             return Ok(GpuTrace {
@@ -421,45 +432,43 @@ impl<'d> GpuPipeline<'d> {
                 kernel_time: Duration::ZERO,
             });
         };
-        rays.results.write(&initial_results(&rays.rays))?;
-        rays.status.write(&[0i32])?;
+        dev.write(&rays.results, &initial_results(&rays.rays))?;
+        dev.write(&rays.status, &[0i32])?;
         let root = match self.root {
             RootRef::U32 => KernelArg::U32(tree.root as u32),
             RootRef::U64 => KernelArg::U64(tree.root),
         };
-        let kernel = self.kernel(&self.names.batch)?;
-        let kernel_time = kernel.run_timed(
+        let kernel_time = dev.run_timed(
+            &self.names.batch,
             grid,
             &[
-                KernelArg::Ptr(table.ptr()),
-                KernelArg::Ptr(rays.queries.ptr()),
-                KernelArg::Ptr(rays.results.ptr()),
+                KernelArg::Ptr(dev.address(table)),
+                KernelArg::Ptr(dev.address(&rays.queries)),
+                KernelArg::Ptr(dev.address(&rays.results)),
                 KernelArg::U64(n as u64),
                 root,
-                KernelArg::Ptr(rays.status.ptr()),
+                KernelArg::Ptr(dev.address(&rays.status)),
             ],
         )?;
-        let status: Vec<i32> = rays.status.download(1)?;
+        let status: Vec<i32> = dev.download(&rays.status, 1)?;
         if status[0] != 0 {
             return Err(CudaError::Status {
                 kernel: self.names.batch.clone(),
                 status: status[0],
             });
         }
-        let results: Vec<[u32; 2]> = rays.results.download(n)?;
+        let results: Vec<[u32; 2]> = dev.download(&rays.results, n)?;
         Ok(GpuTrace {
             hits: hits_of(&results),
             kernel_time,
         })
     }
-}
 
-impl GpuPipeline<'_> {
     /// Traces once for the hits (a warm-up), then `runs` more times for the kernel times.
     pub fn trace_runs(
         &self,
-        tree: &PackedTree<'_>,
-        rays: &DeviceRays<'_>,
+        tree: &PackedTree<L::Buffer>,
+        rays: &DeviceRays<L::Buffer>,
         runs: usize,
     ) -> Result<(Vec<Hit>, Vec<Duration>), CudaError> {
         let first = self.trace(tree, rays)?;

@@ -7,6 +7,7 @@
 //! [`BackendKind::instantiate`].
 
 use crate::contract::LayoutBackend;
+use crate::gpu_emu::EmulatedBackend;
 use crate::jit::{Codegen, JitClosestHit, JIT_OPT_LEVEL};
 use crate::mem_interp::LIBRARY_LAYOUTS;
 use crate::oracle::ClosestHit;
@@ -63,6 +64,16 @@ pub enum BackendKind {
         /// Entries of the traversal stack.
         stack: u32,
     },
+    /// The GPU pipeline of `scion trace --device gpu` emulated on the CPU
+    /// ([`crate::gpu_emu`]): closest hit for the library layout `stem` with the GPU kernels,
+    /// compiled for the host by LLVM -O3, packed and traced by `scion_cuda`'s pipeline with a
+    /// traversal stack of `stack` entries.
+    GpuEmulated {
+        /// The layout's file stem in `library/layouts`.
+        stem: &'static str,
+        /// Entries of the traversal stack.
+        stack: u32,
+    },
 }
 
 impl BackendKind {
@@ -100,6 +111,13 @@ impl BackendKind {
                     name: format!("llvm-O3-{layout}"),
                     inner: LayoutBackend::new(Box::new(code), threads)?,
                 })
+            }
+            BackendKind::GpuEmulated { stem, stack } => {
+                let &(_, layout, boxes) = LIBRARY_LAYOUTS
+                    .iter()
+                    .find(|l| l.0 == stem)
+                    .ok_or_else(|| format!("no library layout `{stem}`"))?;
+                Box::new(EmulatedBackend::new(stem, layout, boxes, stack, threads)?)
             }
         })
     }

@@ -85,13 +85,13 @@ pub enum Codegen {
 }
 
 /// The compiled module: keeps the machine code alive.
-enum Code {
+pub(crate) enum Code {
     Cranelift(Box<scion_clif::JitModule>),
     Llvm(scion_llvm::JitModule),
 }
 
 impl Code {
-    fn compile(m: &Module, codegen: Codegen) -> Result<Code, String> {
+    pub(crate) fn compile(m: &Module, codegen: Codegen) -> Result<Code, String> {
         Ok(match codegen {
             Codegen::Cranelift => {
                 let jit = scion_clif::JitModule::compile(m).map_err(|e| e.to_string())?;
@@ -103,7 +103,7 @@ impl Code {
         })
     }
 
-    fn function_ptr(&self, name: &str) -> Option<*const u8> {
+    pub(crate) fn function_ptr(&self, name: &str) -> Option<*const u8> {
         match self {
             Code::Cranelift(j) => j.function_ptr(name),
             Code::Llvm(j) => j.function_ptr(name),

@@ -15,10 +15,13 @@
 //!   memory through that contract.
 //! - [`jit`]: closest hit specialized to each library layout, lowered to `lo` and compiled by
 //!   Cranelift or LLVM, as a [`contract::LayoutCode`].
+//! - [`gpu_emu`]: the GPU pipeline of `scion-cuda` emulated on the CPU: the GPU kernels
+//!   compiled for the host (`lo-host-kernels`), launched as grids of host threads.
 //! - [`quantized`]: how a layout stores its boxes, and the decoded tree a quantized layout
 //!   really traverses (its bit-for-bit reference).
 pub mod backend;
 pub mod contract;
+pub mod gpu_emu;
 pub mod jit;
 pub mod mem_interp;
 pub mod oracle;

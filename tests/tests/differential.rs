@@ -8,7 +8,8 @@
 //! The test is a table: one row per (scene, tree, ray kind, backend). [`BACKENDS`] lists the
 //! backends; a new backend (the JIT of a layout) is one more entry there and one more
 //! `BackendKind` variant. The LLVM rows (`BackendKind::Llvm`, -O3) cover the same
-//! layouts, scenes and hard cases as the Cranelift rows. Scenes: the generated hard cases
+//! layouts, scenes and hard cases as the Cranelift rows, and so do the rows of the GPU pipeline
+//! emulated on the CPU (`BackendKind::GpuEmulated`: pbrt, ptr, pbrt_q16, sg_eq). Scenes: the generated hard cases
 //! (always) and the real scenes of
 //! `shared/scenes` (skipped with a printed line when missing; those over 20 k triangles only
 //! in release builds). The interpreter is slow, so real scenes get few rays (release: 128
@@ -60,6 +61,25 @@ const BACKENDS: &[BackendKind] = &[
         stack: JIT_STACK,
     },
     BackendKind::Llvm {
+        stem: "sg_eq",
+        stack: JIT_STACK,
+    },
+    // The GPU pipeline emulated on the CPU: the kernels of `scion trace --device gpu` compiled
+    // for the host, packed and traced by scion-cuda's own pipeline (the four layouts the GPU
+    // check runs; docs/gpu.md).
+    BackendKind::GpuEmulated {
+        stem: "pbrt",
+        stack: JIT_STACK,
+    },
+    BackendKind::GpuEmulated {
+        stem: "ptr",
+        stack: JIT_STACK,
+    },
+    BackendKind::GpuEmulated {
+        stem: "pbrt_q16",
+        stack: JIT_STACK,
+    },
+    BackendKind::GpuEmulated {
         stem: "sg_eq",
         stack: JIT_STACK,
     },

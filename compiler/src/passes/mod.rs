@@ -6,6 +6,7 @@
 //! ([`tree_to_mem`], [`mem_inline`], [`mem_cse`]) and below them to `lo` ([`mem_to_lo`], [`recursion_to_stack`],
 //! [`lo_inline`]). Pass order lives in `driver/pipelines.rs` alone.
 
+pub mod lo_host_kernels;
 pub mod lo_inline;
 #[path = "mem/cse.rs"]
 pub mod mem_cse;
@@ -76,5 +77,12 @@ fn lower_passes(reg: &mut PassRegistry) {
         input: scion_ir::pass::Level::Lo,
         output: scion_ir::pass::Level::Lo,
         create: || Box::new(lo_inline::LoInline),
+    });
+    reg.register(scion_ir::PassInfo {
+        name: "lo-host-kernels",
+        summary: "GPU kernels to host functions taking the thread index as a last u64 parameter (host emulation of a launch)",
+        input: scion_ir::pass::Level::Lo,
+        output: scion_ir::pass::Level::Lo,
+        create: || Box::new(lo_host_kernels::LoHostKernels),
     });
 }
