@@ -9,23 +9,24 @@
 //! (`scion_cuda::kit`) that `scion-gpu` runs on machines without LLVM.
 
 use crate::trace::{build, progress, rays, secs, significant, LAYOUTS};
-use crate::{BackendArg, CliError, PtxArgs, TraceArgs};
+use crate::{BackendArg, CliError, DeviceArg, PtxArgs, TraceArgs};
 use scion_compiler::abi::EntryTarget;
 use scion_cuda::compare::Comparison;
 use scion_cuda::kit::PtxKit;
 use scion_cuda::trace::GpuPipeline;
-use scion_cuda::Device;
-use scion_host::jit::{library_lo, LoOptions};
+use scion_cuda::{Device, Launcher};
+use scion_host::gpu_emu::EmulatedGpu;
+use scion_host::jit::{library_lo, Codegen, LoOptions, ALGORITHM};
 use scion_host::mem_interp::LIBRARY_LAYOUTS;
+use scion_host::quantized::{Boxes, DecodedTree};
 use scion_runtime::batch::BatchDriver;
+use scion_runtime::bvh::LogicalTree;
+use scion_runtime::geom::Ray;
 use scion_runtime::reference::closest_hit::closest_hits_tree;
-use scion_runtime::scene::load_obj;
+use scion_runtime::scene::{load_obj, Scene};
 use scion_runtime::timing::trimmed_mean;
 use std::path::Path;
 use std::time::{Duration, Instant};
-
-/// The algorithm the GPU path runs.
-const ALGORITHM: &str = "closest_hit";
 
 /// The `-O` level of the tree/mem passes and of LLVM for PTX.
 const OPT_LEVEL: u8 = 3;
@@ -38,14 +39,7 @@ pub fn compile_kit(
     cpu: Option<&str>,
 ) -> Result<(PtxKit, Duration), CliError> {
     let start = Instant::now();
-    let stem = layout.replace('-', "_");
-    let Some(&(stem, name, boxes)) = LIBRARY_LAYOUTS.iter().find(|l| l.0 == stem) else {
-        let names: Vec<&str> = LAYOUTS.iter().map(|(n, _)| *n).collect();
-        return Err(
-            CliError::new(format!("unknown layout `{layout}` for the GPU"))
-                .note(format!("library layouts: {}", names.join(", "))),
-        );
-    };
+    let (stem, name, boxes) = library_layout(layout)?;
     let fail = |what: &str, detail: String| {
         CliError::new(format!(
             "cannot compile closest hit for `{layout}` ({what}): {detail}"
@@ -104,11 +98,16 @@ fn write_kit(kit: &PtxKit, path: &Path) -> Result<(), CliError> {
     Ok(())
 }
 
-/// `scion trace --device gpu`.
+/// `scion trace --device gpu|gpu-emulated`.
 pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
+    if args.device == DeviceArg::GpuEmulated {
+        return run_emulated(args);
+    }
     // The device first: without one there is nothing to compile for.
     let device = Device::open(args.gpu).map_err(|e| {
-        CliError::new(e.to_string()).note("--device gpu needs an NVIDIA GPU and its driver")
+        CliError::new(e.to_string())
+            .note("--device gpu needs an NVIDIA GPU and its driver")
+            .note("--device gpu-emulated runs the same kernels on this CPU")
     })?;
     let layout = args.layout.as_deref().unwrap_or("pbrt");
     if args.backend != BackendArg::Reference {
@@ -144,15 +143,9 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
     if let Some(path) = &args.emit_ptx {
         write_kit(&kit, path)?;
     }
-    progress(&format!("loading {}", args.scene.display()));
-    let scene =
-        load_obj(&args.scene).map_err(|e| CliError::new(format!("cannot load the scene: {e}")))?;
-    let tree = build(&scene, args);
-    let stats = tree.stats();
-    let rays = rays(&scene, args)?;
+    let input = load(args)?;
 
     progress(&format!("loading the PTX on {}", device.name));
-    let gpu_err = |e: scion_cuda::CudaError| CliError::new(format!("GPU: {e}"));
     let t = Instant::now();
     let pipeline = GpuPipeline::new(
         &device,
@@ -163,13 +156,164 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
     )
     .map_err(gpu_err)?;
     let module_time = t.elapsed();
+    let target = scion_cuda::ptx::directive(&kit.ptx, ".target").unwrap_or("?");
+    let report = Report {
+        device: format!(
+            "{} (sm_{}{}, driver CUDA {})",
+            device.name,
+            device.compute_capability.0,
+            device.compute_capability.1,
+            scion_cuda::error::version_text(device.driver.version)
+        ),
+        compile: match compile_time {
+            Some(t) => format!("{} (front end + LLVM -O3 to PTX for {target})", secs(t)),
+            None => format!("none (PTX kit for {target} read from a file)"),
+        },
+        load: Some(format!("{} (PTX JIT by the driver)", secs(module_time))),
+        place: "on the GPU",
+        timing: "batch kernel, CUDA events",
+        backend: format!("gpu ({} {})", kit.algorithm, kit.layout),
+        layout: kit.layout.clone(),
+        boxes: kit.boxes,
+        buffers: kit.buffers.clone(),
+    };
+    trace_and_report(&pipeline, args, &input, &report)
+}
+
+/// `scion trace --device gpu-emulated`: the kernels of `--device gpu` compiled for this CPU
+/// (`scion_host::gpu_emu`), packed and traced by the same pipeline.
+fn run_emulated(args: &TraceArgs) -> Result<(), CliError> {
+    for (flag, given) in [
+        ("--ptx", args.ptx.is_some()),
+        ("--emit-ptx", args.emit_ptx.is_some()),
+        ("--cpu", args.cpu.is_some()),
+        ("--gpu", args.gpu != 0),
+    ] {
+        if given {
+            eprintln!("scion: note: {flag} is not used with --device gpu-emulated");
+        }
+    }
+    if args.backend != BackendArg::Reference {
+        eprintln!(
+            "scion: note: --backend is not used with --device gpu-emulated (the GPU kernels \
+             of --layout run on the CPU, checked against the reference)"
+        );
+    }
+    let layout = args.layout.as_deref().unwrap_or("pbrt");
+    let (stem, name, boxes) = library_layout(layout)?;
     progress(&format!(
-        "packing the tree into layout `{}` on the GPU",
-        kit.layout
+        "compiling the GPU kernels of closest hit for layout `{layout}` for this CPU"
     ));
-    let packed = pipeline.pack(&tree, stats.depth).map_err(gpu_err)?;
-    let on_device = pipeline.upload_rays(&rays).map_err(gpu_err)?;
-    progress(&format!("tracing {} rays on the GPU", rays.len()));
+    let gpu = EmulatedGpu::compile(
+        stem,
+        name,
+        &LoOptions {
+            stack_size: args.stack_size,
+            opt_level: OPT_LEVEL,
+            dsl_opt: true,
+            target: EntryTarget::Gpu,
+        },
+        Codegen::Llvm(OPT_LEVEL),
+        args.threads,
+    )
+    .map_err(|e| {
+        CliError::new(format!(
+            "cannot compile the GPU kernels of closest hit for `{layout}`: {e}"
+        ))
+    })?;
+    let compile_time = gpu.compile_time;
+    let buffers = gpu.buffers().to_vec();
+    let input = load(args)?;
+    let pipeline = gpu.into_pipeline().map_err(CliError::new)?;
+    let workers = if args.threads == 0 {
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    } else {
+        args.threads
+    };
+    let report = Report {
+        device: format!(
+            "emulated on the CPU ({workers} host thread{}, one kernel call per GPU thread)",
+            if workers == 1 { "" } else { "s" }
+        ),
+        compile: format!(
+            "{} (front end, lo-host-kernels, LLVM -O3 for this CPU)",
+            secs(compile_time)
+        ),
+        load: None,
+        place: "on the emulated GPU",
+        timing: "batch kernel on host threads, wall clock",
+        backend: format!("gpu-emulated ({ALGORITHM} {name})"),
+        layout: name.to_string(),
+        boxes,
+        buffers,
+    };
+    trace_and_report(&pipeline, args, &input, &report)
+}
+
+/// The library layout `--layout` names: file stem, source name and boxes.
+fn library_layout(layout: &str) -> Result<(&'static str, &'static str, Boxes), CliError> {
+    let stem = layout.replace('-', "_");
+    LIBRARY_LAYOUTS
+        .iter()
+        .find(|l| l.0 == stem)
+        .copied()
+        .ok_or_else(|| {
+            let names: Vec<&str> = LAYOUTS.iter().map(|(n, _)| *n).collect();
+            CliError::new(format!("unknown layout `{layout}` for the GPU"))
+                .note(format!("library layouts: {}", names.join(", ")))
+        })
+}
+
+fn gpu_err(e: scion_cuda::CudaError) -> CliError {
+    CliError::new(format!("GPU: {e}"))
+}
+
+/// The scene, its logical tree and the rays of a trace.
+struct Input {
+    scene: Scene,
+    tree: LogicalTree,
+    rays: Vec<Ray>,
+}
+
+fn load(args: &TraceArgs) -> Result<Input, CliError> {
+    progress(&format!("loading {}", args.scene.display()));
+    let scene =
+        load_obj(&args.scene).map_err(|e| CliError::new(format!("cannot load the scene: {e}")))?;
+    let tree = build(&scene, args);
+    let rays = rays(&scene, args)?;
+    Ok(Input { scene, tree, rays })
+}
+
+/// What the report says about where the kernels ran.
+struct Report {
+    device: String,
+    compile: String,
+    load: Option<String>,
+    place: &'static str,
+    timing: &'static str,
+    backend: String,
+    layout: String,
+    boxes: Boxes,
+    buffers: Vec<String>,
+}
+
+/// Packs, traces `args.runs` times after a warm-up, checks every hit against the reference of
+/// the boxes the layout traverses, and prints the report of `scion trace`.
+fn trace_and_report<L: Launcher>(
+    pipeline: &GpuPipeline<L>,
+    args: &TraceArgs,
+    input: &Input,
+    r: &Report,
+) -> Result<(), CliError> {
+    let Input { scene, tree, rays } = input;
+    let stats = tree.stats();
+    progress(&format!(
+        "packing the tree into layout `{}` {}",
+        r.layout, r.place
+    ));
+    let packed = pipeline.pack(tree, stats.depth).map_err(gpu_err)?;
+    let on_device = pipeline.upload_rays(rays).map_err(gpu_err)?;
+    progress(&format!("tracing {} rays {}", rays.len(), r.place));
     let runs = args.runs as usize;
     let (hits, times) = pipeline
         .trace_runs(&packed, &on_device, runs)
@@ -182,14 +326,14 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
     progress("tracing the same rays with the reference for the check");
     let driver = BatchDriver::new(args.threads).map_err(CliError::new)?;
     // A quantized layout traverses its decoded (conservative) boxes: that tree is its reference.
-    let decoded = kit.reference_tree(&tree);
-    let reference = closest_hits_tree(&decoded, &rays, &driver);
+    let decoded = r.boxes.decoded_tree(tree);
+    let reference = closest_hits_tree(&decoded, rays, &driver);
     let check = Comparison::of(&hits, &reference);
 
     let drop = (runs - 1) / 4;
     let kernel = trimmed_mean(&times, drop, drop);
     let bytes: u64 = packed.sizes.iter().sum();
-    let parts: Vec<String> = kit
+    let parts: Vec<String> = r
         .buffers
         .iter()
         .zip(&packed.sizes)
@@ -201,37 +345,27 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
         "nodes        {} ({} interior, {} leaves, depth {}, SAH cost {:.2})",
         stats.nodes, stats.interior, stats.leaves, stats.depth, stats.sah_cost
     );
-    println!(
-        "device       {} (sm_{}{}, driver CUDA {})",
-        device.name,
-        device.compute_capability.0,
-        device.compute_capability.1,
-        scion_cuda::error::version_text(device.driver.version)
-    );
-    let target = scion_cuda::ptx::directive(&kit.ptx, ".target").unwrap_or("?");
-    match compile_time {
-        Some(t) => println!(
-            "compile time {} (front end + LLVM -O3 to PTX for {target})",
-            secs(t)
-        ),
-        None => println!("compile time none (PTX kit for {target} read from a file)"),
+    println!("device       {}", r.device);
+    println!("compile time {}", r.compile);
+    if let Some(load) = &r.load {
+        println!("module load  {load}");
     }
-    println!("module load  {} (PTX JIT by the driver)", secs(module_time));
     println!(
-        "pack time    {} (on the GPU: upload, sizes, allocation, build, root)",
-        secs(packed.pack_time)
+        "pack time    {} ({}: upload, sizes, allocation, build, root)",
+        secs(packed.pack_time),
+        r.place
     );
-    println!("layout       {}: {}", kit.layout, parts.join(", "));
+    println!("layout       {}: {}", r.layout, parts.join(", "));
     println!(
         "structure    {bytes} bytes, {:.1} bytes/node",
         bytes as f64 / stats.nodes.max(1) as f64
     );
     println!("rays         {}", rays.len());
-    println!("backend      gpu ({} {})", kit.algorithm, kit.layout);
+    println!("backend      {}", r.backend);
     println!(
-        "trace time   {} (batch kernel, CUDA events; mean of the middle {} of {} runs after 1 \
-         warm-up)",
+        "trace time   {} ({}; mean of the middle {} of {} runs after 1 warm-up)",
         secs(kernel),
+        r.timing,
         times.len() - 2 * drop,
         times.len()
     );
@@ -259,7 +393,12 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
     }
     if !check.identical() {
         return Err(CliError::new(format!(
-            "GPU hits differ from the reference: {check}"
+            "{} hits differ from the reference: {check}",
+            if r.place == "on the GPU" {
+                "GPU"
+            } else {
+                "emulated GPU"
+            }
         )));
     }
     Ok(())

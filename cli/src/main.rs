@@ -40,6 +40,11 @@ pub enum DeviceArg {
     /// An NVIDIA GPU: closest hit for `--layout` compiled to PTX by LLVM and run through CUDA,
     /// each hit compared with the reference (`--backend` is not used).
     Gpu,
+    /// The GPU path without a GPU: the same kernels (closest hit for `--layout` with the GPU
+    /// entry points) compiled for this CPU by LLVM, launched as grids of host threads and
+    /// driven by the same packing and tracing code, each hit compared with the reference.
+    /// Checks the kernels and the launch protocol, not NVPTX code generation.
+    GpuEmulated,
 }
 
 /// Arguments of `scion ptx`.
@@ -145,8 +150,8 @@ pub struct TraceArgs {
     /// the first ray that overflowed.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
     pub stack_size: Option<u32>,
-    /// Where to trace: the CPU (`--backend`) or an NVIDIA GPU (`--layout` compiled to PTX,
-    /// checked against the reference).
+    /// Where to trace: the CPU (`--backend`), an NVIDIA GPU (`--layout` compiled to PTX,
+    /// checked against the reference), or the GPU's kernels emulated on the CPU.
     #[arg(long, value_enum, default_value = "cpu")]
     pub device: DeviceArg,
     /// The CUDA device ordinal for `--device gpu`.

@@ -38,7 +38,7 @@ pub const LAYOUTS: &[(&str, &str)] = &[
 
 /// Runs `scion trace`.
 pub fn run(args: &TraceArgs) -> Result<(), CliError> {
-    if args.device == DeviceArg::Gpu {
+    if args.device != DeviceArg::Cpu {
         return crate::gpu::run_trace(args);
     }
     for (flag, given) in [

@@ -230,3 +230,99 @@ fn device_gpu_traces_like_the_reference_or_says_why_not() {
         println!("skip: {reason} [scion trace --device gpu --layout {layout}]");
     }
 }
+
+/// `--device gpu-emulated`: the GPU kernels run on this CPU through the GPU pipeline, every hit
+/// checked against the reference, with the checksum and hits file of the CPU backends.
+#[test]
+fn device_gpu_emulated_traces_like_the_cpu() {
+    let dir = scratch("emulated");
+    let scene = dir.join("cube.obj");
+    std::fs::write(&scene, CUBE).unwrap();
+    let scene = scene.to_str().unwrap();
+    let common = [
+        "trace",
+        "--scene",
+        scene,
+        "--rays",
+        "secondary",
+        "--n",
+        "1000",
+        "--runs",
+        "3",
+    ];
+    let cpu = scion(&[&common[..], &["--backend", "llvm"]].concat());
+    assert!(cpu.status.success(), "{}", text(&cpu.stderr));
+    let checksum = |out: &str| {
+        out.lines()
+            .find(|l| l.starts_with("checksum: "))
+            .unwrap_or_else(|| panic!("no checksum in {out}"))
+            .to_string()
+    };
+    let want = checksum(&text(&cpu.stdout));
+    for layout in ["pbrt", "ptr", "pbrt-q16", "sg-eq"] {
+        let hits = dir.join(format!("{layout}.hits"));
+        let o = scion(
+            &[
+                &common[..],
+                &[
+                    "--device",
+                    "gpu-emulated",
+                    "--layout",
+                    layout,
+                    "-o",
+                    hits.to_str().unwrap(),
+                ],
+            ]
+            .concat(),
+        );
+        let (out, err) = (text(&o.stdout), text(&o.stderr));
+        assert!(o.status.success(), "{layout}: {err}");
+        assert!(
+            out.contains("check        identical to the reference on all 1000 rays"),
+            "{out}"
+        );
+        assert!(out.contains("device       emulated on the CPU"), "{out}");
+        assert!(
+            out.contains("backend      gpu-emulated (closest_hit "),
+            "{out}"
+        );
+        assert!(out.contains("Mrays/s"), "{out}");
+        // On the cube the quantized layouts' wider boxes change no hit: one checksum for all.
+        assert_eq!(checksum(&out), want, "{layout}");
+        assert_eq!(std::fs::metadata(&hits).unwrap().len(), 8 * 1000);
+        assert!(err.contains("on the emulated GPU"), "{err}");
+    }
+    // A stack smaller than the tree is the kernel's overflow status, one error line.
+    let o = scion(
+        &[
+            &common[..],
+            &[
+                "--device",
+                "gpu-emulated",
+                "--builder",
+                "median",
+                "--stack-size",
+                "1",
+            ],
+        ]
+        .concat(),
+    );
+    let err = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(
+            "error: GPU: kernel `scion_closest_hit_LinearBVH_kernel`: traversal stack overflow"
+        ),
+        "{err}"
+    );
+    assert!(err.contains("try a larger --stack-size"), "{err}");
+    let o = scion(
+        &[
+            &common[..],
+            &["--device", "gpu-emulated", "--layout", "nope"],
+        ]
+        .concat(),
+    );
+    assert_eq!(o.status.code(), Some(1));
+    assert!(text(&o.stderr).contains("error: unknown layout `nope` for the GPU"));
+}
