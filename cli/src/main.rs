@@ -145,9 +145,10 @@ pub struct TraceArgs {
     /// single untimed-warm-up run for quick use; other counts drop (runs - 1) / 4 at each end.
     #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub runs: u32,
-    /// Entries of the generated traversal's explicit stack (`--backend jit|llvm`; the compiler's
-    /// `recursion-to-stack:stack-size`, default 64). A tree too deep for it is an error naming
-    /// the first ray that overflowed.
+    /// Entries of the generated traversal's explicit stack (`--backend jit|llvm`, `--device
+    /// gpu|gpu-emulated`; the compiler's `recursion-to-stack:stack-size`, default 64). A tree
+    /// too deep for it is an error naming the first ray that overflowed (on the GPU, the
+    /// kernel's overflow status).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
     pub stack_size: Option<u32>,
     /// Where to trace: the CPU (`--backend`), an NVIDIA GPU (`--layout` compiled to PTX,
