@@ -10,7 +10,7 @@
 //! `@scion_closest_hit_L`.
 //!
 //! The front end compiles with the entry option ([`PassOptions::entry`]) through
-//! [`frontend::compile`], the call `scionc` makes, and hands back the entries' C signature
+//! [`scion_compiler::frontend::compile`], the call `scionc` makes, and hands back the entries' C signature
 //! ([`EntrySig`]): the layout's buffers (their names, and the header's `SCION_L_BUFFER_ALIGN`,
 //! at least [`BUFFER_ALIGN`], for every buffer) and the query and result records, checked to
 //! be the 32-byte `Ray` and the 8-byte `(f32, u32)` hit record the host passes. The reference

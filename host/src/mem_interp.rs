@@ -32,7 +32,7 @@ use scion_runtime::geom::{Hit, Ray, Triangle};
 use std::time::{Duration, Instant};
 
 /// The library's layouts: file stem, layout name, and how the layout stores boxes (a
-/// quantized layout's bit-for-bit reference is the traversal of [`Boxes::decoded_tree`]).
+/// quantized layout's bit-for-bit reference is the traversal of [`DecodedTree::decoded_tree`](crate::quantized::DecodedTree::decoded_tree)).
 pub const LIBRARY_LAYOUTS: &[(&str, &str, Boxes)] = &[
     ("pbrt", "LinearBVH", Boxes::Exact),
     ("ptr", "PtrBVH", Boxes::Exact),

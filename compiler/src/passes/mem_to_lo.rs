@@ -6,7 +6,7 @@
 //!   arm yields, a join block whose arguments are the results (short-circuit `&&`/`||` are such
 //!   `if`s); `tree.return` from any depth is a `lo.return`; `tree.foreach` over a fixed array is
 //!   unrolled (its element count is in the type); a `tree.match` on a record runs its one arm.
-//! * **Scalarization** ([`flat`]): vectors, tuples, records (`Ray`, `AABB`, `Triangle`) and
+//! * **Scalarization** (`mem_to_lo/flat.rs`): vectors, tuples, records (`Ray`, `AABB`, `Triangle`) and
 //!   fixed arrays become their scalar leaves, as separate SSA values; function parameters and
 //!   results of aggregate type are flattened the same way (a `(Ray, AABB) -> (f32, f32)`
 //!   function takes 12 scalars and returns 2).
@@ -15,7 +15,7 @@
 //!   `lo.stack_slot` of the callee's frame; `tree.load`/`tree.store` are one scalar load/store
 //!   per leaf at its offset.
 //! * **Calls** stay calls (`lo.call` with flattened arguments); intrinsics become scalar ops per
-//!   lane ([`intrinsics`]).
+//!   lane (`mem_to_lo/intrinsics.rs`).
 //!
 //! Functions that cannot be lowered (sum ADTs not yet specialized, sets, slices, options, and
 //! intrinsics without a scalar form) are a user error (E0970) naming the function and the
