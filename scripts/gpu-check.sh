@@ -21,17 +21,25 @@
 #   GPU_CHECK_BUDGET   seconds for all the traces (default 300): later ones are not started
 #   GPU_CHECK_LAYOUTS  the layouts, in order (default "pbrt ptr pbrt-q16 sg-eq"); pbrt and ptr
 #                      must run on every scene, the others as the budget allows
+#   GPU_CHECK_DEVICE   gpu (default), or gpu-emulated to check this script without a GPU:
+#                      `scion trace --device gpu-emulated` (the GPU kernels compiled for the
+#                      CPU, docs/gpu.md), no device probe, no test binaries (mode scion only)
 #   OUT                where logs and summary.txt go (default: <kit>/results)
 set -uo pipefail
 
 here=$(cd "$(dirname "$0")" && pwd)
-if [ -x "$here/bin/scion-gpu" ]; then KIT=$here; else KIT=${GPU_KIT:-$here/../gpu-kit}; fi
+if [ -x "$here/bin/scion" ]; then KIT=$here; else KIT=${GPU_KIT:-$here/../gpu-kit}; fi
 KIT=$(cd "$KIT" 2>/dev/null && pwd) || { echo "gpu-check: no kit at $KIT; run scripts/gpu-kit.sh first" >&2; exit 2; }
 N=${GPU_CHECK_N:-1048576}
 RUNS=${GPU_CHECK_RUNS:-9}
 TIMEOUT=${GPU_CHECK_TIMEOUT:-60}
 BUDGET=${GPU_CHECK_BUDGET:-300}
 LAYOUTS=${GPU_CHECK_LAYOUTS:-pbrt ptr pbrt-q16 sg-eq}
+DEVICE=${GPU_CHECK_DEVICE:-gpu}
+case $DEVICE in
+  gpu|gpu-emulated) ;;
+  *) echo "gpu-check: GPU_CHECK_DEVICE must be gpu or gpu-emulated" >&2; exit 2;;
+esac
 RESULTS=${OUT:-$KIT/results}
 mkdir -p "$RESULTS/logs"
 SUMMARY=$RESULTS/summary.txt
@@ -65,13 +73,21 @@ mode=${GPU_CHECK_MODE:-auto}
 if [ "$mode" = auto ]; then
   if "$KIT/bin/scion" --version >/dev/null 2>&1; then mode=scion; else mode=kit; fi
 fi
+if [ "$DEVICE" = gpu-emulated ] && [ "$mode" != scion ]; then
+  echo "gpu-check: GPU_CHECK_DEVICE=gpu-emulated needs mode scion (a kit's bin/scion that starts)" >&2
+  exit 2
+fi
 case $mode in
-  scion) say "gpu-check: mode scion (scion trace --device gpu: PTX compiled in-process by LLVM)";;
+  scion) say "gpu-check: mode scion (scion trace --device $DEVICE: PTX compiled in-process by LLVM)";;
   kit) say "gpu-check: mode kit (scion-gpu with the prebuilt PTX kits; scion does not start here: $("$KIT/bin/scion" --version 2>&1 | head -1))";;
   *) echo "gpu-check: GPU_CHECK_MODE must be scion, kit or auto" >&2; exit 2;;
 esac
 say "gpu-check: scenes $scenes, $N rays per run, $RUNS timed runs"
-if ! info=$("$KIT/bin/scion-gpu" --info 2>&1); then
+if [ "$DEVICE" = gpu-emulated ]; then
+  info="emulated on the CPU (scion trace --device gpu-emulated; not a GPU)"
+  say "gpu-check: $info"
+  no_device=0
+elif ! info=$("$KIT/bin/scion-gpu" --info 2>&1); then
   say "gpu-check: FAILED: the GPU cannot be opened: $info"
   say "gpu-check: (the tests below then only print skip lines)"
   no_device=1
@@ -106,7 +122,7 @@ for layout in $LAYOUTS; do
         continue
       fi
       if [ "$mode" = scion ]; then
-        cmd=("$KIT/bin/scion" trace --device gpu --scene "$obj" --layout "$layout" --rays "$rays"
+        cmd=("$KIT/bin/scion" trace --device "$DEVICE" --scene "$obj" --layout "$layout" --rays "$rays"
              --n "$N" --runs "$RUNS")
       else
         cmd=("$KIT/bin/scion-gpu" --ptx "$KIT/ptx/$layout.ptx" --scene "$obj" --rays "$rays"
@@ -118,7 +134,8 @@ for layout in $LAYOUTS; do
       tris=$(awk '/^triangles/ {print $2} /^scene .*triangles\)/ {gsub(/[()]/,""); print $(NF-1)}' "$log" | head -1)
       mrays=$(awk '/^throughput/ {print $2}' "$log" | head -1)
       pack=$(awk '/^pack time/ {print $3}' "$log" | head -1)
-      check=$(sed -n 's/^check *//p' "$log" | head -1)
+      # The `check` line, not `checksum:` before it.
+      check=$(sed -n 's/^check[[:space:]]\{1,\}//p' "$log" | head -1)
       if [ $rc -eq 0 ] && [[ "$check" == identical* ]]; then
         verdict="ok"; identical=$((identical + 1))
       elif [ $rc -eq 124 ]; then
@@ -141,7 +158,7 @@ say ""
 say "== GPU tests of scion-cuda =="
 tests_failed=0
 for t in "$KIT"/tests/*; do
-  [ -x "$t" ] || continue
+  [ -x "$t" ] && [ "$DEVICE" = gpu ] || continue
   name=$(basename "$t")
   log=$RESULTS/logs/test-$name.log
   timeout "$TIMEOUT" "$t" --nocapture --test-threads=1 > "$log" 2>&1
@@ -163,7 +180,7 @@ ran=$((total - not_run))
 say "gpu-check: $identical of $ran traces identical to the reference; $not_run not run (budget spent; a failure for pbrt and ptr); $tests_failed test binaries failed"
 # The Mrays/s as the Markdown table of docs/benchmarks.md: one row per scene and ray kind, the
 # kernel's throughput per layout, and each other layout as a ratio to pbrt in the same run.
-awk -F'\t' -v device="$(printf '%s' "$info" | head -1)" -v layouts="$LAYOUTS" '
+awk -F'\t' -v device="$(printf '%s' "$info" | head -1)" -v layouts="$LAYOUTS" -v rays="$N" '
   NR == 1 { next }
   { key = $1 SUBSEP $2 SUBSEP $3; m[key] = $6; ok[key] = ($7 == "ok"); if ($4 != "-") tris[$1] = $4
     if (!($1 in seen)) { seen[$1] = 1; order[++n] = $1 } }
@@ -172,7 +189,7 @@ awk -F'\t' -v device="$(printf '%s' "$info" | head -1)" -v layouts="$LAYOUTS" '
     return (a + 0 > 0 && b + 0 > 0) ? sprintf("%.2f", a / b) : "-" }
   END {
     nl = split(layouts, L, " ")
-    print "GPU: " device ", closest hit, 2^20 rays, kernel Mrays/s (trimmed mean of the timed runs); (!) = not identical to the reference"
+    print "GPU: " device ", closest hit, " (rays == 1048576 ? "2^20" : rays) " rays, kernel Mrays/s (trimmed mean of the timed runs); (!) = not identical to the reference"
     print ""
     head = "| scene | triangles | rays |"; rule = "|---|---:|---|"
     for (j = 1; j <= nl; j++) { head = head " " L[j] " |"; rule = rule "---:|" }

@@ -326,3 +326,90 @@ fn device_gpu_emulated_traces_like_the_cpu() {
     assert_eq!(o.status.code(), Some(1));
     assert!(text(&o.stderr).contains("error: unknown layout `nope` for the GPU"));
 }
+
+/// scripts/gpu-check.sh, the one command of the GPU check, run end to end without a GPU
+/// (`GPU_CHECK_DEVICE=gpu-emulated`) on a kit of the `scion` under test and two small scenes:
+/// every trace is found identical (its `check` line read, not the `checksum:` line before it),
+/// and the summary and the table for docs/benchmarks.md are written.
+#[test]
+fn gpu_check_script_passes_on_the_emulated_device() {
+    let dir = scratch("gpu-check");
+    let kit = dir.join("kit");
+    std::fs::create_dir_all(kit.join("bin")).unwrap();
+    std::os::unix::fs::symlink(env!("CARGO_BIN_EXE_scion"), kit.join("bin/scion")).unwrap();
+    std::fs::write(kit.join("COMMIT"), "test\n").unwrap();
+    let scenes = dir.join("scenes");
+    std::fs::create_dir_all(&scenes).unwrap();
+    std::fs::write(scenes.join("cube.obj"), CUBE).unwrap();
+    // A 6 x 6 grid of quads, bent along x: 72 triangles.
+    let mut grid = String::new();
+    for j in 0..7 {
+        for i in 0..7 {
+            grid += &format!("v {i} {j} {}\n", (i * i) as f32 * 0.1);
+        }
+    }
+    for j in 0..6 {
+        for i in 0..6 {
+            let v = j * 7 + i + 1;
+            grid += &format!("f {} {} {} {}\n", v, v + 1, v + 8, v + 7);
+        }
+    }
+    std::fs::write(scenes.join("grid.obj"), grid).unwrap();
+    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scripts/gpu-check.sh");
+    let results = dir.join("results");
+    let run = |device: &str| {
+        std::process::Command::new("bash")
+            .arg(&script)
+            .env("GPU_KIT", &kit)
+            .env("SCION_SCENES", &scenes)
+            .env("GPU_CHECK_N", "400")
+            .env("GPU_CHECK_RUNS", "1")
+            .env("GPU_CHECK_DEVICE", device)
+            .env("OUT", &results)
+            .output()
+            .expect("run bash")
+    };
+    let o = run("gpu-emulated");
+    let (out, err) = (text(&o.stdout), text(&o.stderr));
+    assert!(o.status.success(), "{out}\n{err}");
+    let summary = std::fs::read_to_string(results.join("summary.txt")).unwrap();
+    assert!(
+        summary.contains(
+            "gpu-check: 16 of 16 traces identical to the reference; 0 not run (budget spent; \
+             a failure for pbrt and ptr); 0 test binaries failed"
+        ),
+        "{summary}"
+    );
+    assert!(
+        summary.contains("gpu-check: emulated on the CPU"),
+        "{summary}"
+    );
+    let table = std::fs::read_to_string(results.join("benchmarks.md")).unwrap();
+    let rows: Vec<&str> = table
+        .lines()
+        .filter(|l| l.starts_with("| cube ") || l.starts_with("| grid "))
+        .collect();
+    assert_eq!(rows.len(), 4, "{table}");
+    assert!(
+        rows.iter()
+            .any(|r| r.starts_with("| cube | 12 | primary |")),
+        "{table}"
+    );
+    assert!(
+        rows.iter()
+            .any(|r| r.starts_with("| grid | 72 | secondary |")),
+        "{table}"
+    );
+    assert!(rows.iter().all(|r| !r.contains("(!)")), "{table}");
+    assert!(table.contains("closest hit, 400 rays"), "{table}");
+    let tsv = std::fs::read_to_string(results.join("traces.tsv")).unwrap();
+    assert_eq!(
+        tsv.lines().filter(|l| l.ends_with("\tok")).count(),
+        16,
+        "{tsv}"
+    );
+    // A device it does not know is a usage error.
+    let o = run("tpu");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("GPU_CHECK_DEVICE must be gpu or gpu-emulated"));
+}
