@@ -55,6 +55,7 @@ if [ -z "$scenes" ]; then
 fi
 if [ -z "$scenes" ] && ls "$KIT"/scenes/*.obj.gz >/dev/null 2>&1; then
   scenes=$(mktemp -d "${TMPDIR:-/tmp}/scion-scenes.XXXXXX")
+  trap 'rm -rf "$scenes"' EXIT
   for f in "$KIT"/scenes/*.obj.gz; do gzip -dc "$f" > "$scenes/$(basename "$f" .gz)"; done
 fi
 if [ -z "$scenes" ] || ! ls "$scenes"/*.obj >/dev/null 2>&1; then
@@ -78,7 +79,8 @@ if [ "$DEVICE" = gpu-emulated ] && [ "$mode" != scion ]; then
   exit 2
 fi
 case $mode in
-  scion) say "gpu-check: mode scion (scion trace --device $DEVICE: PTX compiled in-process by LLVM)";;
+  scion) if [ "$DEVICE" = gpu ]; then how="PTX compiled in-process by LLVM"; else how="the GPU kernels compiled for this CPU by LLVM"; fi
+         say "gpu-check: mode scion (scion trace --device $DEVICE: $how)";;
   kit) say "gpu-check: mode kit (scion-gpu with the prebuilt PTX kits; scion does not start here: $("$KIT/bin/scion" --version 2>&1 | head -1))";;
   *) echo "gpu-check: GPU_CHECK_MODE must be scion, kit or auto" >&2; exit 2;;
 esac
