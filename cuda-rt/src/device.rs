@@ -48,6 +48,18 @@ pub fn bytes_of<T: DeviceCopy>(data: &[T]) -> &[u8] {
     unsafe { std::slice::from_raw_parts(data.as_ptr().cast::<u8>(), std::mem::size_of_val(data)) }
 }
 
+/// Checks that copying `bytes` (`what`: `writing` or `reading`) fits buffer `name` of `holds`
+/// bytes; the error names the buffer.
+pub fn check_copy_len(name: &str, holds: u64, bytes: usize, what: &str) -> Result<(), CudaError> {
+    if bytes as u64 > holds {
+        return Err(CudaError::Host(format!(
+            "{what} {bytes} bytes {} `{name}`, which holds {holds} bytes",
+            if what == "writing" { "into" } else { "from" },
+        )));
+    }
+    Ok(())
+}
+
 /// An open CUDA device with its primary context.
 pub struct Device {
     ordinal: i32,
@@ -308,15 +320,7 @@ impl DeviceBuffer<'_> {
     }
 
     fn check_len(&self, bytes: usize, what: &str) -> Result<(), CudaError> {
-        if bytes as u64 > self.bytes {
-            return Err(CudaError::Host(format!(
-                "{what} {bytes} bytes {} `{}`, which holds {} bytes",
-                if what == "writing" { "into" } else { "from" },
-                self.name,
-                self.bytes
-            )));
-        }
-        Ok(())
+        check_copy_len(&self.name, self.bytes, bytes, what)
     }
 
     /// Copies `data` to the start of the buffer.

@@ -18,7 +18,7 @@ use crate::jit::{library_lo, Code, Codegen, LoOptions, ALGORITHM};
 use crate::quantized::Boxes;
 use scion_compiler::abi::EntryTarget;
 use scion_cuda::args::PackedArgs;
-use scion_cuda::device::{bytes_of, DeviceCopy};
+use scion_cuda::device::{bytes_of, check_copy_len, DeviceCopy};
 use scion_cuda::ptx::PtxParam;
 use scion_cuda::trace::GpuPipeline;
 use scion_cuda::{CudaError, DevicePtr, Grid, KernelArg, Launcher};
@@ -274,15 +274,7 @@ unsafe impl Sync for HostBuffer {}
 
 impl HostBuffer {
     fn check_len(&self, bytes: usize, what: &str) -> Result<(), CudaError> {
-        if bytes as u64 > self.bytes {
-            return Err(CudaError::Host(format!(
-                "{what} {bytes} bytes {} `{}`, which holds {} bytes",
-                if what == "writing" { "into" } else { "from" },
-                self.name,
-                self.bytes
-            )));
-        }
-        Ok(())
+        check_copy_len(&self.name, self.bytes, bytes, what)
     }
 }
 
