@@ -27,6 +27,8 @@ command -v python3 >/dev/null || need_apt+=(python3)
 # The C++ example's test (tests/tests/cpp_example.rs) builds examples/cpp with make and g++.
 command -v g++ >/dev/null || need_apt+=(g++)
 command -v make >/dev/null || need_apt+=(make)
+# The peers benchmark (bench/benches/peers/embree_peer.rs) links Embree 3, Debian's libembree3.
+[ -e /usr/include/embree3/rtcore.h ] || need_apt+=(libembree-dev)
 # ptxas: the same places lit-tests/lit.cfg.py and scion_cuda::ptxas::find look in. It comes
 # from the Python package registry through pip (Debian's python3 may lack pip: python3-pip).
 PTXAS_VERSION=13.5.37

@@ -1,15 +1,23 @@
 //! `cargo bench -p scion-bench --bench peers -- [OPTIONS]`: closest-hit throughput of Scion's
 //! generated code (Cranelift and LLVM -O3, layouts pbrt and ptr) against the runtime's Rust reference
-//! traversal and the peer library obvhs (BVH2, CWBVH), on one scene and one ray set, in one
-//! interleaved run by the paper's method (see `scion_bench`). Prints a markdown table; every
-//! ratio is to the reference row, measured in the same rounds.
+//! traversal and the peer libraries obvhs (BVH2, CWBVH; Rust), Embree 3 (the system's
+//! libembree3; C++) and tinybvh (BVH, BVH8_CPU; C++ through tinybvh-rs), on one scene and one
+//! ray set, in one interleaved run by the paper's method (see `scion_bench`). Every contender
+//! traces the same triangles and rays on the same threads (the batch driver's). Prints a
+//! markdown table; every ratio is to the reference row, measured in the same rounds.
 //!
 //! Options: `--scene PATH` (default: `bunny.obj` of `$SCION_SCENES` or `../shared/scenes`),
 //! `--rays primary|secondary` (default primary), `--n N` (65536), `--seed S` (1),
 //! `--threads T` (1), `--layouts a,b` (pbrt,ptr), `--interp-rays N` (1024: the interpreter traces
-//! only the first N rays; 0 leaves it out).
+//! only the first N rays; 0 leaves it out), `--peers a,b` (which peer libraries run, in this
+//! order after the reference: `obvhs-bvh2,obvhs-cwbvh,embree,tinybvh-bvh2,tinybvh-bvh8`, all by
+//! default; `--peers ''` runs none). `tinybvh-bvh8` needs a build with the `avx2` target feature
+//! (`RUSTFLAGS="-C target-feature=+avx2,+fma"`, see `tinybvh_peer`); without it the row is left
+//! out with a note.
 
+mod embree_peer;
 mod obvhs_peer;
+mod tinybvh_peer;
 
 use scion_bench::{race, table, Contender, RayKind, Workload};
 use scion_host::contract::{LayoutCode, Packed};
@@ -31,7 +39,17 @@ struct Args {
     threads: usize,
     layouts: Vec<String>,
     interp_rays: usize,
+    peers: Vec<String>,
 }
+
+/// The peer libraries `--peers` can name, in the order their rows come.
+const PEERS: [&str; 5] = [
+    "obvhs-bvh2",
+    "obvhs-cwbvh",
+    "embree",
+    "tinybvh-bvh2",
+    "tinybvh-bvh8",
+];
 
 fn default_scene() -> PathBuf {
     let dir = std::env::var_os("SCION_SCENES").map_or_else(
@@ -50,6 +68,7 @@ fn parse() -> Result<Args, String> {
         threads: 1,
         layouts: vec!["pbrt".into(), "ptr".into()],
         interp_rays: 1024,
+        peers: PEERS.map(str::to_string).to_vec(),
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -70,6 +89,20 @@ fn parse() -> Result<Args, String> {
             "--threads" => a.threads = num(value()?)? as usize,
             "--layouts" => a.layouts = value()?.split(',').map(str::to_string).collect(),
             "--interp-rays" => a.interp_rays = num(value()?)? as usize,
+            "--peers" => {
+                let list = value()?;
+                a.peers = list
+                    .split(',')
+                    .filter(|p| !p.is_empty())
+                    .map(str::to_string)
+                    .collect();
+                if let Some(p) = a.peers.iter().find(|p| !PEERS.contains(&p.as_str())) {
+                    return Err(format!(
+                        "--peers: unknown peer `{p}` (known: {})",
+                        PEERS.join(",")
+                    ));
+                }
+            }
             _ => {
                 return Err(format!(
                     "unknown option `{flag}` (see the header of bench/benches/peers/main.rs)"
@@ -119,9 +152,24 @@ fn run(a: &Args) -> Result<(), String> {
         subset: None,
         trace: Box::new(|rays| Ok(closest_hits_tree(&w.tree, rays, &driver))),
     }];
-    progress("building the obvhs trees");
-    contenders.push(obvhs_peer::bvh2(&w.triangles, &driver));
-    contenders.push(obvhs_peer::cwbvh(&w.triangles, &driver));
+    // The peer libraries, in `PEERS` order whatever the order of `--peers`.
+    let tris = w.triangles.as_slice();
+    for peer in PEERS.iter().filter(|p| a.peers.iter().any(|q| q == *p)) {
+        progress(&format!("building the {peer} structure"));
+        match *peer {
+            "obvhs-bvh2" => contenders.push(obvhs_peer::bvh2(tris, &driver)),
+            "obvhs-cwbvh" => contenders.push(obvhs_peer::cwbvh(tris, &driver)),
+            "embree" => contenders.push(embree_peer::embree(tris, &driver)?),
+            "tinybvh-bvh2" => contenders.push(tinybvh_peer::bvh2(tris, &driver)?),
+            _ => match tinybvh_peer::bvh8_cpu(tris, &driver) {
+                Some(c) => contenders.push(c?),
+                None => progress(
+                    "  left out: tinybvh-rs exposes BVH8_CPU's traversal only to builds with the \
+                     avx2 target feature (RUSTFLAGS=\"-C target-feature=+avx2,+fma\")",
+                ),
+            },
+        }
+    }
     for layout in &a.layouts {
         let stem = layout.replace('-', "_");
         let Some(&(stem, lname, _)) = LIBRARY_LAYOUTS.iter().find(|l| l.0 == stem) else {
