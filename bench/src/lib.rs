@@ -12,6 +12,8 @@
 //! and two slowest of the nine are dropped and the other five averaged
 //! ([`scion_runtime::timing::trimmed_mean`]).
 
+pub mod pbrt_kernel;
+
 use scion_runtime::bvh::{build_sah_binned, LogicalTree, SahOptions};
 use scion_runtime::geom::{Hit, Ray, Triangle};
 use scion_runtime::query::{primary_rays, secondary_rays};

@@ -176,6 +176,13 @@ pub struct TraceArgs {
     /// (scionc --no-dsl-opt: mem-inline, const-fold, mem-cse, dce), to measure what they gain.
     #[arg(long)]
     pub no_dsl_opt: bool,
+    /// Also report the traversal's work per ray: box tests, nodes visited, nodes skipped
+    /// because a nearer hit was found first, triangle tests, and the deepest traversal stack.
+    /// Counted by the reference traversal of the tree the layout traverses (its decoded boxes
+    /// for a quantized layout), which visits the same nodes in the same order as generated
+    /// code (the test suite checks the generated program's own counts against it).
+    #[arg(long)]
+    pub stats: bool,
 }
 
 fn main() -> ExitCode {

@@ -15,13 +15,15 @@ use crate::{BackendArg, BuilderArg, CliError, DeviceArg, RaysArg, TraceArgs};
 use scion_host::backend::{Backend, BackendKind};
 use scion_host::contract::{LayoutCode, Packed};
 use scion_host::jit::{Codegen, JitClosestHit};
-use scion_host::mem_interp::{MemInterpBackend, LIBRARY_LAYOUTS};
+use scion_host::mem_interp::{layout_boxes, MemInterpBackend, LIBRARY_LAYOUTS};
+use scion_host::quantized::{Boxes, DecodedTree};
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::{build_median, build_sah_binned, LogicalNode, LogicalTree, SahOptions};
 use scion_runtime::geom::{Hit, Ray, Triangle};
 use scion_runtime::query::{
     axis_rays, hits_checksum, primary_rays_n, read_rays, secondary_rays, write_hits,
 };
+use scion_runtime::reference::{closest_hit_tree_stats, TraversalStats};
 use scion_runtime::scene::{load_obj, Scene};
 use scion_runtime::timing::{measure_with, Timing, TimingPlan};
 use std::time::{Duration, Instant};
@@ -246,6 +248,26 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         timing.ns_per_query(rays.len())
     );
     println!("hits         {hit_count} of {} rays", rays.len());
+    if args.stats {
+        let boxes = match args.backend {
+            BackendArg::Jit | BackendArg::Llvm | BackendArg::MemInterp => {
+                layout_boxes(&layout.replace('-', "_"))
+            }
+            _ => Boxes::Exact,
+        };
+        let traversed = boxes.decoded_tree(&tree);
+        let s = work(&traversed, &rays, threads);
+        let per = |x: u64| x as f64 / rays.len().max(1) as f64;
+        println!(
+            "work/ray     {:.2} box tests, {:.2} nodes visited, {:.2} skipped, {:.2} triangle tests; deepest stack {} (reference traversal{})",
+            per(s.boxes_tested),
+            per(s.nodes_visited),
+            per(s.nodes_pruned),
+            per(s.triangles_tested),
+            s.max_pending,
+            if matches!(boxes, Boxes::Exact) { "" } else { " of the decoded boxes" }
+        );
+    }
     // The same number as the C library's `scion_hits_checksum` (examples/cpp prints it too).
     println!("checksum: {:016x}", hits_checksum(&hits));
     if let Some(path) = &args.output {
@@ -254,6 +276,20 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         println!("output       {} ({} bytes)", path.display(), hits.len() * 8);
     }
     Ok(())
+}
+
+/// The reference traversal's counters over all `rays`, on `threads` threads.
+fn work(tree: &LogicalTree, rays: &[Ray], threads: usize) -> TraversalStats {
+    let total = std::sync::Mutex::new(TraversalStats::default());
+    let driver = BatchDriver::new(threads).unwrap_or_else(|_| BatchDriver::sequential());
+    driver.run(rays.len(), |begin, end| {
+        let mut s = TraversalStats::default();
+        for r in &rays[begin..end] {
+            closest_hit_tree_stats(tree, r, &mut s);
+        }
+        total.lock().unwrap_or_else(|p| p.into_inner()).add(&s);
+    });
+    total.into_inner().unwrap_or_else(|p| p.into_inner())
 }
 
 /// How `scion trace` traces: a layout-free backend, or code specialized to a layout driven

@@ -465,9 +465,10 @@ impl LayoutCode for JitClosestHit {
         }
         status
     }
-    /// A node at depth `k` (root 1) runs with at most `k - 1` pending entries and pushes two,
-    /// so trees of depth up to `stack_size - 1` never overflow.
+    /// A node at depth `k` (root 1) runs with at most `k - 1` pending entries and pushes one
+    /// (`recursion-to-stack` visits the first of its two children at once), so trees of depth
+    /// up to `stack_size + 1` never overflow.
     fn stack_limit(&self) -> Option<usize> {
-        Some(self.stack_size.saturating_sub(1) as usize)
+        Some(self.stack_size as usize + 1)
     }
 }

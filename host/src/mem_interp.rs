@@ -223,6 +223,26 @@ impl MemClosestHit {
         })
     }
 
+    /// The work profile of the specialized program: how often each function was called while
+    /// tracing `rays` through `tree` (packing not counted), by function name. For closest hit,
+    /// the calls of `closest_hit_node` are the nodes reached, of `distmin` over a `SlabRay` the
+    /// box tests, of `hit_distance` the triangle tests.
+    pub fn call_profile(
+        &self,
+        tree: &LogicalTree,
+        rays: &[Ray],
+    ) -> Result<Vec<(String, u64)>, String> {
+        if tree.is_empty() {
+            return Ok(Vec::new());
+        }
+        let mut it = self.interp(tree);
+        let Packing { b, root, .. } = self.pack(&mut it, tree)?;
+        let table = Val::Int(i128::from(b), IntTy::U64);
+        it.count_calls();
+        closest_hits_in(&mut it, &[table], rays, &root, 0)?;
+        Ok(it.call_counts())
+    }
+
     /// Packs `tree` in a fresh interpreter and traces `rays` (errors name ray `first + i`).
     fn trace_from(
         &self,

@@ -14,8 +14,8 @@ use scion_host::oracle::tree_depth;
 use scion_host::quantized::DecodedTree;
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::LogicalTree;
-use scion_runtime::geom::{Hit, Ray};
-use scion_runtime::reference::closest_hits_tree;
+use scion_runtime::geom::{Hit, Ray, Vec3};
+use scion_runtime::reference::{closest_hit_tree_stats, closest_hits_tree, TraversalStats};
 use scion_runtime::scene::gen;
 use scion_tests::cases::{real_scene, RayKind, TreeKind};
 use std::path::{Path, PathBuf};
@@ -244,15 +244,23 @@ fn aarch64_code_matches_the_reference_under_qemu() {
         cases.len()
     );
 
-    // The default stack of 64 entries overflows on the deepest hard case, and says so.
+    // The default stack of 64 entries overflows on the deepest hard case, and says so: a ray
+    // along the chain from its small end pushes the far child at every level before it hits
+    // anything (the reference counts the entries it leaves pending).
     let deep = cases
         .iter()
         .position(|c| tree_depth(&c.tree) > 64)
         .expect("a hard case deeper than 64");
+    let along = Ray::new(Vec3::new(-1.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0));
+    let mut stats = TraversalStats::default();
+    closest_hit_tree_stats(&cases[deep].tree, &along, &mut stats);
+    assert!(stats.max_pending > 64, "{stats:?}");
+    let deep_input = dir.join("deep.rply");
+    write_replay(&deep_input, &cases[deep].tree, &[along]);
     let exe = replay_binary(&scionc, &dir, "pbrt", "LinearBVH", "-O3", None);
     let o = run(Command::new("qemu-aarch64")
         .arg(&exe)
-        .arg(&inputs[deep])
+        .arg(&deep_input)
         .arg(dir.join("deep.hits")));
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
     assert!(

@@ -7,9 +7,9 @@ mod common;
 use common::{Flat32, STACK};
 use scion_host::contract::{BufferSpec, LayoutCode, Packed, TraceFailure, STATUS_STACK_OVERFLOW};
 use scion_runtime::batch::BatchDriver;
-use scion_runtime::bvh::{build_caterpillar, build_sah_binned, DeepSide, LogicalTree, SahOptions};
+use scion_runtime::bvh::{build_sah_binned, LogicalTree, SahOptions};
 use scion_runtime::geom::{Ray, Vec3};
-use scion_runtime::reference::closest_hits_tree;
+use scion_runtime::reference::{closest_hit_tree_stats, closest_hits_tree, TraversalStats};
 use scion_runtime::scene::gen;
 
 #[test]
@@ -35,16 +35,26 @@ fn buffers_are_sized_aligned_and_hits_match_the_reference() {
 
 #[test]
 fn a_stack_overflow_names_the_first_failing_ray() {
-    // A caterpillar deeper than the stack: a left-first traversal keeps every right child.
-    let scene = gen::random_soup(3 * STACK as u32, 0.1, 9);
-    let tree = build_caterpillar(&scene.triangles, DeepSide::Left);
+    // A chain of triangles shrinking toward the origin gives a tree deeper than the stack; a
+    // ray along the chain from its small end pushes the far child at every level before it
+    // hits anything (the reference counts the entries it leaves pending).
+    let scene = gen::deep_chain(1000, 0.5);
+    let opts = SahOptions {
+        max_leaf: 4,
+        ..SahOptions::default()
+    };
+    let tree = build_sah_binned(&scene.triangles, &opts);
     let packed = Packed::new(&Flat32, &tree).unwrap();
-    let c = scene.bounds().center();
-    // 200 rays that miss the root's box, except ray 150, which starts at its center.
-    let away = Ray::new(Vec3::new(1e3, 1e3, 1e3), Vec3::new(1.0, 0.0, 0.0));
+    let along = Ray::new(Vec3::new(-1.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0));
+    let mut stats = TraversalStats::default();
+    closest_hit_tree_stats(&tree, &along, &mut stats);
+    assert!(stats.max_pending as usize > STACK, "{stats:?}");
+    // 200 rays that miss the root's box (the chain spans y in about ±6e29), except rays 150
+    // and 190.
+    let away = Ray::new(Vec3::new(0.0, -1e31, 0.0), Vec3::new(1.0, 0.0, 0.0));
     let mut rays = vec![away; 200];
-    rays[150] = Ray::new(c, Vec3::new(0.0, 0.0, 1.0));
-    rays[190] = rays[150];
+    rays[150] = along;
+    rays[190] = along;
     let driver = BatchDriver::new(2).unwrap();
     let e = packed.trace(&Flat32, &rays, &driver).unwrap_err();
     assert_eq!(

@@ -363,7 +363,7 @@ fn a_wrong_tie_rule_is_caught() {
 fn interpreter_errors_name_the_ray() {
     use scion_host::oracle::{ClosestHit, CLOSEST_HIT};
     use scion_runtime::geom::Vec3;
-    let mutated = CLOSEST_HIT.replace("best = (d, t.id);", "best = (d, t.id / (t.id - t.id));");
+    let mutated = CLOSEST_HIT.replace("best = (h, t.id);", "best = (h, t.id / (t.id - t.id));");
     assert_ne!(mutated, CLOSEST_HIT, "the mutation must apply");
     let p = ClosestHit::compile_source("div0.scion", &mutated, 0).unwrap();
     let scene = gen::one_triangle();

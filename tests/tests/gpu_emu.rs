@@ -13,7 +13,7 @@ use scion_host::jit::{Codegen, LoOptions};
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::{build_caterpillar, build_sah_binned, DeepSide, LogicalTree, SahOptions};
 use scion_runtime::geom::{Hit, Ray, Vec3};
-use scion_runtime::reference::closest_hits_tree;
+use scion_runtime::reference::{closest_hit_tree_stats, closest_hits_tree, TraversalStats};
 use scion_runtime::scene::gen;
 
 fn options(stack: Option<u32>) -> LoOptions {
@@ -86,10 +86,23 @@ fn emulated_kernels_pack_to_the_catalog_sizes_and_match_the_reference() {
 
 #[test]
 fn a_small_stack_is_the_overflow_status() {
+    // A chain-like tree, and the ray of 2000 random ones that leaves the most entries pending
+    // on the traversal stack (the reference counts them): a stack one entry smaller overflows.
     let scene = gen::random_soup(64, 0.1, 9);
     let tree = build_caterpillar(&scene.triangles, DeepSide::Left);
-    let rays = vec![Ray::new(scene.bounds().center(), Vec3::new(0.0, 0.0, 1.0)); 3];
-    let p = pipeline("pbrt", "LinearBVH", Some(4), Codegen::Llvm(3));
+    let pending = |r: &Ray| {
+        let mut stats = TraversalStats::default();
+        closest_hit_tree_stats(&tree, r, &mut stats);
+        stats.max_pending as u32
+    };
+    let deep = *scion_runtime::query::secondary_rays(scene.bounds(), 2000, 3)
+        .iter()
+        .max_by_key(|r| pending(r))
+        .expect("rays");
+    let need = pending(&deep);
+    assert!(need >= 2, "{need}");
+    let rays = vec![deep; 3];
+    let p = pipeline("pbrt", "LinearBVH", Some(need - 1), Codegen::Llvm(3));
     let e = trace(&p, &tree, &rays).unwrap_err();
     assert!(matches!(e, CudaError::Status { status: 1, .. }), "{e:?}");
     assert!(e.to_string().contains("traversal stack overflow"), "{e}");

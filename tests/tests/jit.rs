@@ -5,10 +5,10 @@
 use scion_host::contract::{LayoutCode, Packed, TraceFailure, STATUS_STACK_OVERFLOW};
 use scion_host::jit::JitClosestHit;
 use scion_runtime::batch::BatchDriver;
-use scion_runtime::bvh::{build_caterpillar, build_sah_binned, DeepSide, SahOptions};
+use scion_runtime::bvh::{build_caterpillar, build_sah_binned, DeepSide, LogicalTree, SahOptions};
 use scion_runtime::geom::{Ray, Vec3};
-use scion_runtime::reference::closest_hits_tree;
-use scion_runtime::scene::gen;
+use scion_runtime::reference::{closest_hit_tree_stats, closest_hits_tree, TraversalStats};
+use scion_runtime::scene::{gen, Scene};
 
 #[test]
 fn jit_layouts_pack_to_their_sizes_and_match_the_reference() {
@@ -40,19 +40,38 @@ fn jit_layouts_pack_to_their_sizes_and_match_the_reference() {
     }
 }
 
-#[test]
-fn a_small_stack_overflows_on_a_deep_tree_and_names_the_ray() {
+/// The entries the reference traversal leaves pending at most for `ray`: a generated traversal
+/// with a smaller stack overflows on it, one with at least that many does not.
+fn pending(tree: &LogicalTree, ray: &Ray) -> u32 {
+    let mut stats = TraversalStats::default();
+    closest_hit_tree_stats(tree, ray, &mut stats);
+    stats.max_pending as u32
+}
+
+/// A caterpillar tree (every interior node has a leaf on one side) over random triangles, and
+/// the ray of 2000 random ones that leaves the most entries pending (near-first traversal
+/// prunes most of a deep tree, so few rays need more than one or two).
+fn deep_tree_and_ray() -> (Scene, LogicalTree, Ray) {
     let scene = gen::random_soup(64, 0.1, 9);
     let tree = build_caterpillar(&scene.triangles, DeepSide::Left);
-    let c = scene.bounds().center();
+    let rays = scion_runtime::query::secondary_rays(scene.bounds(), 2000, 3);
+    let ray = *rays.iter().max_by_key(|r| pending(&tree, r)).expect("rays");
+    (scene, tree, ray)
+}
+
+#[test]
+fn a_small_stack_overflows_on_a_deep_tree_and_names_the_ray() {
+    let (_, tree, deep) = deep_tree_and_ray();
     let away = Ray::new(Vec3::new(1e3, 1e3, 1e3), Vec3::new(1.0, 0.0, 0.0));
     let mut rays = vec![away; 200];
-    rays[137] = Ray::new(c, Vec3::new(0.0, 0.0, 1.0));
-    rays[180] = rays[137];
+    rays[137] = deep;
+    rays[180] = deep;
+    let need = pending(&tree, &deep);
+    assert!(need >= 2, "the ray leaves {need} entries pending");
     let driver = BatchDriver::new(2).unwrap();
     for (stem, name) in [("pbrt", "LinearBVH"), ("ptr", "PtrBVH")] {
-        let code = JitClosestHit::compile(stem, name, Some(4)).unwrap();
-        assert_eq!(code.stack_limit(), Some(3));
+        let code = JitClosestHit::compile(stem, name, Some(need - 1)).unwrap();
+        assert_eq!(code.stack_limit(), Some(need as usize));
         let packed = Packed::new(&code, &tree).unwrap();
         let e = packed.trace(&code, &rays, &driver).unwrap_err();
         assert_eq!(
@@ -63,8 +82,9 @@ fn a_small_stack_overflows_on_a_deep_tree_and_names_the_ray() {
             },
             "{stem}"
         );
-        // The default stack (64 entries) holds the same tree: the hits are the reference's.
-        let code = JitClosestHit::compile(stem, name, None).unwrap();
+        // A stack of exactly `need` entries holds the same traversal: the hits are the
+        // reference's.
+        let code = JitClosestHit::compile(stem, name, Some(need)).unwrap();
         let packed = Packed::new(&code, &tree).unwrap();
         let got = packed.trace(&code, &rays, &driver).unwrap();
         let want = closest_hits_tree(&tree, &rays, &driver);
@@ -90,14 +110,12 @@ fn unknown_layouts_and_bad_stack_sizes_are_errors() {
 /// leaving that query's result as the caller initialized it.
 #[test]
 fn the_batch_entry_stops_at_the_first_overflow() {
-    let scene = gen::random_soup(64, 0.1, 9);
-    let tree = build_caterpillar(&scene.triangles, DeepSide::Left);
-    let code = JitClosestHit::compile("ptr", "PtrBVH", Some(4)).unwrap();
-    let packed = Packed::new(&code, &tree).unwrap();
-    let c = scene.bounds().center();
+    let (_, tree, deep) = deep_tree_and_ray();
     let away = Ray::new(Vec3::new(1e3, 1e3, 1e3), Vec3::new(1.0, 0.0, 0.0));
     let mut rays = vec![away; 6];
-    rays[3] = Ray::new(c, Vec3::new(0.0, 0.0, 1.0));
+    rays[3] = deep;
+    let code = JitClosestHit::compile("ptr", "PtrBVH", Some(pending(&tree, &rays[3]) - 1)).unwrap();
+    let packed = Packed::new(&code, &tree).unwrap();
     let mut results = vec![(7.0f32, 9u32); 6];
     let status = code.batch(&packed.buffers(), &rays, &mut results);
     assert_eq!(status, STATUS_STACK_OVERFLOW);

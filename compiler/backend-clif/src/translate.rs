@@ -5,10 +5,11 @@
 //! type. Float semantics match the interpreters bit for bit: arithmetic rounds to nearest in
 //! the value's own precision; a NaN produced by `add sub mul div rem` is replaced by the
 //! canonical quiet NaN (as [`scion_ir::tree::scalar`] does) wherever its bits can be observed
-//! ([`scion_ir::lo::nan`]: not when every use is another such op or a compare, which see only
-//! whether it is a NaN); Cranelift never contracts `a*b+c`,
-//! and `fma` is emitted only for `lo.fma`; `min`/`max` are compare-and-select (Cranelift's
-//! `fmin`/`fmax` propagate NaN, `lo` wants the non-NaN operand); `rem` calls the C library's
+//! ([`scion_ir::lo::nan`]: where it is defined, when some use sees the payload, possibly through
+//! `min`/`max`/`select` and block arguments, which pass an operand's bits on); Cranelift never contracts
+//! `a*b+c`, and `fma` is emitted only for `lo.fma`; `min`/`max` are compare-and-select
+//! (Cranelift's `fmin`/`fmax` propagate NaN, `lo` wants the non-NaN operand), one `minss`/`maxss`
+//! when an operand is known never to be NaN ([`scion_ir::lo::nan::MinMaxForm`]); `rem` calls the C library's
 //! `fmodf`/`fmod`; `next_up`/`next_down` step the bit pattern; directed rounding (`lo.add_rd`
 //! ...) was expanded into round-to-nearest ops by the callers ([`scion_ir::lo::directed`]).
 //! Blocks are translated in reverse
@@ -23,6 +24,7 @@ use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
 use cranelift_module::{FuncId as ClFuncId, Linkage, Module as ClModule};
 use scion_ir::entity::{BlockId, FuncId, TypeId, ValueId};
 use scion_ir::lo::backend::reverse_post_order;
+use scion_ir::lo::nan::{MinMaxForm, NanFacts};
 use scion_ir::lo::Op as L;
 use scion_ir::op::OpKind;
 use scion_ir::tree::CmpPred;
@@ -124,7 +126,7 @@ pub fn translate_func<M: ClModule>(
     let order = reverse_post_order(m, body);
     let mut blocks = HashMap::new();
     let mut vals: HashMap<ValueId, ir::Value> = HashMap::new();
-    let blind = scion_ir::lo::nan::payload_blind_results(m, body);
+    let nan = NanFacts::of(m, body);
     for (i, &lb) in order.iter().enumerate() {
         let cb = b.create_block();
         if i == 0 {
@@ -143,14 +145,14 @@ pub fn translate_func<M: ClModule>(
         for (&a, v) in m.blocks[lb].args.iter().zip(params) {
             vals.insert(a, v);
         }
+        let mut fx = Fx {
+            b: &mut b,
+            m,
+            ptr,
+            vals: &mut vals,
+            nan: &nan,
+        };
         for &op in &m.blocks[lb].ops {
-            let mut fx = Fx {
-                b: &mut b,
-                m,
-                ptr,
-                vals: &mut vals,
-                blind: &blind,
-            };
             fx.op(cl, syms, op, &blocks)?;
         }
     }
@@ -164,8 +166,8 @@ struct Fx<'a, 'b> {
     m: &'a Module,
     ptr: ir::Type,
     vals: &'a mut HashMap<ValueId, ir::Value>,
-    /// Float results whose NaN payload nothing observes ([`scion_ir::lo::nan`]).
-    blind: &'a scion_ir::lo::nan::ValueSet,
+    /// Which NaNs to canonicalize, which values are never NaN ([`scion_ir::lo::nan`]).
+    nan: &'a NanFacts,
 }
 
 impl Fx<'_, '_> {
@@ -182,6 +184,16 @@ impl Fx<'_, '_> {
 
     fn cty(&self, ty: TypeId) -> Result<ir::Type, String> {
         clif_type(self.m, ty, self.ptr)
+    }
+
+    /// `r` (the value of `lo` value `x`), canonicalized when [`NanFacts::canonicalize`] says so.
+    fn canon_if_needed(&mut self, x: ValueId, r: ir::Value) -> ir::Value {
+        if self.nan.canonicalize(x) {
+            let t = self.b.func.dfg.value_type(r);
+            self.canon(r, t)
+        } else {
+            r
+        }
     }
 
     /// The canonical quiet NaN in place of any NaN `v`.
@@ -273,11 +285,7 @@ impl Fx<'_, '_> {
                         self.b.inst_results(call)[0]
                     }
                 };
-                if self.blind.contains(&o.results[0]) {
-                    Some(r)
-                } else {
-                    Some(self.canon(r, t))
-                }
+                Some(self.canon_if_needed(o.results[0], r))
             }
             L::Add => Some(self.b.ins().iadd(args[0], args[1])),
             L::Sub => Some(self.b.ins().isub(args[0], args[1])),
@@ -304,7 +312,10 @@ impl Fx<'_, '_> {
             L::Popcount => Some(self.b.ins().popcnt(args[0])),
             L::Clz => Some(self.b.ins().clz(args[0])),
             L::Ctz => Some(self.b.ins().ctz(args[0])),
-            L::Min | L::Max => Some(self.min_max(kind == L::Max, args[0], args[1], ct()?, signed)),
+            L::Min | L::Max => {
+                let form = self.nan.min_max_form(o.operands[0], o.operands[1]);
+                Some(self.min_max(kind == L::Max, args[0], args[1], ct()?, signed, form))
+            }
             L::NextUp | L::NextDown => Some(self.next(kind == L::NextUp, args[0], ct()?)),
             L::AddRd | L::AddRu | L::MulRd | L::MulRu => {
                 return Err(format!(
@@ -360,7 +371,19 @@ impl Fx<'_, '_> {
             }
             L::Load => {
                 let off = o.int_attr("offset").unwrap_or(0) as i32;
-                Some(self.b.ins().load(ct()?, MemFlags::new(), args[0], off))
+                // A layout buffer's address (`global = true`) is read from the buffer table,
+                // which nothing writes while generated code runs and which is valid wherever
+                // the function may run: a pure value that Cranelift may share and hoist out of
+                // the traversal loop.
+                let flags = if o.attr("global") == Some(&scion_ir::attr::Attr::Bool(true)) {
+                    MemFlags::new()
+                        .with_notrap()
+                        .with_readonly()
+                        .with_can_move()
+                } else {
+                    MemFlags::new()
+                };
+                Some(self.b.ins().load(ct()?, flags, args[0], off))
             }
             L::Store => {
                 let off = o.int_attr("offset").unwrap_or(0) as i32;
@@ -487,6 +510,7 @@ impl Fx<'_, '_> {
         q: ir::Value,
         t: ir::Type,
         signed: bool,
+        form: MinMaxForm,
     ) -> ir::Value {
         if !(t == types::F32 || t == types::F64) {
             return match (max, signed) {
@@ -496,15 +520,27 @@ impl Fx<'_, '_> {
                 (true, false) => self.b.ins().umax(p, q),
             };
         }
-        let cc = if max {
-            FloatCC::GreaterThan
-        } else {
-            FloatCC::LessThan
+        // minNum/maxNum with the first operand on ties, in the cheapest form the operands
+        // allow (scion_ir::lo::nan::MinMaxForm). Written as `select(fcmp lt x y, x, y)` (min)
+        // and `select(fcmp lt y x, x, y)` (max), the shapes Cranelift's x64 backend turns into
+        // one `minss`/`maxss`.
+        let pick = |b: &mut FunctionBuilder<'_>, x: ir::Value, y: ir::Value| {
+            // min: x < y ? x : y; max: x > y ? x : y (as y < x).
+            let c = if max {
+                b.ins().fcmp(FloatCC::LessThan, y, x)
+            } else {
+                b.ins().fcmp(FloatCC::LessThan, x, y)
+            };
+            b.ins().select(c, x, y)
         };
-        let better = self.b.ins().fcmp(cc, q, p);
-        let r = self.b.ins().select(better, q, p);
-        let q_nan = self.b.ins().fcmp(FloatCC::Unordered, q, q);
-        let r = self.b.ins().select(q_nan, p, r);
+        if form == MinMaxForm::SelectSwapped {
+            return pick(self.b, p, q);
+        }
+        let r = pick(self.b, q, p);
+        if form == MinMaxForm::Select {
+            return r;
+        }
+        // q < p is false when q is NaN, so `r` is then p; only a NaN p needs its own select.
         let p_nan = self.b.ins().fcmp(FloatCC::Unordered, p, p);
         self.b.ins().select(p_nan, q, r)
     }

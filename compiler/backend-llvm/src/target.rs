@@ -263,10 +263,10 @@ pub fn host_cpu() -> (String, String) {
 }
 
 /// Runs LLVM's `default<O{level}>` pipeline on `lm`. For a GPU (`gpu`) at `-O1` and above,
-/// address-space inference runs first, while the `assume(isspacep.global(p))` the translation
-/// puts after each layout buffer's base pointer is still there (LLVM 22's pipeline drops such
-/// assumes as unused before its own, later, inference): the accesses derived from a buffer
-/// become global ones (`ld.global`), and the later inference carries that through inlining.
+/// address-space inference runs first: the translation loads each layout buffer's base as a
+/// global-space pointer and casts it to a generic one, so the accesses derived from a buffer
+/// become global ones (`ld.global`) before inlining and merging; the later inference of
+/// LLVM's NVPTX pipeline carries that through.
 pub(crate) fn optimize(
     lm: &LModule,
     tm: &TargetMachine,

@@ -168,6 +168,10 @@ fn new_func(
     (f, entry, args)
 }
 
+fn int_list(ks: &[i128]) -> Attr {
+    Attr::List(ks.iter().map(|&k| Attr::Int(k)).collect())
+}
+
 fn kname(base: String, kernel: bool) -> String {
     if kernel {
         format!("{base}_kernel")
@@ -304,6 +308,8 @@ fn run_query(
 fn batch(m: &mut Module, sig: &EntrySig, t: &Tys, algo: &Algo) {
     let params = [t.ptr, t.ptr, t.ptr, t.u64, t.u64, t.root];
     let (f, entry, a) = new_func(m, sig.batch_fn(), &params, &[t.i32], false);
+    // The buffer table, the queries and the results do not overlap (docs/c-abi.md).
+    m.funcs[f].attrs.set("noalias", int_list(&[0, 1, 2]));
     let body = m.funcs[f].body;
     let head = m.add_block(body, &[t.u64]);
     let run = m.add_block(body, &[]);
@@ -344,6 +350,8 @@ fn batch_kernel(m: &mut Module, sig: &EntrySig, t: &Tys, algo: &Algo) {
     let params = [t.ptr, t.ptr, t.ptr, t.u64, t.root, t.ptr];
     let name = format!("{}_kernel", sig.batch_fn());
     let (f, entry, a) = new_func(m, name, &params, &[], true);
+    // The buffer table, queries, results and status do not overlap (docs/c-abi.md).
+    m.funcs[f].attrs.set("noalias", int_list(&[0, 1, 2, 5]));
     let body = m.funcs[f].body;
     let run = m.add_block(body, &[]);
     let exit = m.add_block(body, &[]);

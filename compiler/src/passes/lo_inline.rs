@@ -1,13 +1,17 @@
 //! `lo-inline`: inlines calls of small leaf functions in the `lo` CFG (design note §5:
 //! "non-recursive helpers may also be inlined"). Input and output: a `lo` module.
 //!
-//! A callee qualifies when it is defined, makes no calls itself, and has at most `max-ops`
-//! ops (option `lo-inline:max-ops=N`, default 48). The call's block is split after the call
+//! A callee qualifies when it is defined, makes no calls itself, and either has at most
+//! `max-ops` ops (option `lo-inline:max-ops=N`, default 48) or is called from exactly one place
+//! in the module (inlining it then costs no code size in the caller's hot path: the traversal's
+//! triangle test, and the traversal itself into its entry, whatever their size). The call's
+//! block is split after the call
 //! (the rest moves to a continuation block whose arguments are the call's results), a copy of
 //! the callee's blocks joins the caller's region, the call becomes a branch to the copy's entry
 //! with the arguments, and each copied `lo.return` becomes a branch to the continuation.
-//! Rounds repeat (a caller whose calls were all inlined becomes a leaf) up to four times. The
-//! callees stay in the module (they may be entry points).
+//! Rounds repeat (a caller whose calls were all inlined becomes a leaf, so inlining proceeds
+//! from the leaves of the call graph up) up to eight times. The callees stay in the module (they
+//! may be entry points).
 
 use rustc_hash::FxHashMap;
 use scion_ir::attr::Attr;
@@ -69,8 +73,19 @@ fn callee(m: &Module, op: OpId) -> Option<FuncId> {
 /// Inlines qualifying calls in the whole module; returns whether anything changed.
 pub fn run(m: &mut Module, max_ops: usize) -> bool {
     let mut changed = false;
-    for _ in 0..4 {
-        let small: FxHashMap<FuncId, ()> = m
+    for _ in 0..8 {
+        let mut sites_of: FxHashMap<FuncId, usize> = FxHashMap::default();
+        for &g in &m.func_order {
+            if m.is_declaration(g) {
+                continue;
+            }
+            for op in body_ops(m, g) {
+                if let Some(f) = callee(m, op) {
+                    *sites_of.entry(f).or_default() += 1;
+                }
+            }
+        }
+        let inlinable: FxHashMap<FuncId, ()> = m
             .func_order
             .iter()
             .copied()
@@ -79,7 +94,8 @@ pub fn run(m: &mut Module, max_ops: usize) -> bool {
                     return false;
                 }
                 let ops = body_ops(m, f);
-                ops.len() <= max_ops && ops.iter().all(|&o| m.ops[o].kind != OpKind::Lo(L::Call))
+                let leaf = ops.iter().all(|&o| m.ops[o].kind != OpKind::Lo(L::Call));
+                leaf && (ops.len() <= max_ops || sites_of.get(&f) == Some(&1))
             })
             .map(|f| (f, ()))
             .collect();
@@ -90,7 +106,7 @@ pub fn run(m: &mut Module, max_ops: usize) -> bool {
             }
             for op in body_ops(m, g) {
                 if let Some(f) = callee(m, op) {
-                    if f != g && small.contains_key(&f) {
+                    if f != g && inlinable.contains_key(&f) {
                         sites.push((g, op, f));
                     }
                 }

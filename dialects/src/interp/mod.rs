@@ -237,6 +237,9 @@ pub struct Interp<'m> {
     /// debug builds when every level nests regions); the default of 64 fits a 2 MiB thread.
     /// Raise it only on a thread with a bigger stack.
     pub max_depth: usize,
+    /// Calls of each defined function since counting was turned on ([`Interp::count_calls`]):
+    /// the work profile of a traversal (node visits, box and primitive tests).
+    calls: Option<FxHashMap<FuncId, u64>>,
 }
 
 /// How a region was left.
@@ -262,7 +265,26 @@ impl<'m> Interp<'m> {
             depth: 0,
             max_steps: 10_000_000,
             max_depth: 64,
+            calls: None,
         }
+    }
+
+    /// Starts counting the calls of each function (from zero).
+    pub fn count_calls(&mut self) {
+        self.calls = Some(FxHashMap::default());
+    }
+
+    /// The calls counted since [`Interp::count_calls`], by function name, in the module's
+    /// function order (functions never called are left out).
+    pub fn call_counts(&self) -> Vec<(String, u64)> {
+        let Some(calls) = &self.calls else {
+            return Vec::new();
+        };
+        self.m
+            .func_order
+            .iter()
+            .filter_map(|f| calls.get(f).map(|&n| (self.m.funcs[*f].name.clone(), n)))
+            .collect()
     }
 
     /// Lets calls to the declaration `name` run `f`.
@@ -334,6 +356,9 @@ impl<'m> Interp<'m> {
                 at,
                 format!("call depth limit {} reached", self.max_depth),
             ));
+        }
+        if let Some(calls) = &mut self.calls {
+            *calls.entry(f).or_default() += 1;
         }
         let entry = self.m.regions[func.body].blocks[0];
         if self.m.regions[func.body].blocks.len() != 1 {

@@ -85,9 +85,11 @@ pub enum Op {
     /// `lo.ctz` `(T) -> T`, integers: trailing zero bits (the width for 0).
     Ctz,
     /// `lo.load {offset}` `(ptr) -> T`: the scalar at `ptr + offset` (little-endian). A `ptr`
-    /// load may carry `global = true`: the loaded pointer addresses a layout buffer, which the
-    /// runtime always allocates in the device's global memory (`mem.buffer`), so a GPU backend
-    /// may use global-space accesses through it; CPUs and the interpreter ignore it.
+    /// load may carry `global = true`: it reads a layout buffer's address from the buffer table
+    /// (`mem.buffer`). The runtime always allocates buffers in the device's global memory, so a
+    /// GPU backend may use global-space accesses through it; and nothing writes the table while
+    /// generated code runs, so a CPU backend may treat the load as a pure value (hoist it out of
+    /// loops). The interpreter ignores it.
     Load,
     /// `lo.store {offset}` `(ptr, T) -> ()`.
     Store,

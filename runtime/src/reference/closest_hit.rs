@@ -4,10 +4,13 @@
 //!
 //! Two versions with the same arithmetic ([`super::prelude`]):
 //! - [`closest_hit_brute`] tests every triangle;
-//! - [`closest_hit_tree`] traverses a [`LogicalTree`] exactly as the Scion algorithm does:
-//!   `best` starts at `(ray.tmax, u32::MAX)`; a node (interior or leaf) is entered iff the ray
-//!   meets its box and the entry distance is `<= best.t` (prune on `>` only); an interior
-//!   node visits its left child, then its right child; a leaf tests its primitives in order.
+//! - [`closest_hit_tree`] traverses a [`LogicalTree`] exactly as the Scion algorithm does, node
+//!   for node and in the same order: `best` starts at `(ray.tmax, u32::MAX)`; the root is
+//!   visited iff the ray meets its box before `best.t`; a visited interior node tests both
+//!   children's boxes (`distmin(slab_ray(ray), child, best.t)`), skips those that return
+//!   `+inf`, and visits the nearer first (the left one on equal distances); a node reached with
+//!   entry distance `d > best.t` is skipped (prune on `>` only); a leaf tests its primitives
+//!   in order.
 //!
 //! Tie rule (language notes, "Results and ties"): the smallest `t` wins, and on equal `t` the
 //! smallest original primitive id. With it, the result does not depend on the order in which
@@ -18,64 +21,77 @@
 //! Results are normalized with [`Hit::from_best`]: a miss is `(+inf, u32::MAX)` whatever the
 //! ray's `tmax`.
 
-use super::prelude::{hit_distance, slab_interval};
+use super::prelude::{distmin_of, hit_distance, slab_interval, slab_ray};
 use crate::batch::BatchDriver;
 use crate::bvh::LogicalTree;
 use crate::geom::{Hit, Ray, Triangle};
 
-/// Counters of one traversal, for comparing layouts' work (e.g. extra visits of quantized
-/// layouts, paper §9).
+/// Counters of one traversal, for comparing layouts' and traversals' work (e.g. extra visits of
+/// quantized layouts, paper §9). Each counts what the algorithm does, so generated code that
+/// visits the same nodes counts the same.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TraversalStats {
-    /// Boxes tested (nodes popped).
+    /// Ray-box tests (the root's, and both children's at every visited interior node).
     pub boxes_tested: u64,
-    /// Nodes entered (box hit and not pruned).
-    pub nodes_entered: u64,
-    /// Triangle tests.
+    /// Nodes visited (reached with an entry distance `<= best.t`).
+    pub nodes_visited: u64,
+    /// Nodes skipped when reached because `best.t` had dropped below their entry distance.
+    pub nodes_pruned: u64,
+    /// Ray-triangle tests.
     pub triangles_tested: u64,
+    /// The most entries ever pending on the traversal stack (the largest over the traversals
+    /// added): generated code with a stack of `n` entries overflows exactly when this exceeds
+    /// `n`.
+    pub max_pending: u64,
 }
 
 impl TraversalStats {
     /// Adds another traversal's counters.
     pub fn add(&mut self, o: &TraversalStats) {
         self.boxes_tested += o.boxes_tested;
-        self.nodes_entered += o.nodes_entered;
+        self.nodes_visited += o.nodes_visited;
+        self.nodes_pruned += o.nodes_pruned;
         self.triangles_tested += o.triangles_tested;
+        self.max_pending = self.max_pending.max(o.max_pending);
     }
 }
 
-/// A LIFO of node indices: 64 entries inline (no allocation for ordinary trees), then a heap
-/// spill for deeper ones, so the reference has no depth limit.
+/// A LIFO of `(node, entry distance)`: 64 entries inline (no allocation for ordinary trees),
+/// then a heap spill for deeper ones, so the reference has no depth limit.
 struct NodeStack {
-    inline: [u32; 64],
+    inline: [(u32, f32); 64],
     len: usize,
-    spill: Vec<u32>,
+    spill: Vec<(u32, f32)>,
 }
 
 impl NodeStack {
     fn new() -> NodeStack {
         NodeStack {
-            inline: [0; 64],
+            inline: [(0, 0.0); 64],
             len: 0,
             spill: Vec::new(),
         }
     }
 
     #[inline]
-    fn push(&mut self, node: u32) {
+    fn push(&mut self, node: u32, d: f32) {
         if self.len < self.inline.len() {
-            self.inline[self.len] = node;
+            self.inline[self.len] = (node, d);
             self.len += 1;
         } else {
-            self.spill.push(node);
+            self.spill.push((node, d));
         }
     }
 
+    fn len(&self) -> usize {
+        self.len + self.spill.len()
+    }
+
     #[inline]
-    fn pop(&mut self) -> Option<u32> {
+    fn pop(&mut self) -> Option<(u32, f32)> {
         // Spilled entries were pushed last, so they come off first.
-        if let Some(node) = self.spill.pop() {
-            return Some(node);
+        if let Some(e) = self.spill.pop() {
+            return Some(e);
         }
         if self.len == 0 {
             return None;
@@ -114,26 +130,56 @@ pub fn closest_hit_tree_stats(tree: &LogicalTree, ray: &Ray, stats: &mut Travers
     if tree.is_empty() {
         return Hit::from_best(best.0, best.1);
     }
-    // An explicit stack replays the recursion's order: pop = enter, push right then left.
+    let r = slab_ray(ray);
+    let bounds = |i: u32| tree.nodes[i as usize].aabb();
+    stats.boxes_tested += 1;
+    let d = distmin_of(&r, &bounds(tree.root), best.0);
+    if !(d < f32::INFINITY) {
+        return Hit::from_best(best.0, best.1);
+    }
+    // An explicit stack replays the recursion's order as generated code does
+    // (`recursion-to-stack`): of two children to visit, the farther is pushed and the nearer
+    // visited at once; a node without a child to visit pops the next entry.
     let mut stack = NodeStack::new();
-    stack.push(tree.root);
-    while let Some(i) = stack.pop() {
-        let node = &tree.nodes[i as usize];
-        stats.boxes_tested += 1;
-        let (enter, exit) = slab_interval(ray, &node.aabb());
-        // intersects(ray, bounds) && distmin(ray, bounds) <= best.t
-        if !(enter <= exit && enter <= best.0) {
-            continue;
-        }
-        stats.nodes_entered += 1;
-        if node.is_leaf() {
-            for tri in tree.leaf_primitives(node) {
-                stats.triangles_tested += 1;
-                consider(ray, tri, &mut best);
+    let (mut i, mut d) = (tree.root, d);
+    loop {
+        let mut next = None;
+        if d <= best.0 {
+            stats.nodes_visited += 1;
+            let node = &tree.nodes[i as usize];
+            if node.is_leaf() {
+                for tri in tree.leaf_primitives(node) {
+                    stats.triangles_tested += 1;
+                    consider(ray, tri, &mut best);
+                }
+            } else {
+                let [left, right] = node.child;
+                stats.boxes_tested += 2;
+                let dl = distmin_of(&r, &bounds(left), best.0);
+                let dr = distmin_of(&r, &bounds(right), best.0);
+                next = match (dl < f32::INFINITY, dr < f32::INFINITY) {
+                    (true, true) => {
+                        // The nearer first; the left one on equal distances.
+                        let (near, far) = if dr < dl {
+                            ((right, dr), (left, dl))
+                        } else {
+                            ((left, dl), (right, dr))
+                        };
+                        stack.push(far.0, far.1);
+                        stats.max_pending = stats.max_pending.max(stack.len() as u64);
+                        Some(near)
+                    }
+                    (true, false) => Some((left, dl)),
+                    (false, true) => Some((right, dr)),
+                    (false, false) => None,
+                };
             }
         } else {
-            stack.push(node.child[1]);
-            stack.push(node.child[0]);
+            stats.nodes_pruned += 1;
+        }
+        match next.or_else(|| stack.pop()) {
+            Some((n, nd)) => (i, d) = (n, nd),
+            None => break,
         }
     }
     Hit::from_best(best.0, best.1)

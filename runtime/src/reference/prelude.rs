@@ -9,8 +9,9 @@
 //!   LLVM's NVPTX backend otherwise fuse into `fma.rn`).
 //! - `min`/`max` are IEEE 754 minNum/maxNum: when one operand is NaN the other is returned
 //!   (`f32::min`/`f32::max` in Rust, `llvm.minnum`/`llvm.maxnum`, `min.f32`/`max.f32` in PTX).
-//!   An axis with an infinite `1/d` (zero or tiny direction lane) is decided by the origin's
-//!   position (`slab_lane`), so no `0 * inf = NaN` arises in the slab test.
+//!   An axis with an infinite `1/d` (zero or tiny direction lane) gets `inv = +inf` and is
+//!   decided by the origin's position ([`slab_axis`]): the `0 * inf = NaN` of an origin on a
+//!   plane becomes the inside answer, so no distance of the slab test is NaN.
 //! - `dot(a, b) = (a.x*b.x + a.y*b.y) + a.z*b.z`, left to right;
 //!   `cross(a, b) = (a.y*b.z - a.z*b.y, a.z*b.x - a.x*b.z, a.x*b.y - a.y*b.x)`.
 //! - Division is IEEE division (`1.0 / d`), never a reciprocal approximation.
@@ -21,35 +22,82 @@ use crate::geom::{Aabb, Ray, Triangle, Vec3};
 /// `1.0000004` as the prelude writes it, rounded to `f32`.
 pub const FAR_WIDENING: f32 = 1.000_000_4;
 
-/// The prelude's `slab_interval(ray, box)`: `(enter, exit)`; the ray meets the box iff
-/// `enter <= exit` (false when either is NaN).
+/// The prelude's `SlabRay`: what every box test of one traversal shares, computed once per ray
+/// by [`slab_ray`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SlabRay {
+    /// The ray's origin.
+    pub origin: Vec3,
+    /// `1 / direction` lane-wise, `+inf` on an axis the ray does not move along.
+    pub inv: Vec3,
+    /// `max(ray.tmin, -inf)`: the ray's `tmin`, `-inf` when it is NaN.
+    pub tmin: f32,
+    /// `min(ray.tmax, inf)`: the ray's `tmax`, `+inf` when it is NaN.
+    pub tmax: f32,
+}
+
+/// The prelude's `slab_inv(d)`: `1 / d`, or `+inf` when that is infinite (`d` is zero or tiny).
 #[inline]
-pub fn slab_interval(ray: &Ray, b: &Aabb) -> (f32, f32) {
+pub fn slab_inv(d: f32) -> f32 {
+    let inv = 1.0 / d;
+    if inv.abs() == f32::INFINITY {
+        f32::INFINITY
+    } else {
+        inv
+    }
+}
+
+/// The prelude's `slab_ray(ray)`.
+#[inline]
+pub fn slab_ray(ray: &Ray) -> SlabRay {
     let d = ray.dir;
-    let inv = Vec3::new(1.0 / d.x, 1.0 / d.y, 1.0 / d.z);
-    let o = ray.origin;
-    let x = slab_lane(b.low.x, b.high.x, o.x, inv.x);
-    let y = slab_lane(b.low.y, b.high.y, o.y, inv.y);
-    let z = slab_lane(b.low.z, b.high.z, o.z, inv.z);
-    let w = FAR_WIDENING;
-    let enter = max_num(ray.tmin, max_num(x.0, max_num(y.0, z.0)));
-    let exit = min_num(ray.tmax, min_num(x.1 * w, min_num(y.1 * w, z.1 * w)));
+    SlabRay {
+        origin: ray.origin,
+        inv: Vec3::new(slab_inv(d.x), slab_inv(d.y), slab_inv(d.z)),
+        tmin: max_num(ray.tmin, f32::NEG_INFINITY),
+        tmax: min_num(ray.tmax, f32::INFINITY),
+    }
+}
+
+/// One axis of the prelude's `slab_interval`: `(near, far)`, never NaN. `(plane - o) * inf`
+/// is NaN when the origin lies on the plane of an axis the ray does not move along; the
+/// `max(.., -inf)` / `min(.., inf)` make that the inside answer.
+#[inline]
+pub fn slab_axis(lo: f32, hi: f32, o: f32, inv: f32) -> (f32, f32) {
+    let t0 = max_num((lo - o) * inv, f32::NEG_INFINITY);
+    let t1 = min_num((hi - o) * inv, f32::INFINITY);
+    (min_num(t0, t1), max_num(t0, t1))
+}
+
+/// The prelude's `slab_interval(r, box, tmax)`: `(enter, exit)` with `exit <= tmax`; the ray
+/// meets the box iff `enter <= exit` (false when either is NaN).
+#[inline]
+pub fn slab_interval_of(r: &SlabRay, b: &Aabb, tmax: f32) -> (f32, f32) {
+    let o = r.origin;
+    let x = slab_axis(b.low.x, b.high.x, o.x, r.inv.x);
+    let y = slab_axis(b.low.y, b.high.y, o.y, r.inv.y);
+    let z = slab_axis(b.low.z, b.high.z, o.z, r.inv.z);
+    let enter = max_num(max_num(x.0, max_num(y.0, z.0)), r.tmin);
+    let exit = min_num(min_num(x.1, min_num(y.1, z.1)) * FAR_WIDENING, tmax);
     (enter, exit)
 }
 
-/// The prelude's `slab_lane`: one axis's `(entry, exit)`. An axis the ray does not move along
-/// (`1/d` infinite) is decided by the origin's position, boundary planes included.
+/// The prelude's `distmin(r, box, tmax)`: the entry distance when the ray meets the box before
+/// `tmax`, else `+inf`.
 #[inline]
-pub fn slab_lane(lo: f32, hi: f32, o: f32, inv: f32) -> (f32, f32) {
-    if inv.abs() == f32::INFINITY {
-        if lo <= o && o <= hi {
-            return (f32::NEG_INFINITY, f32::INFINITY);
-        }
-        return (f32::INFINITY, f32::NEG_INFINITY);
+pub fn distmin_of(r: &SlabRay, b: &Aabb, tmax: f32) -> f32 {
+    let (enter, exit) = slab_interval_of(r, b, tmax);
+    if enter <= exit {
+        enter
+    } else {
+        f32::INFINITY
     }
-    let t0 = (lo - o) * inv;
-    let t1 = (hi - o) * inv;
-    (min_num(t0, t1), max_num(t0, t1))
+}
+
+/// The prelude's `slab_interval(ray, box)`: `slab_interval(slab_ray(ray), box, ray.tmax)`.
+#[inline]
+pub fn slab_interval(ray: &Ray, b: &Aabb) -> (f32, f32) {
+    slab_interval_of(&slab_ray(ray), b, ray.tmax)
 }
 
 /// The language's float `min`: the non-NaN operand when one is NaN, else the smaller, and the
@@ -87,12 +135,7 @@ pub fn intersects_box(ray: &Ray, b: &Aabb) -> bool {
 /// The prelude's `distmin(ray, box)`: the entry distance, or `+inf` on a miss.
 #[inline]
 pub fn distmin_box(ray: &Ray, b: &Aabb) -> f32 {
-    let (enter, exit) = slab_interval(ray, b);
-    if enter <= exit {
-        enter
-    } else {
-        f32::INFINITY
-    }
+    distmin_of(&slab_ray(ray), b, ray.tmax)
 }
 
 /// The prelude's `hit_distance(ray, tri)` (Moller-Trumbore): the hit distance in

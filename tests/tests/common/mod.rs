@@ -5,16 +5,16 @@
 //! `flat32`: buffer `nodes` (align 16), 32 bytes per node in depth-first pre-order from the
 //! root: six `f32` bounds, then `a`, `b`: an interior node has `a` = left, `b` = right; a leaf
 //! has `a` = first triangle, `b` = `0x8000_0000 | count`. Buffer `tris` (align 4), 40 bytes per
-//! triangle: nine `f32` corners and the `u32` id. Traversal: the prelude's arithmetic, left
-//! first, an explicit stack of [`STACK`] entries; overflow is status 1 (trees deeper than
-//! [`STACK`] nodes may overflow, shallower ones never do).
+//! triangle: nine `f32` corners and the `u32` id. Traversal: the library's closest hit with the
+//! prelude's arithmetic (nearer child first), an explicit stack of [`STACK`] entries; overflow
+//! is status 1 (trees deeper than [`STACK`] + 1 nodes may overflow, shallower ones never do).
 
 #![allow(dead_code)]
 
 use scion_host::contract::{BufferSpec, LayoutCode, STATUS_OK, STATUS_STACK_OVERFLOW};
 use scion_runtime::bvh::{LogicalTree, NO_NODE};
 use scion_runtime::geom::{Aabb, Ray, Triangle, Vec3};
-use scion_runtime::reference::prelude::{distmin_box, hit_distance, intersects_box};
+use scion_runtime::reference::prelude::{distmin_of, hit_distance, slab_ray};
 
 /// Entries of the traversal stack.
 pub const STACK: usize = 64;
@@ -110,17 +110,30 @@ impl LayoutCode for Flat32 {
 
     fn batch(&self, buffers: &[&[u8]], queries: &[Ray], results: &mut [(f32, u32)]) -> i32 {
         let (nodes, tris) = (buffers[0], buffers[1]);
+        let bounds = |i: u32| {
+            let at = 32 * i as usize;
+            Aabb::new(vec_at(nodes, at), vec_at(nodes, at + 12))
+        };
         for (ray, result) in queries.iter().zip(results.iter_mut()) {
             let mut best = *result;
-            let mut stack = [0u32; STACK];
-            let mut top = 1; // the root, node 0
-            while top > 0 {
-                top -= 1;
-                let at = 32 * stack[top] as usize;
-                let bounds = Aabb::new(vec_at(nodes, at), vec_at(nodes, at + 12));
-                if !(intersects_box(ray, &bounds) && distmin_box(ray, &bounds) <= best.0) {
+            let r = slab_ray(ray);
+            // The library's algorithm: the root's box, then at each interior node both
+            // children's boxes, the nearer child visited first (the left one on ties), the
+            // farther one pushed with its entry distance and skipped if `best` has passed it.
+            let mut stack = [(0u32, 0f32); STACK];
+            let mut top = 0;
+            let mut next = Some((0u32, distmin_of(&r, &bounds(0), best.0)))
+                .filter(|&(_, d)| d < f32::INFINITY);
+            while let Some((i, d)) = next.take().or_else(|| {
+                (top > 0).then(|| {
+                    top -= 1;
+                    stack[top]
+                })
+            }) {
+                if !(d <= best.0) {
                     continue;
                 }
+                let at = 32 * i as usize;
                 let (a, b) = (u32_at(nodes, at + 24), u32_at(nodes, at + 28));
                 if b & 0x8000_0000 != 0 {
                     for k in a..a + (b & 0x7FFF_FFFF) {
@@ -136,23 +149,37 @@ impl LayoutCode for Flat32 {
                             best = (d, t.id);
                         }
                     }
-                } else {
-                    if top + 2 > STACK {
-                        return STATUS_STACK_OVERFLOW;
-                    }
-                    stack[top] = b;
-                    stack[top + 1] = a;
-                    top += 2;
+                    continue;
                 }
+                let da = distmin_of(&r, &bounds(a), best.0);
+                let db = distmin_of(&r, &bounds(b), best.0);
+                next = match (da < f32::INFINITY, db < f32::INFINITY) {
+                    (true, true) => {
+                        let (near, far) = if db < da {
+                            ((b, db), (a, da))
+                        } else {
+                            ((a, da), (b, db))
+                        };
+                        if top == STACK {
+                            return STATUS_STACK_OVERFLOW;
+                        }
+                        stack[top] = far;
+                        top += 1;
+                        Some(near)
+                    }
+                    (true, false) => Some((a, da)),
+                    (false, true) => Some((b, db)),
+                    (false, false) => None,
+                };
             }
             *result = best;
         }
         STATUS_OK
     }
 
-    /// A node at depth `k` (root 1) leaves at most `k - 1` pending right children, so trees
-    /// of depth up to [`STACK`] fit.
+    /// A node at depth `k` (root 1) runs with at most `k - 1` pending entries and pushes one,
+    /// so trees of depth up to [`STACK`] + 1 fit.
     fn stack_limit(&self) -> Option<usize> {
-        Some(STACK)
+        Some(STACK + 1)
     }
 }

@@ -14,10 +14,11 @@
 //! Float semantics are those of `scion-clif` and the interpreters, bit for bit: no fast-math
 //! flags (so LLVM never contracts `a*b+c`; `llvm.fma` only for `lo.fma`); a NaN produced by
 //! `add sub mul div rem` is replaced by the canonical quiet NaN wherever its bits can be
-//! observed ([`scion_ir::lo::nan`]: not when its only uses are such ops or compares, which see
-//! only whether it is a NaN); `min`/`max` are
+//! observed ([`scion_ir::lo::nan`]: where it is defined, when some use sees the payload,
+//! possibly through `min`/`max`/`select` and block arguments, which pass an operand's bits on); `min`/`max` are
 //! compare-and-select (minNum/maxNum, first operand on ties, never `llvm.minnum`, whose zero
-//! and NaN-payload cases are looser); `rem` is `frem` (C `fmod`; an error on NVPTX, whose
+//! and NaN-payload cases are looser), a single compare-and-select (`minss`) when an operand is
+//! known never to be NaN ([`scion_ir::lo::nan::MinMaxForm`]); `rem` is `frem` (C `fmod`; an error on NVPTX, whose
 //! `frem` is not exact); float-to-int casts are the
 //! saturating `llvm.fpto[su]i.sat`; `next_up`/`next_down` step the bit pattern; directed rounding
 //! (`lo.add_rd` ...) is `llvm.nvvm.{add,mul}.{rm,rp}.f` on NVPTX and, for CPUs, expanded into
@@ -49,6 +50,7 @@ use inkwell::values::{
 use inkwell::{FloatPredicate, IntPredicate};
 use scion_ir::entity::{BlockId, FuncId, TypeId, ValueId};
 use scion_ir::lo::backend::reverse_post_order;
+use scion_ir::lo::nan::{MinMaxForm, NanFacts};
 use scion_ir::lo::Op as L;
 use scion_ir::op::OpKind;
 use scion_ir::tree::CmpPred;
@@ -179,6 +181,20 @@ pub fn translate<'c>(
             Linkage::External
         };
         let fv = lm.add_function(&symbol(m, f, i, target), fty, Some(linkage));
+        // `noalias = [k, ...]`: no other pointer reaches what parameter `k` points to while the
+        // function runs (the entry points' buffer table, queries and results, docs/c-abi.md),
+        // so stores of results do not make LLVM reload the tree's buffer addresses.
+        if let Some(scion_ir::attr::Attr::List(ks)) = func.attrs.get("noalias") {
+            let kind = inkwell::attributes::Attribute::get_named_enum_kind_id("noalias");
+            let shift = u32::from(multi.is_some());
+            for k in ks.iter().filter_map(scion_ir::attr::Attr::as_int) {
+                let attr = cx.create_enum_attribute(kind, 0);
+                fv.add_attribute(
+                    inkwell::attributes::AttributeLoc::Param(k as u32 + shift),
+                    attr,
+                );
+            }
+        }
         if target == Target::Nvptx64 && func.attrs.get("kernel").is_some() {
             if !func.results.is_empty() {
                 return Err(format!(
@@ -209,7 +225,7 @@ pub fn translate<'c>(
             blocks: HashMap::new(),
             phis: HashMap::new(),
             entry: None,
-            blind: scion_ir::lo::nan::payload_blind_results(m, &m.regions[m.funcs[f].body].blocks),
+            nan: NanFacts::of(m, &m.regions[m.funcs[f].body].blocks),
         };
         t.body(f)
             .map_err(|e| format!("@{}: {e}", m.funcs[f].name))?;
@@ -233,8 +249,8 @@ struct Fn<'a, 'c> {
     phis: HashMap<BlockId, Vec<PhiValue<'c>>>,
     /// The LLVM entry block (allocas go to its start).
     entry: Option<BasicBlock<'c>>,
-    /// Float results whose NaN payload nothing observes ([`scion_ir::lo::nan`]).
-    blind: scion_ir::lo::nan::ValueSet,
+    /// Which NaNs to canonicalize, which values are never NaN ([`scion_ir::lo::nan`]).
+    nan: NanFacts,
 }
 
 impl<'c> Fn<'_, 'c> {
@@ -406,6 +422,15 @@ impl<'c> Fn<'_, 'c> {
         self.b.build_select(uno, nan, v, "").map_err(be)
     }
 
+    /// `v` (the value of `lo` value `x`), canonicalized when [`NanFacts::canonicalize`] says so.
+    fn canon_if_needed(&self, x: ValueId, v: BasicValueEnum<'c>) -> R<BasicValueEnum<'c>> {
+        if self.nan.canonicalize(x) {
+            self.canon(v.into_float_value())
+        } else {
+            Ok(v)
+        }
+    }
+
     fn op(&mut self, op: scion_ir::OpId) -> R<()> {
         let m = self.m;
         let o = &m.ops[op];
@@ -469,11 +494,7 @@ impl<'c> Fn<'_, 'c> {
                     _ => b.build_float_rem(x, y, ""),
                 }
                 .map_err(be)?;
-                if self.blind.contains(&o.results[0]) {
-                    Some(r.into())
-                } else {
-                    Some(self.canon(r)?)
-                }
+                Some(self.canon_if_needed(o.results[0], r.into())?)
             }
             L::AddRd | L::AddRu | L::MulRd | L::MulRu => {
                 // Only NVPTX gets here (elsewhere `translate` expanded them): PTX rounds per
@@ -484,12 +505,8 @@ impl<'c> Fn<'_, 'c> {
                     L::MulRd => "llvm.nvvm.mul.rm.f",
                     _ => "llvm.nvvm.mul.rp.f",
                 };
-                let r = self.call_intr(name, &[], &args)?.into_float_value();
-                if self.blind.contains(&o.results[0]) {
-                    Some(r.into())
-                } else {
-                    Some(self.canon(r)?)
-                }
+                let r = self.call_intr(name, &[], &args)?;
+                Some(self.canon_if_needed(o.results[0], r)?)
             }
             L::Add => Some(b.build_int_add(int(0), int(1), "").map_err(be)?.into()),
             L::Sub => Some(b.build_int_sub(int(0), int(1), "").map_err(be)?.into()),
@@ -549,7 +566,10 @@ impl<'c> Fn<'_, 'c> {
                         .into(),
                 )
             }
-            L::Min | L::Max => Some(self.min_max(kind == L::Max, args[0], args[1], signed)?),
+            L::Min | L::Max => {
+                let form = self.nan.min_max_form(o.operands[0], o.operands[1]);
+                Some(self.min_max(kind == L::Max, args[0], args[1], signed, form)?)
+            }
             L::NextUp | L::NextDown => Some(self.next(kind == L::NextUp, flt(0))?),
             L::Cmp => {
                 let pred = o
@@ -580,7 +600,18 @@ impl<'c> Fn<'_, 'c> {
                 } else {
                     ty()?
                 };
-                let v = b.build_load(lt, p, "").map_err(be)?;
+                // A layout buffer's base on NVPTX is loaded as a global-space pointer and cast
+                // to a generic one: the cast keeps the buffer's address space visible to
+                // LLVM's address-space inference however later passes merge or hoist the load,
+                // so the accesses derived from it become `ld.global`/`st.global`.
+                let global_base = self.target == Target::Nvptx64
+                    && o.attr("global") == Some(&scion_ir::attr::Attr::Bool(true));
+                let load_ty: BasicTypeEnum = if global_base {
+                    self.cx.ptr_type(inkwell::AddressSpace::from(1u16)).into()
+                } else {
+                    lt
+                };
+                let v = b.build_load(load_ty, p, "").map_err(be)?;
                 if let Some(i) = v.as_instruction_value() {
                     i.set_alignment(self.mem_align(lt)).map_err(be)?;
                 }
@@ -589,17 +620,10 @@ impl<'c> Fn<'_, 'c> {
                     b.build_int_compare(IntPredicate::NE, v.into_int_value(), zero, "")
                         .map_err(be)?
                         .into()
-                } else if self.target == Target::Nvptx64
-                    && o.attr("global") == Some(&scion_ir::attr::Attr::Bool(true))
-                {
-                    // A layout buffer's base: `assume(isspacep.global(p))` lets LLVM's
-                    // address-space inference turn the accesses derived from it into
-                    // `ld.global`/`st.global` instead of generic ones (a round trip of
-                    // address-space casts would be folded away before it looks).
-                    let global = self.call_intr("llvm.nvvm.isspacep.global", &[], &[v])?;
-                    let assume = self.intrinsic("llvm.assume", &[])?;
-                    b.build_call(assume, &[global.into()], "").map_err(be)?;
-                    v
+                } else if global_base {
+                    b.build_address_space_cast(v.into_pointer_value(), lt.into_pointer_type(), "")
+                        .map_err(be)?
+                        .into()
                 } else {
                     v
                 })

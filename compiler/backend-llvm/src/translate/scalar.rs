@@ -112,6 +112,7 @@ impl<'c> Fn<'_, 'c> {
         p: BasicValueEnum<'c>,
         q: BasicValueEnum<'c>,
         signed: bool,
+        form: MinMaxForm,
     ) -> R<BasicValueEnum<'c>> {
         let b = self.b;
         if !p.is_float_value() {
@@ -123,18 +124,24 @@ impl<'c> Fn<'_, 'c> {
             };
             return self.call_intr(name, &[p.get_type()], &[p, q]);
         }
+        // minNum/maxNum with the first operand on ties, in the cheapest form the operands
+        // allow (scion_ir::lo::nan::MinMaxForm); `select(q < p, q, p)` is one x86 `minss`.
         let (pf, qf) = (p.into_float_value(), q.into_float_value());
         let pred = if max {
             FloatPredicate::OGT
         } else {
             FloatPredicate::OLT
         };
+        if form == MinMaxForm::SelectSwapped {
+            let better = b.build_float_compare(pred, pf, qf, "").map_err(be)?;
+            return b.build_select(better, p, q, "").map_err(be);
+        }
         let better = b.build_float_compare(pred, qf, pf, "").map_err(be)?;
         let r = b.build_select(better, q, p, "").map_err(be)?;
-        let q_nan = b
-            .build_float_compare(FloatPredicate::UNO, qf, qf, "")
-            .map_err(be)?;
-        let r = b.build_select(q_nan, p, r, "").map_err(be)?;
+        if form == MinMaxForm::Select {
+            return Ok(r);
+        }
+        // q < p is false when q is NaN, so `r` is then p; only a NaN p needs its own select.
         let p_nan = b
             .build_float_compare(FloatPredicate::UNO, pf, pf, "")
             .map_err(be)?;

@@ -9,11 +9,16 @@
 //! passed through). The *changed* positions form a stack entry.
 //!
 //! The rewrite: a new entry block allocates the stack (`lo.stack_slot`, `stack-size` entries,
-//! default 64, each changed argument in an 8-byte cell) and the stack pointer (a 4-byte slot),
-//! then runs the old body on the original arguments. Where the body made recursive calls it now
-//! pushes their arguments in reverse order and jumps to the loop head; where it returned it jumps
-//! to the loop head. The loop head pops the next entry into the body, or returns when the stack
-//! is empty. So the visit order, and every result, is the recursion's.
+//! each changed argument in an 8-byte cell) and runs the old body on the original arguments
+//! with an empty stack. The old entry block becomes the loop body's head: its arguments are the
+//! changed parameters and the stack pointer `sp` (an SSA value, the number of pending entries;
+//! parameters that no call changes are read from the new entry directly, not passed around the
+//! loop). Where the body made `n` recursive calls it now pushes the arguments of the last
+//! `n - 1`, last first, and jumps straight back into the body with the first call's arguments
+//! (the entry a push would have popped next); where it returned it jumps to the loop head, which
+//! pops the next entry into the body, or returns when the stack is empty. So the visit order,
+//! and every result, is the recursion's, and a binary traversal pushes one entry per interior
+//! node: a node at depth `k` (the root at 1) runs with at most `k - 1` pending entries.
 //!
 //! **Status results.** A rewritten function returns an `i32` status: 0 done, 1 the stack
 //! overflowed (a push to a full stack returns at once; `mut` results hold what was computed so
@@ -35,6 +40,10 @@ use scion_ir::{Builder, Module, Pass, PassCx, PassError};
 
 /// The default number of stack entries.
 pub const DEFAULT_STACK_SIZE: u32 = 64;
+
+/// The largest explicit stack, in bytes: it lives in the frame of the thread that runs the
+/// traversal (a worker thread has 2 MiB in all), so a larger one is an error, not a crash.
+pub const MAX_STACK_BYTES: u64 = 256 * 1024;
 
 /// The pass object.
 pub struct RecursionToStack;
@@ -190,39 +199,66 @@ fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), D
     let mut changed: Vec<usize> = changed.into_iter().collect();
     changed.sort_unstable();
     let entry_bytes = 8 * changed.len().max(1) as u64;
+    if entry_bytes * u64::from(size) > MAX_STACK_BYTES {
+        let name = m.funcs[f].name.clone();
+        return Err(Diagnostic::error(
+            "E0962",
+            format!(
+                "recursion-to-stack:stack-size={size}: the stack of `@{name}` would take {} bytes \
+                 of the thread's stack ({entry_bytes} per entry), more than {MAX_STACK_BYTES}",
+                entry_bytes * u64::from(size)
+            ),
+        )
+        .with_note(format!(
+            "at most {} entries here; a traversal needs about as many as the tree is deep",
+            MAX_STACK_BYTES / entry_bytes
+        )));
+    }
     let i32t = m.types.i32();
     let u32t = m.types.u32();
     let u64t = m.types.int(IntTy::U64);
     let ptrt = m.ty(Type::Ptr);
-
-    // New entry: the stack, the stack pointer, then the old body on the original arguments.
     let param_tys = m.funcs[f].params.clone();
+
+    // New entry: the stack, then the old body on the original arguments with an empty stack.
     let new_entry = m.add_block(region, &param_tys);
     let blocks = &mut m.regions[region].blocks;
     blocks.retain(|&x| x != new_entry);
     blocks.insert(0, new_entry);
     let new_params: Vec<ValueId> = m.blocks[new_entry].args.to_vec();
-    // The old entry keeps its arguments: it is now the loop body's head.
-    let head = m.add_block(region, &[]);
+    // The old entry becomes the loop body's head: its arguments are the changed parameters
+    // and the stack pointer `sp` (the number of pending entries). The parameters that no call
+    // changes are the same on every visit: their uses read the new entry's arguments.
+    for (i, &p) in params.iter().enumerate() {
+        if !changed.contains(&i) {
+            scion_ir::rewrite::replace_all_uses(m, p, new_params[i]);
+        }
+    }
+    let kept: Vec<ValueId> = changed.iter().map(|&i| params[i]).collect();
+    for (k, &v) in kept.iter().enumerate() {
+        m.values[v].def = ValueDef::BlockArg(entry, k as u32);
+    }
+    m.blocks[entry].args = kept.into_iter().collect();
+    let sp_entry = m.add_block_arg(entry, u32t);
+    let head = m.add_block(region, &[u32t]);
+    let sp_head = m.blocks[head].args[0];
     let done = m.add_block(region, &[]);
     let pop = m.add_block(region, &[]);
     let overflow = m.add_block(region, &[]);
-    let (stack, sp_slot);
+    let stack;
     {
         let mut b = Builder::at_end(m, new_entry);
         stack = b.lo_stack_slot(entry_bytes * u64::from(size), 8);
-        sp_slot = b.lo_stack_slot(4, 4);
         let zero = b.lo_int(u32t, 0);
-        b.lo_store(sp_slot, 0, zero);
-        b.lo_br(entry, &new_params);
+        let mut args: Vec<ValueId> = changed.iter().map(|&i| new_params[i]).collect();
+        args.push(zero);
+        b.lo_br(entry, &args);
     }
-    // The old entry's uses of unchanged parameters must see the new entry's values on every
-    // visit: they do, since `entry` is entered with them each time (below).
+    // The loop head: pop the next entry into the body, or return when the stack is empty.
     {
         let mut b = Builder::at_end(m, head);
-        let sp = b.lo_load(sp_slot, 0, u32t);
         let zero = b.lo_int(u32t, 0);
-        let empty = b.lo_cmp(CmpPred::Eq, sp, zero);
+        let empty = b.lo_cmp(CmpPred::Eq, sp_head, zero);
         b.lo_cond_br(empty, (done, &[]), (pop, &[]));
         b.set_insertion_point_to_end(done);
         let ok = b.lo_int(i32t, 0);
@@ -232,16 +268,16 @@ fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), D
         b.lo_ret(&[one]);
         b.set_insertion_point_to_end(pop);
         let one = b.lo_int(u32t, 1);
-        let sp1 = b.lo1(L::Sub, &[sp, one], u32t);
-        b.lo_store(sp_slot, 0, sp1);
+        let sp1 = b.lo1(L::Sub, &[sp_head, one], u32t);
         let sp64 = b.lo1(L::Cast, &[sp1], u64t);
         let width = b.lo_int(u64t, entry_bytes as i128);
         let off = b.lo1(L::Mul, &[sp64, width], u64t);
         let at = b.lo1(L::PtrAdd, &[stack, off], ptrt);
-        let mut args = new_params.clone();
+        let mut args = Vec::with_capacity(changed.len() + 1);
         for (k, &i) in changed.iter().enumerate() {
-            args[i] = b.lo_load(at, 8 * k as i64, param_tys[i]);
+            args.push(b.lo_load(at, 8 * k as i64, param_tys[i]));
         }
+        args.push(sp1);
         b.lo_br(entry, &args);
     }
     // Returns of the body go to the loop head.
@@ -257,10 +293,11 @@ fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), D
         };
         if m.ops[term].kind == OpKind::Lo(L::Return) && !by_block.contains_key(&bb) {
             scion_ir::rewrite::erase_op(m, term);
-            Builder::at_end(m, bb).lo_br(head, &[]);
+            Builder::at_end(m, bb).lo_br(head, &[sp_entry]);
         }
     }
-    // Recursive calls become pushes, last call first.
+    // Recursive calls: all but the first are pushed, last first; the first is a jump straight
+    // back into the body (it would be the next entry popped anyway).
     for (bb, cs) in by_block {
         let term = *m.blocks[bb].ops.last().expect("checked above");
         let arg_lists: Vec<Vec<ValueId>> = cs.iter().map(|&c| m.ops[c].operands.to_vec()).collect();
@@ -269,10 +306,10 @@ fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), D
         }
         scion_ir::rewrite::erase_op(m, term);
         let mut cur = bb;
-        for args in arg_lists.iter().rev() {
+        let mut sp = sp_entry;
+        for args in arg_lists.iter().skip(1).rev() {
             let next = m.add_block(region, &[]);
             let mut b = Builder::at_end(m, cur);
-            let sp = b.lo_load(sp_slot, 0, u32t);
             let cap = b.lo_int(u32t, i128::from(size));
             let full = b.lo_cmp(CmpPred::Ge, sp, cap);
             b.lo_cond_br(full, (overflow, &[]), (next, &[]));
@@ -285,11 +322,12 @@ fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), D
                 b.lo_store(at, 8 * k as i64, args[i]);
             }
             let one = b.lo_int(u32t, 1);
-            let sp1 = b.lo1(L::Add, &[sp, one], u32t);
-            b.lo_store(sp_slot, 0, sp1);
+            sp = b.lo1(L::Add, &[sp, one], u32t);
             cur = next;
         }
-        Builder::at_end(m, cur).lo_br(head, &[]);
+        let mut args: Vec<ValueId> = changed.iter().map(|&i| arg_lists[0][i]).collect();
+        args.push(sp);
+        Builder::at_end(m, cur).lo_br(entry, &args);
     }
     m.funcs[f].results = vec![i32t];
     m.funcs[f].attrs.set("status", Attr::Unit);
