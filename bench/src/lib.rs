@@ -12,6 +12,7 @@
 //! and two slowest of the nine are dropped and the other five averaged
 //! ([`scion_runtime::timing::trimmed_mean`]).
 
+pub mod foreign_tree;
 pub mod pbrt_kernel;
 
 use scion_runtime::bvh::{build_sah_binned, LogicalTree, SahOptions};
@@ -261,6 +262,37 @@ pub fn table(w: &Workload, threads: usize, outcomes: &[Outcome]) -> String {
     }
     s
 }
+
+/// The outcomes as tab-separated lines (no header): scene, triangles, ray kind, rays, threads,
+/// tracer, Mrays/s, ratio to the first row, setup seconds, bytes (`-` when unknown), hits equal
+/// to the first row's, hits naming the same primitive. [`TSV_HEADER`] names the columns.
+pub fn tsv_rows(w: &Workload, threads: usize, outcomes: &[Outcome]) -> String {
+    let base = outcomes.first().map_or(1.0, Outcome::mrays);
+    let mut s = String::new();
+    for o in outcomes {
+        let _ = writeln!(
+            s,
+            "{}\t{}\t{}\t{}\t{}\t{}\t{:.4}\t{:.4}\t{:.4}\t{}\t{}\t{}",
+            w.scene,
+            w.triangles.len(),
+            w.kind.name(),
+            o.rays,
+            threads,
+            o.name,
+            o.mrays(),
+            o.mrays() / base,
+            o.setup.as_secs_f64(),
+            o.bytes.map_or_else(|| "-".to_string(), |b| b.to_string()),
+            o.agree,
+            o.same_prim
+        );
+    }
+    s
+}
+
+/// The columns of [`tsv_rows`].
+pub const TSV_HEADER: &str =
+    "scene\ttriangles\trays\tn\tthreads\ttracer\tmrays\tratio\tsetup_s\tbytes\tagree\tsame_prim";
 
 #[cfg(test)]
 mod tests {

@@ -132,7 +132,7 @@ impl<'a> PbrtKernel<'a> {
         let mut sp = 0usize;
         let mut node = 0u32;
         let mut d = distmin(&r, &self.node(0).bounds, best.0);
-        if !(d < f32::INFINITY) {
+        if d == f32::INFINITY {
             return Some(Hit::MISS);
         }
         loop {

@@ -97,7 +97,8 @@ pub enum RaysArg {
 /// Tree builders.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum BuilderArg {
-    /// Binned SAH (32 bins), leaves of up to `--leaf-size` triangles.
+    /// Binned SAH (32 bins), leaves of up to `--leaf-size` triangles, then insertion-based
+    /// optimization of the tree (Bittner et al. 2013; docs/runtime.md).
     Sah,
     /// Median split of the longest axis, one triangle per leaf.
     Median,

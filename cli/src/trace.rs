@@ -213,7 +213,7 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     };
     let hit_count = hits.iter().filter(|h| h.is_hit()).count();
     let builder = match args.builder {
-        BuilderArg::Sah => format!("binned SAH, leaves <= {}", args.leaf_size),
+        BuilderArg::Sah => format!("binned SAH + reinsertion, leaves <= {}", args.leaf_size),
         BuilderArg::Median => "median, one triangle per leaf".to_string(),
     };
     let source = match &args.rays_file {

@@ -9,27 +9,34 @@
 //! Options: `--scene PATH` (default: `bunny.obj` of `$SCION_SCENES` or `../shared/scenes`),
 //! `--rays primary|secondary` (default primary), `--n N` (65536), `--seed S` (1),
 //! `--threads T` (1), `--layouts a,b` (pbrt,ptr), `--interp-rays N` (1024: the interpreter traces
-//! only the first N rays; 0 leaves it out), `--peers a,b` (which peer libraries run, in this
-//! order after the reference: `obvhs-bvh2,obvhs-cwbvh,embree,tinybvh-bvh2,tinybvh-bvh8`, all by
-//! default; `--peers ''` runs none). `tinybvh-bvh8` needs a build with the `avx2` target feature
+//! only the first N rays; 0 leaves it out), `--peers a,b` (which peers run, in this order after
+//! the reference: `hand-pbrt` (the hand-written kernel over the pbrt layout's bytes,
+//! `scion_bench::pbrt_kernel`), `obvhs-bvh2,obvhs-cwbvh,embree,tinybvh-bvh2,tinybvh-bvh8`; all by
+//! default; `--peers ''` runs none), `--tsv PATH` (also append one tab-separated line per row to
+//! PATH, the input of scripts/bench-peers.sh), `--trace-only NAME` (trace only the row NAME, once,
+//! untimed: what scripts/perf-counters.sh runs under valgrind), `--builders` (instead of timing,
+//! compare the trees of Scion's builder, tinybvh's and obvhs's: SAH cost and the reference
+//! traversal's work per ray on each, see `builders`), `--tree scion|tinybvh|obvhs` (the tree the
+//! reference, the hand-written kernel and Scion's rows traverse: Scion's binned SAH tree by
+//! default, or the one tinybvh's or obvhs's builder makes, read back as a logical tree; the
+//! peers always use their own). `tinybvh-bvh8` needs a build with the `avx2` target feature
 //! (`RUSTFLAGS="-C target-feature=+avx2,+fma"`, see `tinybvh_peer`); without it the row is left
 //! out with a note.
 
+mod builders;
 mod embree_peer;
 mod obvhs_peer;
+mod scion_rows;
 mod tinybvh_peer;
 
-use scion_bench::{race, table, Contender, RayKind, Workload};
-use scion_host::contract::{LayoutCode, Packed};
-use scion_host::jit::{Codegen, JitClosestHit};
-use scion_host::mem_interp::LIBRARY_LAYOUTS;
+use scion_bench::{race, table, tsv_rows, Contender, RayKind, Workload};
 use scion_host::oracle::ClosestHit;
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::reference::closest_hits_tree;
 use scion_runtime::timing::TimingPlan;
+use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::time::Instant;
 
 struct Args {
     scene: PathBuf,
@@ -40,10 +47,16 @@ struct Args {
     layouts: Vec<String>,
     interp_rays: usize,
     peers: Vec<String>,
+    tsv: Option<PathBuf>,
+    trace_only: Option<String>,
+    builders: bool,
+    tree: String,
 }
 
-/// The peer libraries `--peers` can name, in the order their rows come.
-const PEERS: [&str; 5] = [
+/// The peers `--peers` can name, in the order their rows come: the hand-written kernel over
+/// the `pbrt` layout's bytes, then the peer libraries.
+const PEERS: [&str; 6] = [
+    "hand-pbrt",
     "obvhs-bvh2",
     "obvhs-cwbvh",
     "embree",
@@ -69,6 +82,10 @@ fn parse() -> Result<Args, String> {
         layouts: vec!["pbrt".into(), "ptr".into()],
         interp_rays: 1024,
         peers: PEERS.map(str::to_string).to_vec(),
+        tsv: None,
+        trace_only: None,
+        builders: false,
+        tree: "scion".into(),
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -87,8 +104,18 @@ fn parse() -> Result<Args, String> {
             "--n" => a.n = num(value()?)? as usize,
             "--seed" => a.seed = num(value()?)?,
             "--threads" => a.threads = num(value()?)? as usize,
-            "--layouts" => a.layouts = value()?.split(',').map(str::to_string).collect(),
+            "--layouts" => {
+                a.layouts = value()?
+                    .split(',')
+                    .filter(|l| !l.is_empty())
+                    .map(str::to_string)
+                    .collect()
+            }
             "--interp-rays" => a.interp_rays = num(value()?)? as usize,
+            "--tsv" => a.tsv = Some(PathBuf::from(value()?)),
+            "--trace-only" => a.trace_only = Some(value()?),
+            "--builders" => a.builders = true,
+            "--tree" => a.tree = value()?,
             "--peers" => {
                 let list = value()?;
                 a.peers = list
@@ -117,34 +144,35 @@ fn progress(s: &str) {
     eprintln!("peers: {s}");
 }
 
-/// A layout's generated code as a contender: packed once (the pack time is its setup), then
-/// traced through the batch entry.
-fn layout_contender<'a>(
-    name: String,
-    code: Box<dyn LayoutCode>,
-    w: &'a Workload,
-    driver: &'a BatchDriver,
-) -> Result<Contender<'a>, String> {
-    let packed = Packed::new(code.as_ref(), &w.tree)?;
-    Ok(Contender {
-        name,
-        bytes: Some(packed.bytes()),
-        setup: packed.pack_time,
-        subset: None,
-        trace: Box::new(move |rays| {
-            packed
-                .trace(code.as_ref(), rays, driver)
-                .map_err(|f| f.to_string())
-        }),
-    })
-}
-
 fn run(a: &Args) -> Result<(), String> {
     progress(&format!("loading {}", a.scene.display()));
-    let w = Workload::load(&a.scene, a.rays, a.n, a.seed)?;
+    let mut w = Workload::load(&a.scene, a.rays, a.n, a.seed)?;
+    // The tree the reference, the hand-written kernel and Scion's rows traverse.
+    match a.tree.as_str() {
+        "scion" => {}
+        "tinybvh" => w.tree = tinybvh_peer::logical_tree(&w.triangles)?,
+        "obvhs" => w.tree = obvhs_peer::logical_tree(&w.triangles)?,
+        t => {
+            return Err(format!(
+                "--tree: unknown builder `{t}` (scion, tinybvh or obvhs)"
+            ))
+        }
+    }
     let driver = BatchDriver::new(a.threads)?;
     let tree_bytes = std::mem::size_of_val(w.tree.nodes.as_slice())
         + std::mem::size_of_val(w.tree.primitives.as_slice());
+    if a.builders {
+        print!("{}", builders::report(&w, &driver)?);
+        return Ok(());
+    }
+    let want = |p: &str| a.peers.iter().any(|q| q == p);
+    // The pbrt layout's bytes for the hand-written kernel (they outlive the contenders).
+    let hand_packed = if want("hand-pbrt") {
+        progress("packing the pbrt layout for the hand-written kernel");
+        Some(scion_rows::pack_pbrt(&w)?)
+    } else {
+        None
+    };
     let mut contenders = vec![Contender {
         name: "reference".into(),
         bytes: Some(tree_bytes),
@@ -152,11 +180,17 @@ fn run(a: &Args) -> Result<(), String> {
         subset: None,
         trace: Box::new(|rays| Ok(closest_hits_tree(&w.tree, rays, &driver))),
     }];
-    // The peer libraries, in `PEERS` order whatever the order of `--peers`.
+    // The peers, in `PEERS` order whatever the order of `--peers`.
     let tris = w.triangles.as_slice();
-    for peer in PEERS.iter().filter(|p| a.peers.iter().any(|q| q == *p)) {
+    for peer in PEERS.iter().filter(|p| want(p)) {
         progress(&format!("building the {peer} structure"));
         match *peer {
+            "hand-pbrt" => {
+                let packed = hand_packed
+                    .as_ref()
+                    .ok_or("the pbrt layout was not packed")?;
+                contenders.push(scion_rows::hand_pbrt(packed, &driver)?);
+            }
             "obvhs-bvh2" => contenders.push(obvhs_peer::bvh2(tris, &driver)),
             "obvhs-cwbvh" => contenders.push(obvhs_peer::cwbvh(tris, &driver)),
             "embree" => contenders.push(embree_peer::embree(tris, &driver)?),
@@ -171,30 +205,7 @@ fn run(a: &Args) -> Result<(), String> {
         }
     }
     for layout in &a.layouts {
-        let stem = layout.replace('-', "_");
-        let Some(&(stem, lname, _)) = LIBRARY_LAYOUTS.iter().find(|l| l.0 == stem) else {
-            return Err(format!("unknown library layout `{layout}`"));
-        };
-        progress(&format!("compiling and packing {layout} (Cranelift)"));
-        let t = Instant::now();
-        let jit = JitClosestHit::compile(stem, lname, None)?;
-        progress(&format!("  compiled in {:.3} s", t.elapsed().as_secs_f64()));
-        contenders.push(layout_contender(
-            format!("cranelift {layout}"),
-            Box::new(jit),
-            &w,
-            &driver,
-        )?);
-        progress(&format!("compiling and packing {layout} (LLVM -O3)"));
-        let t = Instant::now();
-        let llvm = JitClosestHit::compile_with(stem, lname, None, 3, Codegen::Llvm(3))?;
-        progress(&format!("  compiled in {:.3} s", t.elapsed().as_secs_f64()));
-        contenders.push(layout_contender(
-            format!("llvm-O3 {layout}"),
-            Box::new(llvm),
-            &w,
-            &driver,
-        )?);
+        contenders.extend(scion_rows::generated(layout, &w, &driver)?);
     }
     if a.interp_rays > 0 {
         let interp = ClosestHit::compile(1)?;
@@ -210,6 +221,21 @@ fn run(a: &Args) -> Result<(), String> {
             subset: Some(a.interp_rays),
             trace: Box::new(move |rays| interp.trace_all(&w.tree, rays, threads)),
         });
+    }
+    if let Some(name) = &a.trace_only {
+        // One untimed trace of one contender, for counting its instructions and cache misses
+        // (scripts/perf-counters.sh runs this under valgrind at two ray counts).
+        let c = contenders
+            .iter_mut()
+            .find(|c| &c.name == name)
+            .ok_or_else(|| format!("--trace-only: no contender `{name}`"))?;
+        let hits = (c.trace)(&w.rays)?;
+        println!(
+            "{name}: traced {} rays, {} hits",
+            hits.len(),
+            hits.iter().filter(|h| h.is_hit()).count()
+        );
+        return Ok(());
     }
     let outcomes = race(&w.rays, &mut contenders, &TimingPlan::PAPER, progress)?;
     drop(contenders);
@@ -227,6 +253,15 @@ fn run(a: &Args) -> Result<(), String> {
         "Machine: {cores} CPUs, {cpu}. Method: 1 warm-up round, 9 interleaved rounds, mean of the middle 5.\n"
     );
     print!("{}", table(&w, a.threads, &outcomes));
+    if let Some(path) = &a.tsv {
+        let mut f = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(path)
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        f.write_all(tsv_rows(&w, a.threads, &outcomes).as_bytes())
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+    }
     Ok(())
 }
 

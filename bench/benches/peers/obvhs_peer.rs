@@ -115,3 +115,22 @@ pub fn cwbvh<'a>(tris: &'a [Triangle], driver: &'a BatchDriver) -> Contender<'a>
         build_cwbvh_from_tris(t, BvhBuildParams::medium_build(), time)
     })
 }
+
+/// The BVH2 obvhs's `medium_build` makes over `tris`, as a logical tree (for `--builders`): a
+/// node with primitives is a leaf over `primitive_indices[first_index..][..prim_count]`, an
+/// inner node's children are `first_index` and `first_index + 1`.
+pub fn logical_tree(tris: &[Triangle]) -> Result<scion_runtime::bvh::LogicalTree, String> {
+    use scion_bench::foreign_tree::{logical_tree, Shape};
+    let otris = convert(tris);
+    let mut time = Duration::ZERO;
+    let bvh = build_bvh2_from_tris(&otris, BvhBuildParams::medium_build(), &mut time);
+    logical_tree(tris, 0, |i| {
+        let n = &bvh.nodes[i as usize];
+        if n.prim_count > 0 {
+            let first = n.first_index as usize;
+            Shape::Leaf(&bvh.primitive_indices[first..first + n.prim_count as usize])
+        } else {
+            Shape::Interior(n.first_index, n.first_index + 1)
+        }
+    })
+}

@@ -210,3 +210,22 @@ pub fn bvh8_cpu<'a>(
 ) -> Option<Result<Contender<'a>, String>> {
     None
 }
+
+/// The tree tinybvh's `BVH::Build` makes over `tris`, as a logical tree (for `--builders`).
+/// tinybvh's node 1 is unused (its children come in pairs from node 2); a node with triangles
+/// is a leaf over `indices[left_first..left_first + tri_count]`.
+pub fn logical_tree(tris: &[Triangle]) -> Result<scion_runtime::bvh::LogicalTree, String> {
+    use scion_bench::foreign_tree::{logical_tree, Shape};
+    let verts = vertices(tris);
+    let built = bvh::BVH::new(verts.as_slice().into()).map_err(|e| format!("tinybvh: {e}"))?;
+    let (nodes, indices) = (built.nodes(), built.indices());
+    logical_tree(tris, 0, |i| {
+        let n = &nodes[i as usize];
+        if n.is_leaf() {
+            let first = n.left_first as usize;
+            Shape::Leaf(&indices[first..first + n.tri_count as usize])
+        } else {
+            Shape::Interior(n.left_first, n.left_first + 1)
+        }
+    })
+}

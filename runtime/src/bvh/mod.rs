@@ -12,6 +12,7 @@
 pub mod chain;
 pub mod logical;
 pub mod median;
+pub mod reinsert;
 pub mod sah_binned;
 
 pub use chain::{build_caterpillar, DeepSide};

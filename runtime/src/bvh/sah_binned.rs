@@ -30,6 +30,9 @@ pub struct SahOptions {
     pub traversal_cost: f64,
     /// Cost of one primitive test (default 1).
     pub intersection_cost: f64,
+    /// Passes of insertion-based optimization after the top-down build (default 32; 0 keeps
+    /// the binned SAH tree as built; see [`super::reinsert`]).
+    pub reinsertion_passes: usize,
 }
 
 impl Default for SahOptions {
@@ -40,6 +43,7 @@ impl Default for SahOptions {
             bins: 32,
             traversal_cost: 1.0,
             intersection_cost: 1.0,
+            reinsertion_passes: 32,
         }
     }
 }
@@ -76,7 +80,9 @@ pub fn build_sah_binned(tris: &[Triangle], options: &SahOptions) -> LogicalTree 
         ct: options.traversal_cost,
         ci: options.intersection_cost,
     };
-    build_top_down(tris, &rule)
+    let mut tree = build_top_down(tris, &rule);
+    super::reinsert::optimize(&mut tree, options.reinsertion_passes);
+    tree
 }
 
 impl Decide for Sah {

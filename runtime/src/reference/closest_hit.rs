@@ -134,7 +134,8 @@ pub fn closest_hit_tree_stats(tree: &LogicalTree, ray: &Ray, stats: &mut Travers
     let bounds = |i: u32| tree.nodes[i as usize].aabb();
     stats.boxes_tested += 1;
     let d = distmin_of(&r, &bounds(tree.root), best.0);
-    if !(d < f32::INFINITY) {
+    if d == f32::INFINITY {
+        // (distmin is a number or +inf, never NaN: it returns `enter` only when `enter <= exit`.)
         return Hit::from_best(best.0, best.1);
     }
     // An explicit stack replays the recursion's order as generated code does

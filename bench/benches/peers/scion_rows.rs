@@ -1,0 +1,95 @@
+//! Scion's own contenders: closest hit specialized to a library layout and compiled by
+//! Cranelift or LLVM -O3 (packed once by the generated builder, traced through the batch
+//! entry), and the hand-written Rust kernel over the same bytes as the `pbrt` layout's
+//! generated code (`scion_bench::pbrt_kernel`), which measures what the abstraction costs on
+//! identical data.
+
+use scion_bench::pbrt_kernel::PbrtKernel;
+use scion_bench::{Contender, Workload};
+use scion_host::contract::{LayoutCode, Packed};
+use scion_host::jit::{Codegen, JitClosestHit};
+use scion_host::mem_interp::LIBRARY_LAYOUTS;
+use scion_runtime::batch::BatchDriver;
+use std::time::Instant;
+
+fn progress(s: &str) {
+    eprintln!("peers: {s}");
+}
+
+/// The library layout called `layout` (`pbrt`, `pbrt-q16`, ...): file stem and layout name.
+fn library_layout(layout: &str) -> Result<(&'static str, &'static str), String> {
+    let stem = layout.replace('-', "_");
+    LIBRARY_LAYOUTS
+        .iter()
+        .find(|l| l.0 == stem)
+        .map(|l| (l.0, l.1))
+        .ok_or_else(|| format!("unknown library layout `{layout}`"))
+}
+
+/// A layout's generated code as a contender: packed once (the pack time is its setup), then
+/// traced through the batch entry.
+fn layout_contender<'a>(
+    name: String,
+    code: Box<dyn LayoutCode>,
+    w: &'a Workload,
+    driver: &'a BatchDriver,
+) -> Result<Contender<'a>, String> {
+    let packed = Packed::new(code.as_ref(), &w.tree)?;
+    Ok(Contender {
+        name,
+        bytes: Some(packed.bytes()),
+        setup: packed.pack_time,
+        subset: None,
+        trace: Box::new(move |rays| {
+            packed
+                .trace(code.as_ref(), rays, driver)
+                .map_err(|f| f.to_string())
+        }),
+    })
+}
+
+/// `cranelift L` and `llvm-O3 L` for the library layout `layout`.
+pub fn generated<'a>(
+    layout: &str,
+    w: &'a Workload,
+    driver: &'a BatchDriver,
+) -> Result<Vec<Contender<'a>>, String> {
+    let (stem, lname) = library_layout(layout)?;
+    let mut out = Vec::new();
+    for (codegen, label) in [
+        (Codegen::Cranelift, "cranelift"),
+        (Codegen::Llvm(3), "llvm-O3"),
+    ] {
+        progress(&format!("compiling and packing {layout} ({label})"));
+        let t = Instant::now();
+        let code = JitClosestHit::compile_with(stem, lname, None, 3, codegen)?;
+        progress(&format!("  compiled in {:.3} s", t.elapsed().as_secs_f64()));
+        out.push(layout_contender(
+            format!("{label} {layout}"),
+            Box::new(code),
+            w,
+            driver,
+        )?);
+    }
+    Ok(out)
+}
+
+/// The tree packed into the `pbrt` layout by its generated builder (for [`hand_pbrt`]).
+pub fn pack_pbrt(w: &Workload) -> Result<Packed, String> {
+    let (stem, lname) = library_layout("pbrt")?;
+    let code = JitClosestHit::compile(stem, lname, None)?;
+    Packed::new(&code, &w.tree)
+}
+
+/// The hand-written kernel over `packed`, the `pbrt` layout's buffers (its pack time is the
+/// setup).
+pub fn hand_pbrt<'a>(packed: &'a Packed, driver: &'a BatchDriver) -> Result<Contender<'a>, String> {
+    let kernel = PbrtKernel::new(&packed.buffers())?;
+    Ok(Contender {
+        name: "hand-written pbrt".into(),
+        bytes: Some(kernel.bytes()),
+        setup: packed.pack_time,
+        subset: None,
+        trace: Box::new(move |rays| kernel.trace(rays, driver)),
+    })
+}

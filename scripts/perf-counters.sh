@@ -1,0 +1,78 @@
+#!/usr/bin/env bash
+# Instructions and (simulated) cache misses per ray of Scion's closest hit and of its peers, on
+# one scene, one thread, the same rays: what docs/performance.md explains gaps with.
+#
+# Hardware counters (`perf stat`) are not available on the development machine (a VM without a
+# PMU), so each tracer runs under valgrind's cachegrind (instruction counts are exact; cache
+# misses come from its model of this machine's caches). The peers benchmark traces one row,
+# once (`--trace-only`), at two ray counts; everything else it does (loading, building and
+# compiling) is the same in both runs, so the difference divided by the difference in rays is
+# the per-ray cost of that row's traversal alone. Branch mispredictions come from cachegrind's
+# simple branch predictor model, so read them as relative, not as this CPU's.
+#
+# Usage: scripts/perf-counters.sh [SCENE_NAME [RAYS]]   (default: bunny, primary and secondary)
+#   Environment: SCION_SCENES (default ../shared/scenes), PERF_N1 / PERF_N2 (ray counts,
+#   default 4096 and 20480). Prints a markdown table.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+./scripts/setup.sh >/dev/null
+command -v valgrind >/dev/null || {
+  echo "perf-counters: installing valgrind (Debian package)" >&2
+  SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO=sudo
+  $SUDO apt-get update -q >/dev/null
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q valgrind >/dev/null
+}
+scenes=$(cd "${SCION_SCENES:-../shared/scenes}" && pwd)
+scene=${1:-bunny}
+kinds=${2:-primary secondary}
+n1=${PERF_N1:-4096}
+n2=${PERF_N2:-20480}
+export CARGO_TARGET_DIR=target/bench-native
+export RUSTFLAGS="-C target-cpu=native"
+bench=$(cargo bench -p scion-bench --bench peers --no-run 2>&1 |
+  sed -n 's/.*Executable .*(\(.*\)).*/\1/p' | tail -n 1)
+[ -x "$bench" ] || { echo "perf-counters: no benchmark executable" >&2; exit 1; }
+out=target/perf-counters
+mkdir -p "$out"
+
+# row name | --peers | --layouts
+rows=(
+  "llvm-O3 pbrt||pbrt"
+  "cranelift pbrt||pbrt"
+  "hand-written pbrt|hand-pbrt|"
+  "reference||"
+  "tinybvh bvh2|tinybvh-bvh2|"
+  "obvhs bvh2|obvhs-bvh2|"
+  "embree|embree|"
+)
+
+# counts FILE: "instructions D1-misses LL-misses branches mispredicts" from cachegrind's
+# summary on stderr.
+counts() {
+  awk '/I *refs:/ { gsub(",", "", $4); i = $4 }
+       /D1 *misses:/ { gsub(",", "", $4); d = $4 }
+       /LLd misses:/ { gsub(",", "", $4); l = $4 }
+       /Branches:/ { gsub(",", "", $3); b = $3 }
+       /Mispredicts:/ { gsub(",", "", $3); m = $3 }
+       END { print i, d, l, b, m }' "$1"
+}
+
+echo "| rays | tracer | instructions/ray | branches/ray | mispredicted/ray | L1d misses/ray | LLd misses/ray |"
+echo "|---|---|---:|---:|---:|---:|---:|"
+for kind in $kinds; do
+  for row in "${rows[@]}"; do
+    IFS='|' read -r name peers layouts <<<"$row"
+    tag=$(echo "$name" | tr ' ' '_')-$kind
+    for n in "$n1" "$n2"; do
+      valgrind --tool=cachegrind --cache-sim=yes --branch-sim=yes --cachegrind-out-file=/dev/null \
+        "$bench" --scene "$scenes/$scene.obj" --rays "$kind" --n "$n" --threads 1 \
+        --peers "$peers" --layouts "$layouts" --interp-rays 0 --trace-only "$name" \
+        > "$out/$tag-$n.out" 2> "$out/$tag-$n.err"
+    done
+    read -r i1 d1 l1 b1 m1 <<<"$(counts "$out/$tag-$n1.err")"
+    read -r i2 d2 l2 b2 m2 <<<"$(counts "$out/$tag-$n2.err")"
+    awk -v k="$kind" -v name="$name" -v n="$((n2 - n1))" \
+      -v i="$((i2 - i1))" -v d="$((d2 - d1))" -v l="$((l2 - l1))" -v b="$((b2 - b1))" -v m="$((m2 - m1))" \
+      'BEGIN { printf "| %s | %s | %.0f | %.1f | %.2f | %.1f | %.2f |\n", k, name, i / n, b / n, m / n, d / n, l / n }'
+  done
+done
