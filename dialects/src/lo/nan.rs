@@ -8,10 +8,11 @@
 //! backend replaces a NaN by the canonical one with a compare and a select, but only where the
 //! payload can be seen. A use *blind* to payloads sees only whether its operand is a NaN: float
 //! `add sub mul div rem`, the directed ops, compares, and float-to-integer casts (a NaN gives 0).
-//! A *transparent* use passes the operand's payload on to its own result unchanged: `min`/`max`
-//! (which return an operand), the two values of a `select`, and branch arguments (block
-//! arguments). Every other use (store, return, call argument, bitcast, `neg`/`abs`, `sqrt`,
-//! `fma`, float casts, ...) *observes* the payload.
+//! A *transparent* use passes the operand's payload on to its own result, whose bits are then
+//! canonical when the operand's are: `min`/`max` (which return an operand), the two values of a
+//! `select`, branch arguments (block arguments), and `neg`/`abs` (which change only the sign
+//! bit, as the interpreters do to the canonical NaN). Every other use (store, return, call
+//! argument, bitcast, `sqrt`, `fma`, float casts, ...) *observes* the payload.
 //!
 //! So a backend canonicalizes an arithmetic result where it is defined
 //! ([`NanFacts::canonicalize`]) only when its payload reaches an observing use, directly or
@@ -139,7 +140,7 @@ fn use_of(m: &Module, op: OpId, i: usize) -> Use {
         OpKind::Lo(L::Add | L::Sub | L::Mul | L::Div | L::Rem) if result_float => Use::Blind,
         OpKind::Lo(L::AddRd | L::AddRu | L::MulRd | L::MulRu | L::Cmp) => Use::Blind,
         OpKind::Lo(L::Cast) if !result_float => Use::Blind,
-        OpKind::Lo(L::Min | L::Max) if result_float => Use::Transparent,
+        OpKind::Lo(L::Min | L::Max | L::Neg | L::Abs) if result_float => Use::Transparent,
         OpKind::Lo(L::Select) if i > 0 => Use::Transparent,
         _ => Use::Observes,
     }
@@ -245,7 +246,7 @@ fn to_canonicalize(m: &Module, ops: &[OpId], nn: &ValueSet) -> ValueSet {
         for &op in ops {
             let o = &m.ops[op];
             let passes: &[ValueId] = match o.kind {
-                OpKind::Lo(L::Min | L::Max) => &o.operands,
+                OpKind::Lo(L::Min | L::Max | L::Neg | L::Abs) => &o.operands,
                 OpKind::Lo(L::Select) => &o.operands[1..],
                 _ => &[],
             };
