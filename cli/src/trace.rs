@@ -23,7 +23,7 @@ use scion_runtime::geom::{Hit, Ray, Triangle};
 use scion_runtime::query::{
     axis_rays, hits_checksum, primary_rays_n, read_rays, secondary_rays, write_hits,
 };
-use scion_runtime::reference::{closest_hit_tree_stats, TraversalStats};
+use scion_runtime::reference::closest_hits_tree_stats;
 use scion_runtime::scene::{load_obj, Scene};
 use scion_runtime::timing::{measure_with, Timing, TimingPlan};
 use std::time::{Duration, Instant};
@@ -256,7 +256,8 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
             _ => Boxes::Exact,
         };
         let traversed = boxes.decoded_tree(&tree);
-        let s = work(&traversed, &rays, threads);
+        let driver = BatchDriver::new(threads).map_err(CliError::new)?;
+        let s = closest_hits_tree_stats(&traversed, &rays, &driver);
         let per = |x: u64| x as f64 / rays.len().max(1) as f64;
         println!(
             "work/ray     {:.2} box tests, {:.2} nodes visited, {:.2} skipped, {:.2} triangle tests; deepest stack {} (reference traversal{})",
@@ -276,20 +277,6 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         println!("output       {} ({} bytes)", path.display(), hits.len() * 8);
     }
     Ok(())
-}
-
-/// The reference traversal's counters over all `rays`, on `threads` threads.
-fn work(tree: &LogicalTree, rays: &[Ray], threads: usize) -> TraversalStats {
-    let total = std::sync::Mutex::new(TraversalStats::default());
-    let driver = BatchDriver::new(threads).unwrap_or_else(|_| BatchDriver::sequential());
-    driver.run(rays.len(), |begin, end| {
-        let mut s = TraversalStats::default();
-        for r in &rays[begin..end] {
-            closest_hit_tree_stats(tree, r, &mut s);
-        }
-        total.lock().unwrap_or_else(|p| p.into_inner()).add(&s);
-    });
-    total.into_inner().unwrap_or_else(|p| p.into_inner())
 }
 
 /// How `scion trace` traces: a layout-free backend, or code specialized to a layout driven

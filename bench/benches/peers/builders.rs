@@ -1,4 +1,5 @@
-//! `--builders`: the trees the builders make, compared with the traversal held fixed. Each peer's
+//! `--builders`: the trees the builders make, compared with the traversal held fixed: Scion's
+//! binned SAH with and without its insertion-based optimization, and the peers'. Each peer's
 //! binary BVH over the workload's triangles is read back as a logical tree
 //! (`scion_bench::foreign_tree`), and for Scion's binned SAH tree and each of them the table gives
 //! the node counts, depth, the SAH cost (traversal and triangle cost 1, relative to the root's
@@ -8,27 +9,25 @@
 use crate::{obvhs_peer, tinybvh_peer};
 use scion_bench::Workload;
 use scion_runtime::batch::BatchDriver;
-use scion_runtime::bvh::LogicalTree;
-use scion_runtime::reference::{closest_hit_tree_stats, TraversalStats};
+use scion_runtime::bvh::{build_sah_binned, SahOptions};
+use scion_runtime::reference::closest_hits_tree_stats;
 use std::fmt::Write as _;
-use std::sync::Mutex;
-
-fn work(tree: &LogicalTree, w: &Workload, driver: &BatchDriver) -> TraversalStats {
-    let total = Mutex::new(TraversalStats::default());
-    driver.run(w.rays.len(), |begin, end| {
-        let mut s = TraversalStats::default();
-        for r in &w.rays[begin..end] {
-            closest_hit_tree_stats(tree, r, &mut s);
-        }
-        total.lock().unwrap_or_else(|p| p.into_inner()).add(&s);
-    });
-    total.into_inner().unwrap_or_else(|p| p.into_inner())
-}
 
 /// The table (markdown).
 pub fn report(w: &Workload, driver: &BatchDriver) -> Result<String, String> {
+    let plain = SahOptions {
+        reinsertion_passes: 0,
+        ..SahOptions::default()
+    };
     let trees = [
-        ("Scion binned SAH (32 bins, leaves <= 15)", w.tree.clone()),
+        (
+            "Scion binned SAH without reinsertion",
+            build_sah_binned(&w.triangles, &plain),
+        ),
+        (
+            "Scion binned SAH + reinsertion (default)",
+            build_sah_binned(&w.triangles, &SahOptions::default()),
+        ),
         (
             "tinybvh BVH::Build (binned SAH)",
             tinybvh_peer::logical_tree(&w.triangles)?,
@@ -57,7 +56,7 @@ pub fn report(w: &Workload, driver: &BatchDriver) -> Result<String, String> {
         tree.validate_with_cap(usize::MAX)
             .map_err(|e| format!("{name}: {e}"))?;
         let st = tree.stats();
-        let k = work(tree, w, driver);
+        let k = closest_hits_tree_stats(tree, &w.rays, driver);
         let _ = writeln!(
             s,
             "| {name} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.2} |",

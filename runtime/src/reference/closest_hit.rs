@@ -231,6 +231,24 @@ pub fn closest_hits_tree(tree: &LogicalTree, rays: &[Ray], driver: &BatchDriver)
     driver.map(rays, |r| closest_hit_tree(tree, r))
 }
 
+/// The counters of tracing all `rays` through `tree` (in parallel blocks of 64, summed; the
+/// deepest stack is the largest): the work per ray that `scion trace --stats` reports.
+pub fn closest_hits_tree_stats(
+    tree: &LogicalTree,
+    rays: &[Ray],
+    driver: &BatchDriver,
+) -> TraversalStats {
+    let total = std::sync::Mutex::new(TraversalStats::default());
+    driver.run(rays.len(), |begin, end| {
+        let mut s = TraversalStats::default();
+        for r in &rays[begin..end] {
+            closest_hit_tree_stats(tree, r, &mut s);
+        }
+        total.lock().unwrap_or_else(|p| p.into_inner()).add(&s);
+    });
+    total.into_inner().unwrap_or_else(|p| p.into_inner())
+}
+
 /// Closest hits of all `rays` by brute force, in parallel blocks of 64.
 pub fn closest_hits_brute(triangles: &[Triangle], rays: &[Ray], driver: &BatchDriver) -> Vec<Hit> {
     driver.map(rays, |r| closest_hit_brute(triangles, r))

@@ -8,5 +8,5 @@ pub mod prelude;
 
 pub use closest_hit::{
     closest_hit_brute, closest_hit_tree, closest_hit_tree_stats, closest_hits_brute,
-    closest_hits_tree, why_pruned, TraversalStats,
+    closest_hits_tree, closest_hits_tree_stats, why_pruned, TraversalStats,
 };

@@ -130,7 +130,9 @@ impl LayoutCode for Flat32 {
                     stack[top]
                 })
             }) {
-                if !(d <= best.0) {
+                // Skipped when `best` has passed it (or is NaN, as in generated code).
+                let visit = d <= best.0;
+                if !visit {
                     continue;
                 }
                 let at = 32 * i as usize;
