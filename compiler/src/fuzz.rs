@@ -285,7 +285,7 @@ mod tests {
 /// that mutations reach types, functions, layouts and builds.
 pub fn library_seeds(library: &std::path::Path) -> std::io::Result<Vec<String>> {
     let prelude = std::fs::read_to_string(library.join("prelude.scion"))?;
-    let mut seeds = vec![prelude.clone()];
+    let mut seeds = vec![prelude.clone(), CONSTRUCTS_SEED.to_string()];
     for rel in [
         "algorithms/closest_hit.scion",
         "layouts/pbrt.scion",
@@ -297,6 +297,22 @@ pub fn library_seeds(library: &std::path::Path) -> std::io::Result<Vec<String>> 
     }
     Ok(seeds)
 }
+
+/// A seed with the traversal language's constructs that the library does not use yet
+/// (`let mut`, `if` expressions, the lane and bit builtins), so that mutation reaches them.
+pub const CONSTRUCTS_SEED: &str = r#"
+func keep(best: mut (f32, u32), t: f32, id: u32) = {
+  if t < best[0] { best = (t, id); }
+}
+func constructs(v: f32x3, n: u32) -> (f32, u32) = {
+  let mut best = (inf, 0xFFFFFFFF);
+  keep(best, hmin(v), popcount(n));
+  let mut k: u32 = ctz(n | 1);
+  k = k + clz(n);
+  let s: f32 = if isnan(v.x) { 0.0 } elif v.y < v.z { hsum(v) } else { rsqrt(trunc(v.z)) };
+  return (best[0] + s, if k > 3 { k } else { best[1] });
+}
+"#;
 
 /// The outcome of one campaign.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]

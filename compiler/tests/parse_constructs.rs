@@ -68,6 +68,25 @@ fn sexpr(e: &Expr) -> String {
         ExprKind::This => "this".to_string(),
         ExprKind::Parent(n) => format!("(parent {})", n.name),
         ExprKind::Build(n) => format!("(build {})", n.name),
+        ExprKind::If {
+            branches,
+            otherwise,
+        } => {
+            let arms: String = branches
+                .iter()
+                .map(|(c, b)| format!(" {} {}", sexpr(c), tail_sexpr(b)))
+                .collect();
+            format!("(if{arms} else {})", tail_sexpr(otherwise))
+        }
+    }
+}
+
+/// A branch block by its tail expression (`{...}` when it has none).
+fn tail_sexpr(s: &Stmt) -> String {
+    match &s.kind {
+        StmtKind::Block(b) => b.last().map_or("{}".to_string(), tail_sexpr),
+        StmtKind::Expr(e) => sexpr(e),
+        _ => "{...}".to_string(),
     }
 }
 
@@ -90,6 +109,18 @@ fn precedence_loosest_to_tightest() {
     check_expr(
         "a * b + c << d & e ^ f | g != h && i || j",
         expect!["(|| (&& (!= (| (^ (& (<< (+ (* a b) c) d) e) f) g) h) i) j)"],
+    );
+}
+
+#[test]
+fn if_expressions_are_primaries() {
+    check_expr(
+        "a + if c { b } elif d { let x = 1; x } else { e } * 2",
+        expect!["(+ a (* (if c b d x else e) 2))"],
+    );
+    check_expr(
+        "f(if c { (1, 2) } else { g(if d { 3 } else { 4 }) })",
+        expect!["(call f (if c (tuple 1 2) else (call g (if d 3 else 4))))"],
     );
 }
 

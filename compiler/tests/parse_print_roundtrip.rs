@@ -116,7 +116,7 @@ impl Gen {
         let choice = if depth == 0 {
             self.below(8)
         } else {
-            self.below(17)
+            self.below(18)
         };
         let kind = match choice {
             0 => ExprKind::Name(self.ident(NAMES)),
@@ -164,6 +164,12 @@ impl Gen {
             15 => ExprKind::BitCast {
                 expr: Box::new(self.expr(depth - 1)),
                 ty: self.ty(1),
+            },
+            16 => ExprKind::If {
+                branches: (0..1 + self.count(2))
+                    .map(|_| (self.expr(depth - 1), self.block(0)))
+                    .collect(),
+                otherwise: Box::new(self.block(0)),
             },
             _ => ExprKind::Binary {
                 op: self.pick(BINOPS),
@@ -261,6 +267,7 @@ impl Gen {
                     Some(self.ty(1))
                 },
                 value: self.expr(2),
+                mutable: self.below(2) == 0,
             },
             4 => StmtKind::Build {
                 field: self.ident(NAMES),

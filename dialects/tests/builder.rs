@@ -59,7 +59,7 @@ fn every_shorthand_builds_valid_ir() {
     let first = b.index(a, one).unwrap();
     let lanes = b.vector(&[first, first, zero]).unwrap();
     let y = b.lane(lanes, 1).unwrap();
-    let d = b.intrinsic("dot", &[lanes, lanes], f32t);
+    let d = b.intrinsic(scion_ir::tree::Intrinsic::Dot, &[lanes, lanes], f32t);
     let low = b.bits(k, 0, 8, u8t);
     let lowf = b.cast(low, f32t);
     let raw = b.bitcast(d, u32t);

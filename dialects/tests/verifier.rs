@@ -365,3 +365,25 @@ func @f(%a: vector<3xf64>) -> (vector<3xf64>) {
         "#]],
     );
 }
+
+/// `tree.intrinsic` names one of `scion_ir::tree::Intrinsic`: names no engine can compute (the
+/// transcendentals, options) are refused, not carried to a lowering that cannot take them.
+#[test]
+fn unknown_intrinsics_are_refused() {
+    check(
+        r#"
+func @f(%a: f32) -> (f32) {
+  %b = "tree.intrinsic"(%a) {name = "sin"} : (f32) -> f32
+  "tree.return"(%b) : (f32) -> ()
+}"#,
+        expect![[r#"
+            error: unknown intrinsic `sin`
+              in: %1 = "tree.intrinsic"(%0) {name = "sin"} : (f32) -> f32
+            func @f(%0: f32) -> (f32) {
+              // error: unknown intrinsic `sin`
+              %1 = "tree.intrinsic"(%0) {name = "sin"} : (f32) -> f32
+              "tree.return"(%1) : (f32) -> ()
+            }
+        "#]],
+    );
+}

@@ -10,7 +10,7 @@ use crate::syntax::ast::{BinaryOp, Expr, ExprKind, Item, UnaryOp};
 use scion_ir::attr::Attr;
 use scion_ir::diag::InternalError;
 use scion_ir::entity::{TypeId, ValueId};
-use scion_ir::tree::{CmpPred, Op};
+use scion_ir::tree::{CmpPred, Intrinsic, Op};
 use scion_ir::types::Type;
 use scion_ir::{Builder, OpSpec};
 
@@ -49,12 +49,26 @@ impl FuncCx<'_> {
     fn expr_inner(&mut self, b: &mut Builder<'_>, e: &Expr) -> Result<ValueId, InternalError> {
         b.set_span(Some(e.span));
         match &e.kind {
+            ExprKind::If {
+                branches,
+                otherwise,
+            } => {
+                let t = self.expr_ty(b, e)?;
+                self.if_chain(b, branches, Some(otherwise), Some(t))?
+                    .ok_or_else(|| self.bug("an `if` expression without a value"))
+            }
             ExprKind::Name(id) => match self.typed.resolution(e.id) {
-                Some(Resolution::Local(binding)) => self
-                    .locals
-                    .get(binding)
-                    .copied()
-                    .ok_or_else(|| self.bug(format!("`{}` used before its binding", id.name))),
+                Some(Resolution::Local(binding)) => {
+                    let v = self.locals.get(binding).copied().ok_or_else(|| {
+                        self.bug(format!("`{}` used before its binding", id.name))
+                    })?;
+                    if self.is_cell(*binding) {
+                        let t = self.expr_ty(b, e)?;
+                        Ok(b.build1(Op::Load, &[v], t))
+                    } else {
+                        Ok(v)
+                    }
+                }
                 Some(Resolution::Param(i)) => {
                     let i = *i as usize;
                     let v = self.params[i];
@@ -344,7 +358,7 @@ impl FuncCx<'_> {
                 let mut vals = Vec::with_capacity(info.params.len());
                 for (i, p) in info.params.iter().enumerate() {
                     match args.get(i) {
-                        Some(a) if p.mutable => vals.push(self.mut_param_ref(a)?),
+                        Some(a) if p.mutable => vals.push(self.place_ref(a)?),
                         Some(a) => vals.push(self.expr(b, a)?),
                         None => vals.push(self.param_default(b, fid, i)?),
                     }
@@ -366,7 +380,7 @@ impl FuncCx<'_> {
                 let [set, x] = args.as_slice() else {
                     return Err(self.bug("insert takes 2 arguments"));
                 };
-                let r = self.mut_param_ref(set)?;
+                let r = self.place_ref(set)?;
                 let v = self.expr(b, x)?;
                 let set_ty = match b.m.types.get(b.value_type(r)) {
                     scion_ir::types::Type::Ref(t) => *t,
@@ -374,7 +388,7 @@ impl FuncCx<'_> {
                 };
                 b.set_span(Some(e.span));
                 let old = b.build1(Op::Load, &[r], set_ty);
-                let new = b.intrinsic("set_insert", &[old, v], set_ty);
+                let new = b.intrinsic(Intrinsic::SetInsert, &[old, v], set_ty);
                 b.build(Op::Store, &[r, new], &[]);
                 Ok(None)
             }
@@ -453,11 +467,12 @@ impl FuncCx<'_> {
                 let [x, lo, hi] = vals else {
                     return Err(self.bug("clamp takes 3 arguments"));
                 };
-                let m = b.intrinsic("max", &[*x, *lo], t);
-                b.intrinsic("min", &[m, *hi], t)
+                let m = b.intrinsic(Intrinsic::Max, &[*x, *lo], t);
+                b.intrinsic(Intrinsic::Min, &[m, *hi], t)
             }
             Builtin::Append => return Err(self.bug("`append` outside a build")),
-            other => b.intrinsic(other.name(), vals, t),
+            Builtin::Insert => return Err(self.bug("`insert` as a value")),
+            Builtin::Intrinsic(i) => b.intrinsic(i, vals, t),
         })
     }
 

@@ -88,6 +88,8 @@ struct FuncCx<'a> {
     /// The function's block arguments, by parameter index.
     params: Vec<ValueId>,
     /// Values of `let`, `foreach` and pattern bindings.
+    /// The value of each local binding in scope; for a `let mut` local, its cell
+    /// (`!tree.ref<T>` from `tree.var`), read with `tree.load` and assigned with `tree.store`.
     locals: FxHashMap<crate::sema::BindingId, ValueId>,
     /// Set while lowering a build function (then `func` is not a function of `typed`).
     build: Option<builds::BuildCx>,

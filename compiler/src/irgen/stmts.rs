@@ -86,9 +86,10 @@ impl FuncCx<'_> {
                 b.ret(&vals);
                 Ok(Flow::Returned)
             }
-            StmtKind::Let { value, .. } => {
+            StmtKind::Let { value, mutable, .. } => {
                 let v = self.expr(b, value)?;
                 let binding = self.binder(s.id)?;
+                let v = if *mutable { b.var(v) } else { v };
                 self.locals.insert(binding, v);
                 Ok(Flow::Next)
             }
@@ -202,7 +203,7 @@ impl FuncCx<'_> {
     }
 
     /// `if c1 { } elif c2 { } else { }` as nested `tree.if`s; with `result`, each yields it.
-    fn if_chain(
+    pub(super) fn if_chain(
         &mut self,
         b: &mut Builder<'_>,
         branches: &[(Expr, Stmt)],
@@ -344,7 +345,8 @@ impl FuncCx<'_> {
             .ok_or_else(|| self.bug("a binding without a binder"))
     }
 
-    /// Stores `v` into an assignment target: a `mut` parameter or a tuple component of one.
+    /// Stores `v` into an assignment target: a `mut` parameter, a `let mut` local, or a tuple
+    /// component of one.
     pub(super) fn assign(
         &mut self,
         b: &mut Builder<'_>,
@@ -353,7 +355,7 @@ impl FuncCx<'_> {
     ) -> Result<(), InternalError> {
         match &target.kind {
             ExprKind::Name(_) => {
-                let r = self.mut_param_ref(target)?;
+                let r = self.place_ref(target)?;
                 b.build(Op::Store, &[r, v], &[]);
                 Ok(())
             }
@@ -362,7 +364,7 @@ impl FuncCx<'_> {
                     ExprKind::Int(i) => i as i128,
                     _ => return Err(self.bug("component assignment with a non-literal index")),
                 };
-                let r = self.mut_param_ref(base)?;
+                let r = self.place_ref(base)?;
                 let ty = match b.m.types.get(b.value_type(r)) {
                     Type::Ref(t) => *t,
                     _ => return Err(self.bug("assignment through a non-reference")),
@@ -382,15 +384,28 @@ impl FuncCx<'_> {
         }
     }
 
-    /// The reference argument of the `mut` parameter named by `e`.
-    pub(super) fn mut_param_ref(&self, e: &Expr) -> Result<ValueId, InternalError> {
+    /// The reference (`!tree.ref<T>`) of the `mut` parameter or `let mut` local named by `e`.
+    pub(super) fn place_ref(&self, e: &Expr) -> Result<ValueId, InternalError> {
         match self.typed.resolution(e.id) {
             Some(Resolution::Param(i))
                 if self.typed.func(self.func).params[*i as usize].mutable =>
             {
                 Ok(self.params[*i as usize])
             }
-            _ => Err(self.bug("expected a `mut` parameter")),
+            Some(Resolution::Local(binding)) if self.is_cell(*binding) => self
+                .locals
+                .get(binding)
+                .copied()
+                .ok_or_else(|| self.bug("a `let mut` local used before its binding")),
+            _ => Err(self.bug("expected a `mut` parameter or a `let mut` local")),
         }
+    }
+
+    /// Whether `binding` is a `let mut` local (held in a cell).
+    pub(super) fn is_cell(&self, binding: crate::sema::BindingId) -> bool {
+        self.typed
+            .bindings
+            .get(binding.0 as usize)
+            .is_some_and(|b| b.mutable)
     }
 }

@@ -400,6 +400,16 @@ fn walk_names(e: &Expr, out: &mut Vec<Ident>, depth: u32) {
             walk_names(rhs, out, d);
         }
         ExprKind::Cast { expr, .. } | ExprKind::BitCast { expr, .. } => walk_names(expr, out, d),
+        ExprKind::If {
+            branches,
+            otherwise,
+        } => {
+            for (cond, body) in branches {
+                walk_names(cond, out, d);
+                stmt_exprs(body, &mut |x| walk_names(x, out, d));
+            }
+            stmt_exprs(otherwise, &mut |x| walk_names(x, out, d));
+        }
     }
 }
 

@@ -38,7 +38,7 @@ use scion_ir::diag::{Diagnostic, Diagnostics, Span};
 use scion_ir::entity::{BlockId, FuncId, OpId, TypeId, ValueId};
 use scion_ir::lo::Op as L;
 use scion_ir::op::OpKind;
-use scion_ir::tree::{CmpPred, Op as T};
+use scion_ir::tree::{CmpPred, Intrinsic, Op as T};
 use scion_ir::types::Type;
 use scion_ir::{Builder, Module, OpSpec, Pass, PassCx, PassError};
 
@@ -434,7 +434,7 @@ impl FnLower<'_> {
                 return self.bind_results(op, flat, cur);
             }
             T::Intrinsic
-                if o.str_attr("name") == Some("len")
+                if o.str_attr("name") == Some(Intrinsic::Len.name())
                     && o.operands.first().is_some_and(|&v| {
                         matches!(src.types.get(src.values[v].ty), Type::View(_))
                     }) =>
@@ -448,10 +448,10 @@ impl FnLower<'_> {
                 }]
             }
             T::Intrinsic => {
-                let name = o.str_attr("name").unwrap_or("").to_string();
+                let intrinsic = Intrinsic::of(o).map_err(|e| (e, self.span))?;
                 let ty = res_ty.unwrap_or_default_ty(self)?;
                 let tys = self.lo_ty(ty)?;
-                intrinsics::lower(self, cur, &name, &ins, &tys)?
+                intrinsics::lower(self, cur, intrinsic, &ins, &tys)?
             }
             T::Var => {
                 let ty = src.values[o.operands[0]].ty;

@@ -7,7 +7,7 @@
 use super::errors::SemaError;
 use super::infer::Checker;
 use super::ops::{Class, Progress};
-use super::typed::Builtin;
+use super::typed::{Builtin, Intrinsic};
 use super::types::{Prim, Ty};
 use scion_ir::diag::Span;
 
@@ -16,6 +16,8 @@ use scion_ir::diag::Span;
 enum Want {
     /// Integers, floats and numeric vectors.
     Numeric,
+    /// Integers and integer vectors.
+    Integer,
     /// Floats and float vectors.
     Float,
     /// Float vectors.
@@ -28,6 +30,8 @@ enum Want {
     FloatVec3,
     /// Any vector.
     Vector,
+    /// Vectors of numbers.
+    NumericVector,
     /// Arrays, slices and sets.
     Collection,
     /// Sets.
@@ -38,12 +42,14 @@ impl Want {
     fn describe(self) -> &'static str {
         match self {
             Want::Numeric => "a number or a numeric vector",
+            Want::Integer => "an integer or an integer vector",
             Want::Float => "a float or a float vector",
             Want::FloatVec => "a float vector",
             Want::F32Vec => "an f32 vector",
             Want::F32 => "an f32 or an f32 vector",
             Want::FloatVec3 => "a 3-lane float vector",
             Want::Vector => "a vector",
+            Want::NumericVector => "a numeric vector",
             Want::Collection => "an array, slice or set",
             Want::Set => "a set",
         }
@@ -66,6 +72,7 @@ impl Checker<'_> {
                 matches!(class, Class::Int | Class::Float)
                     || matches!(s, Ty::Vector(p, _) if p.is_numeric())
             }
+            Want::Integer => class == Class::Int || matches!(s, Ty::Vector(p, _) if p.is_int()),
             Want::Float => class == Class::Float || matches!(s, Ty::Vector(p, _) if p.is_float()),
             Want::FloatVec => matches!(s, Ty::Vector(p, _) if p.is_float()),
             Want::F32Vec => matches!(s, Ty::Vector(Prim::F32, _)),
@@ -79,6 +86,7 @@ impl Checker<'_> {
             Want::F32 => matches!(s, Ty::Prim(Prim::F32) | Ty::Vector(Prim::F32, _)),
             Want::FloatVec3 => matches!(s, Ty::Vector(p, 3) if p.is_float()),
             Want::Vector => matches!(s, Ty::Vector(..)),
+            Want::NumericVector => matches!(s, Ty::Vector(p, _) if p.is_numeric()),
             Want::Collection => matches!(s, Ty::Array(..) | Ty::Slice(_) | Ty::Set(_)),
             Want::Set => matches!(s, Ty::Set(_)),
         })
@@ -92,23 +100,35 @@ impl Checker<'_> {
         span: Span,
         force: bool,
     ) -> Progress {
-        use Builtin::*;
+        use Intrinsic::*;
         let name = kind.name();
+        let intrinsic = match kind {
+            Builtin::Intrinsic(i) => Some(i),
+            _ => None,
+        };
         // The class of the first argument, how many leading arguments share its type, and which
         // arguments are integers of any type.
         let all = args.len();
         let (want, shared, ints): (Want, usize, &[usize]) = match kind {
-            Min | Max | Clamp | Abs => (Want::Numeric, all, &[]),
-            Sqrt | Floor | Ceil | Fma => (Want::Float, all, &[]),
-            FaddRd | FaddRu | FsubRd | FsubRu | FmulRd | FmulRu => (Want::F32, all, &[]),
-            Dot | Length | Normalize => (Want::FloatVec, all, &[]),
-            FrameOrigin => (Want::F32Vec, all, &[]),
-            Cross => (Want::FloatVec3, all, &[]),
-            FrameStep | SgBins => (Want::F32Vec, 2, &[2]),
-            QuantLo | QuantHi | SgCodeUp | SgCodeDown => (Want::F32Vec, 3, &[3]),
-            WithAxis => (Want::Vector, 1, &[1]),
-            Len | Append => (Want::Collection, 1, &[]),
-            Insert => (Want::Set, 1, &[]),
+            Builtin::Clamp => (Want::Numeric, all, &[]),
+            Builtin::Append => (Want::Collection, 1, &[]),
+            Builtin::Insert => (Want::Set, 1, &[]),
+            Builtin::Intrinsic(i) => match i {
+                Min | Max | Abs => (Want::Numeric, all, &[]),
+                Sqrt | Rsqrt | Floor | Ceil | Trunc | Fma | IsNan => (Want::Float, all, &[]),
+                Popcount | Clz | Ctz => (Want::Integer, all, &[]),
+                FaddRd | FaddRu | FsubRd | FsubRu | FmulRd | FmulRu => (Want::F32, all, &[]),
+                Dot | Length | Normalize => (Want::FloatVec, all, &[]),
+                Hmin | Hmax | Hsum => (Want::NumericVector, all, &[]),
+                FrameOrigin => (Want::F32Vec, all, &[]),
+                Cross => (Want::FloatVec3, all, &[]),
+                FrameStep | SgBins => (Want::F32Vec, 2, &[2]),
+                QuantLo | QuantHi | SgCodeUp | SgCodeDown => (Want::F32Vec, 3, &[3]),
+                WithAxis => (Want::Vector, 1, &[1]),
+                Len => (Want::Collection, 1, &[]),
+                // Sets are grown with `insert`, which `Builtin::traversal` offers instead.
+                SetInsert => (Want::Set, 1, &[]),
+            },
         };
         let Some((first, first_span)) = args.first().cloned() else {
             return Progress::Done;
@@ -164,7 +184,9 @@ impl Checker<'_> {
             }
             Some(true) => {}
         }
-        if kind == Abs && matches!(self.shallow(&first), Ty::Prim(p) if p.is_unsigned_int()) {
+        if intrinsic == Some(Abs)
+            && matches!(self.shallow(&first), Ty::Prim(p) if p.is_unsigned_int())
+        {
             let ty = self.show(&first);
             self.error(SemaError::BuiltinArg {
                 name: name.to_string(),
@@ -178,20 +200,24 @@ impl Checker<'_> {
             Ty::Array(e, _) | Ty::Slice(e) | Ty::Set(e) => *e,
             _ => Ty::Error,
         };
-        let out = match kind {
-            Dot | Length => elem,
-            Len => Ty::Prim(Prim::U32),
-            Insert => {
+        let out = match intrinsic {
+            Some(Dot | Length | Hmin | Hmax | Hsum) => elem,
+            Some(Len) => Ty::Prim(Prim::U32),
+            Some(IsNan) => match self.shallow(&first) {
+                Ty::Vector(_, n) => Ty::Vector(Prim::Bool, n),
+                _ => Ty::Prim(Prim::Bool),
+            },
+            _ if kind == Builtin::Insert => {
                 let (x, xs) = args[1].clone();
                 self.expect(&x, &elem, xs, "the set's element type");
                 Ty::unit()
             }
-            WithAxis => {
+            Some(WithAxis) => {
                 let (x, xs) = args[2].clone();
                 self.expect(&x, &elem, xs, "the vector's element type");
                 first
             }
-            QuantLo | QuantHi | SgCodeUp | SgCodeDown => match self.shallow(&first) {
+            Some(QuantLo | QuantHi | SgCodeUp | SgCodeDown) => match self.shallow(&first) {
                 Ty::Vector(_, n) => Ty::Vector(Prim::U32, n),
                 _ => Ty::Error,
             },

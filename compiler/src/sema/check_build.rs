@@ -633,6 +633,22 @@ impl<'a, 'm> VariantCheck<'a, 'm> {
                 self.expr(rhs, st);
             }
             ExprKind::Cast { expr, .. } | ExprKind::BitCast { expr, .. } => self.expr(expr, st),
+            ExprKind::If {
+                branches,
+                otherwise,
+            } => {
+                // As an `if` statement: the conditions in order, the branches joined.
+                let mut out = None;
+                let mut cur = st.clone();
+                for (c, b) in branches {
+                    self.expr(c, &mut cur);
+                    out = join(out, self.stmt(b, Some(cur.clone())));
+                }
+                out = join(out, self.stmt(otherwise, Some(cur)));
+                if let Some(o) = out {
+                    *st = o;
+                }
+            }
         }
     }
 

@@ -172,6 +172,8 @@ pub enum SemaError {
         ty: String,
         span: Span,
     },
+    /// E0240
+    IfWithoutValue { span: Span },
     /// E0353
     DiscriminantNotInt { ty: String, span: Span },
     /// E0354
@@ -285,6 +287,7 @@ impl SemaError {
             RecursiveRecord { .. } => "E0237",
             IndexRange { .. } => "E0238",
             BitRange { .. } => "E0239",
+            IfWithoutValue { .. } => "E0240",
             DiscriminantNotInt { .. } => "E0353",
             GroupSizeNotInt { .. } => "E0354",
             GroupByNotIndex { .. } => "E0355",
@@ -366,12 +369,12 @@ impl SemaError {
                 .with_primary(*span, "this body can fall off its end")
                 .with_note("end every path with `return e` or a tail expression"),
             AssignImmutable { name, span } => e(format!("cannot assign to `{name}`"))
-                .with_primary(*span, "not a `mut` parameter")
-                .with_note("only `mut` parameters (and their components) can be assigned"),
+                .with_primary(*span, "not a `mut` parameter or a `let mut` local")
+                .with_note("only `mut` parameters, `let mut` locals and their components can be assigned"),
             BadAssignTarget { span } => e("invalid assignment target".to_string())
                 .with_primary(*span, "cannot assign to this expression")
                 .with_note("assign to a `mut` parameter, a component of one, or (in a build) `this[a:b]`"),
-            MutArgNotPlace { param, span } => e(format!("argument for `mut` parameter `{param}` must be a `mut` parameter"))
+            MutArgNotPlace { param, span } => e(format!("argument for `mut` parameter `{param}` must be a `mut` parameter or a `let mut` local"))
                 .with_primary(*span, "not passable by reference"),
             TupleIndexNotLiteral { span } => e("a tuple index must be an integer literal".to_string())
                 .with_primary(*span, "not a literal"),
@@ -409,6 +412,9 @@ impl SemaError {
             BitRange { lo, hi, ty, span } => e(format!("bit range [{lo}:{hi}] does not fit `{ty}`"))
                 .with_primary(*span, "bits outside the value")
                 .with_note(format!("`e[a:b]` takes bits a..b-1 of an integer: it needs a < b <= {}", ty_bits(ty))),
+            IfWithoutValue { span } => e("a branch of an `if` expression ends without a value".to_string())
+                .with_primary(*span, "no value here")
+                .with_note("an `if` used as a value needs a value at the end of every branch (or a `return`)"),
             DiscriminantNotInt { ty, span } => e(format!("split discriminant has type `{ty}`, not an integer"))
                 .with_primary(*span, "expected an integer"),
             GroupSizeNotInt { ty, span } => e(format!("group size has type `{ty}`, not an integer"))

@@ -30,6 +30,10 @@ impl Checker<'_> {
             }
             ExprKind::Float(_) => self.fresh(VarKind::Float),
             ExprKind::Bool(_) => Ty::bool(),
+            ExprKind::If {
+                branches,
+                otherwise,
+            } => self.infer_if(branches, otherwise),
             ExprKind::Call { callee, args } => self.infer_call(e, callee, args),
             ExprKind::Field { base, name } => {
                 let b = self.infer_expr(base);

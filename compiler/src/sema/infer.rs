@@ -165,6 +165,7 @@ impl<'a> Checker<'a> {
             name: name.name.clone(),
             ty,
             kind,
+            mutable: false,
             span: name.span,
         });
         if name.name != "_" {
@@ -311,7 +312,12 @@ impl<'a> Checker<'a> {
                 self.check_return(e.as_ref(), s.span);
                 Tail::Diverges
             }
-            StmtKind::Let { name, ty, value } => {
+            StmtKind::Let {
+                name,
+                ty,
+                value,
+                mutable,
+            } => {
                 let declared = ty.as_ref().map(|t| self.lower_type_local(t));
                 let v = self.infer_expr(value);
                 let t = match declared {
@@ -322,6 +328,7 @@ impl<'a> Checker<'a> {
                     None => v,
                 };
                 let b = self.new_binding(name, t, BindingKind::Let);
+                self.out.bindings[b.0 as usize].mutable = *mutable;
                 self.out.binders.insert(s.id, b);
                 Tail::NoValue
             }
@@ -367,6 +374,32 @@ impl<'a> Checker<'a> {
                 self.check_build_stmt(s, field, value.as_ref());
                 Tail::NoValue
             }
+        }
+    }
+
+    /// `if c { s } elif c { s } else { s }` as an expression: each branch's tail is a value of
+    /// one type (or leaves the function); a branch without one is E0240.
+    pub(super) fn infer_if(&mut self, branches: &[(Expr, Stmt)], otherwise: &Stmt) -> Ty {
+        let mut tails = Vec::new();
+        for (cond, body) in branches {
+            let c = self.infer_expr(cond);
+            self.expect(&c, &Ty::bool(), cond.span, "an `if` condition");
+            self.push_scope();
+            tails.push((self.check_stmt(body, true), tail_span(body)));
+            self.pop_scope();
+        }
+        self.push_scope();
+        tails.push((self.check_stmt(otherwise, true), tail_span(otherwise)));
+        self.pop_scope();
+        if let Some((_, span)) = tails.iter().find(|t| t.0 == Tail::NoValue) {
+            self.error(SemaError::IfWithoutValue { span: *span });
+            return Ty::Error;
+        }
+        match self.join_tails(tails, true) {
+            Tail::Value(t) => t,
+            // Every branch leaves the function: the value is never made; its type is whatever
+            // the context asks for.
+            _ => self.fresh(VarKind::General),
         }
     }
 
@@ -455,6 +488,7 @@ impl<'a> Checker<'a> {
                 (Some(Binding::Param(i)), Ctx::Func(f)) => {
                     f.params.get(i as usize).is_some_and(|p| p.mutable)
                 }
+                (Some(Binding::Local(b)), _) => self.out.bindings[b.0 as usize].mutable,
                 _ => false,
             },
             ExprKind::Field { base, .. } | ExprKind::Index { base, .. } => self.is_assignable(base),

@@ -30,7 +30,8 @@ pub(super) enum Callee {
 pub(super) struct Arg {
     pub ty: Ty,
     pub span: Span,
-    /// The argument is a `mut` parameter of the enclosing function (can be passed by reference).
+    /// The argument is a `mut` parameter of the enclosing function or a `let mut` local (can be
+    /// passed by reference).
     pub mut_place: bool,
 }
 
@@ -184,6 +185,7 @@ impl Checker<'_> {
             (Some(Binding::Param(i)), Ctx::Func(f)) => {
                 f.params.get(i as usize).is_some_and(|p| p.mutable)
             }
+            (Some(Binding::Local(b)), _) => self.out.bindings[b.0 as usize].mutable,
             _ => false,
         }
     }

@@ -29,6 +29,7 @@ use super::types::{AdtId, AdtTable, Prim, Ty};
 use crate::syntax::ast::NodeId;
 use rustc_hash::FxHashMap;
 use scion_ir::diag::Span;
+pub use scion_ir::tree::Intrinsic;
 
 /// Identifies a function in [`TypedProgram::funcs`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -50,69 +51,17 @@ pub struct LayoutId(pub u32);
 pub struct MemberId(pub u32);
 
 /// A builtin function (table in `docs/language.md`, "Builtins").
+///
+/// Most builtins are the `tree` level's own ([`Intrinsic`]: one list of names, type rules,
+/// interpreter semantics and lowerings); the front end adds the few that are sugar over them or
+/// belong to the build language.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Builtin {
-    /// `min(a, b)`: ints, floats, vectors elementwise; floats return the non-NaN operand.
-    Min,
-    /// `max(a, b)`: as `min`.
-    Max,
+    /// A builtin of the `tree` level, called under its own name (`min`, `sqrt`, `popcount`, ...;
+    /// not `set_insert`, which the language spells `insert`).
+    Intrinsic(Intrinsic),
     /// `clamp(x, lo, hi)` = `min(max(x, lo), hi)`.
     Clamp,
-    /// `abs(x)`: signed ints, floats, vectors.
-    Abs,
-    /// `sqrt(x)`: floats and float vectors.
-    Sqrt,
-    /// `floor(x)`
-    Floor,
-    /// `ceil(x)`
-    Ceil,
-    /// `fma(a, b, c)` = `a * b + c` rounded once.
-    Fma,
-    /// `dot(u, v)`: float vectors, yields the element type.
-    Dot,
-    /// `cross(u, v)`: 3-lane float vectors.
-    Cross,
-    /// `length(v)`: Euclidean length of a float vector.
-    Length,
-    /// `normalize(v)` = `v / length(v)`.
-    Normalize,
-    /// `fadd_rd(a, b)`: `a + b` rounded toward -inf.
-    FaddRd,
-    /// `fadd_ru(a, b)`: `a + b` rounded toward +inf.
-    FaddRu,
-    /// `fsub_rd(a, b)`
-    FsubRd,
-    /// `fsub_ru(a, b)`
-    FsubRu,
-    /// `fmul_rd(a, b)`
-    FmulRd,
-    /// `fmul_ru(a, b)`
-    FmulRu,
-    /// `with_axis(v, k, x)`: vector `v` with lane `k` replaced by `x`.
-    WithAxis,
-    /// `len(a)`: element count of an array or slice, as `u32`.
-    Len,
-    /// `frame_origin(lo)`: the origin of a quantization frame whose low corner is `lo` (rounded
-    /// down to 0 or a normal float).
-    FrameOrigin,
-    /// `frame_step(origin, hi, m)`: the smallest grid step with which `m` steps from `origin`
-    /// reach `hi`.
-    FrameStep,
-    /// `quant_lo(v, origin, step, m)`: the largest code in `[0, m]` whose decoded plane is at or
-    /// below `v`, lane-wise (`u32` lanes).
-    QuantLo,
-    /// `quant_hi(v, origin, step, m)`: the smallest code in `[0, m]` whose decoded plane is at
-    /// or above `v`, lane-wise (`u32` lanes).
-    QuantHi,
-    /// `sg_bins(wlo, whi, m)`: the bin width of a snapped-grid frame with `m` bins (Howard's
-    /// `sg-eq`), lane-wise.
-    SgBins,
-    /// `sg_code_up(v, wlo, whi, m)`: the bins from `wlo` up to low plane `v`, conservative for
-    /// the decoder `RD(wlo + RD(q * bins))` (`u32` lanes).
-    SgCodeUp,
-    /// `sg_code_down(v, wlo, whi, m)`: the bins from `whi` down to high plane `v`, conservative
-    /// for the decoder `RU(whi - RD(q * bins))` (`u32` lanes).
-    SgCodeDown,
     /// `insert(s, x)`: adds `x` to the set `s`, a `mut` parameter (passed by reference).
     Insert,
     /// Build language: `append(x, n)` appends `n` elements of logical array `x` to the array the
@@ -122,95 +71,35 @@ pub enum Builtin {
 
 impl Builtin {
     /// Every builtin of the traversal and layout languages (not `append`).
-    pub const TRAVERSAL: [Builtin; 28] = [
-        Builtin::Min,
-        Builtin::Max,
-        Builtin::Clamp,
-        Builtin::Abs,
-        Builtin::Sqrt,
-        Builtin::Floor,
-        Builtin::Ceil,
-        Builtin::Fma,
-        Builtin::Dot,
-        Builtin::Cross,
-        Builtin::Length,
-        Builtin::Normalize,
-        Builtin::FaddRd,
-        Builtin::FaddRu,
-        Builtin::FsubRd,
-        Builtin::FsubRu,
-        Builtin::FmulRd,
-        Builtin::FmulRu,
-        Builtin::WithAxis,
-        Builtin::Len,
-        Builtin::Insert,
-        Builtin::FrameOrigin,
-        Builtin::FrameStep,
-        Builtin::QuantLo,
-        Builtin::QuantHi,
-        Builtin::SgBins,
-        Builtin::SgCodeUp,
-        Builtin::SgCodeDown,
-    ];
+    pub fn traversal() -> impl Iterator<Item = Builtin> {
+        Intrinsic::ALL
+            .iter()
+            .filter(|&&i| i != Intrinsic::SetInsert)
+            .map(|&i| Builtin::Intrinsic(i))
+            .chain([Builtin::Clamp, Builtin::Insert])
+    }
 
     /// The name as written.
     pub fn name(self) -> &'static str {
         match self {
-            Builtin::Min => "min",
-            Builtin::Max => "max",
+            Builtin::Intrinsic(i) => i.name(),
             Builtin::Clamp => "clamp",
-            Builtin::Abs => "abs",
-            Builtin::Sqrt => "sqrt",
-            Builtin::Floor => "floor",
-            Builtin::Ceil => "ceil",
-            Builtin::Fma => "fma",
-            Builtin::Dot => "dot",
-            Builtin::Cross => "cross",
-            Builtin::Length => "length",
-            Builtin::Normalize => "normalize",
-            Builtin::FaddRd => "fadd_rd",
-            Builtin::FaddRu => "fadd_ru",
-            Builtin::FsubRd => "fsub_rd",
-            Builtin::FsubRu => "fsub_ru",
-            Builtin::FmulRd => "fmul_rd",
-            Builtin::FmulRu => "fmul_ru",
-            Builtin::WithAxis => "with_axis",
-            Builtin::Len => "len",
             Builtin::Insert => "insert",
-            Builtin::FrameOrigin => "frame_origin",
-            Builtin::FrameStep => "frame_step",
-            Builtin::QuantLo => "quant_lo",
-            Builtin::QuantHi => "quant_hi",
-            Builtin::SgBins => "sg_bins",
-            Builtin::SgCodeUp => "sg_code_up",
-            Builtin::SgCodeDown => "sg_code_down",
             Builtin::Append => "append",
         }
     }
 
     /// The traversal builtin named `name`.
     pub fn from_name(name: &str) -> Option<Builtin> {
-        Builtin::TRAVERSAL.into_iter().find(|b| b.name() == name)
+        Builtin::traversal().find(|b| b.name() == name)
     }
 
     /// Number of arguments.
     pub fn arity(self) -> usize {
         match self {
-            Builtin::Abs
-            | Builtin::Sqrt
-            | Builtin::Floor
-            | Builtin::Ceil
-            | Builtin::Length
-            | Builtin::Normalize
-            | Builtin::Len
-            | Builtin::FrameOrigin => 1,
-            Builtin::Clamp
-            | Builtin::Fma
-            | Builtin::WithAxis
-            | Builtin::FrameStep
-            | Builtin::SgBins => 3,
-            Builtin::QuantLo | Builtin::QuantHi | Builtin::SgCodeUp | Builtin::SgCodeDown => 4,
-            _ => 2,
+            Builtin::Intrinsic(i) => i.arity(),
+            Builtin::Clamp => 3,
+            Builtin::Insert | Builtin::Append => 2,
         }
     }
 }
@@ -303,6 +192,8 @@ pub struct BindingInfo {
     pub ty: Ty,
     /// Introduced by.
     pub kind: BindingKind,
+    /// A `let mut` local: assignable, and passable to a `mut` parameter.
+    pub mutable: bool,
     /// Where the name was written.
     pub span: Span,
 }

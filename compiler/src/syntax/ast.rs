@@ -228,7 +228,8 @@ pub enum StmtKind {
         /// Arms, tested in order.
         arms: Vec<MatchArm>,
     },
-    /// `let x: T = e` (the type may be omitted and is then inferred).
+    /// `let x: T = e` (the type may be omitted and is then inferred), or `let mut x: T = e`, a
+    /// local that later statements may assign.
     Let {
         /// Bound name.
         name: Ident,
@@ -236,6 +237,8 @@ pub enum StmtKind {
         ty: Option<TypeExpr>,
         /// Initial value.
         value: Expr,
+        /// Written `let mut`.
+        mutable: bool,
     },
     /// `if e { s } elif e { s } ... else { s }`
     If {
@@ -399,6 +402,15 @@ pub enum ExprKind {
     Parent(Ident),
     /// Build language: `build x` in expression position: builds child `x`, yields its reference.
     Build(Ident),
+    /// `if c { s } elif c { s } else { s }` as an expression: the taken branch's value (the
+    /// tail of its block, as in a function body). The `else` is required, and every branch
+    /// must end in a value or leave the function.
+    If {
+        /// Conditions with their branches, in order (the `if` first, then each `elif`).
+        branches: Vec<(Expr, Stmt)>,
+        /// The `else` branch.
+        otherwise: Box<Stmt>,
+    },
 }
 
 /// Prefix operators.

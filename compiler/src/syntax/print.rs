@@ -63,15 +63,17 @@ fn expr_prec(e: &Expr) -> u8 {
         | ExprKind::Tuple(_)
         | ExprKind::This
         | ExprKind::Parent(_)
-        | ExprKind::Build(_) => PREC_ATOM,
+        | ExprKind::Build(_)
+        | ExprKind::If { .. } => PREC_ATOM,
     }
 }
 
-/// True when `e` prints starting with the keyword `build` (`build x + 1`, `build x.y`): as a
-/// statement that would read as a `build x` statement, so it is parenthesized there.
+/// True when `e` prints starting with the keyword `build` (`build x + 1`, `build x.y`) or `if`
+/// (`if c { a } else { b } + 1`): as a statement that would read as a `build x` or an `if`
+/// statement, so it is parenthesized there.
 fn starts_with_build(e: &Expr) -> bool {
     match &e.kind {
-        ExprKind::Build(_) => true,
+        ExprKind::Build(_) | ExprKind::If { .. } => true,
         ExprKind::Binary { lhs: inner, .. }
         | ExprKind::Field { base: inner, .. }
         | ExprKind::Index { base: inner, .. }
@@ -297,8 +299,13 @@ impl Printer {
                 self.newline();
                 self.w("}");
             }
-            StmtKind::Let { name, ty, value } => {
-                self.w("let ");
+            StmtKind::Let {
+                name,
+                ty,
+                value,
+                mutable,
+            } => {
+                self.w(if *mutable { "let mut " } else { "let " });
                 self.w(&name.name);
                 if let Some(t) = ty {
                     self.w(": ");
@@ -310,18 +317,7 @@ impl Printer {
             StmtKind::If {
                 branches,
                 otherwise,
-            } => {
-                for (i, (cond, body)) in branches.iter().enumerate() {
-                    self.w(if i == 0 { "if " } else { " elif " });
-                    self.expr(cond, 0, false);
-                    self.w(" ");
-                    self.block_like(body);
-                }
-                if let Some(o) = otherwise {
-                    self.w(" else ");
-                    self.block_like(o);
-                }
-            }
+            } => self.if_chain(branches, otherwise.as_deref()),
             StmtKind::Foreach { var, iter, body } => {
                 self.w("foreach ");
                 self.w(&var.name);
@@ -341,7 +337,21 @@ impl Printer {
         }
     }
 
-    /// An expression that starts a statement: parenthesized when it starts with `build`.
+    /// `if c { } elif c { } else { }`, as a statement or an expression.
+    fn if_chain(&mut self, branches: &[(Expr, Stmt)], otherwise: Option<&Stmt>) {
+        for (i, (cond, body)) in branches.iter().enumerate() {
+            self.w(if i == 0 { "if " } else { " elif " });
+            self.expr(cond, 0, false);
+            self.w(" ");
+            self.block_like(body);
+        }
+        if let Some(o) = otherwise {
+            self.w(" else ");
+            self.block_like(o);
+        }
+    }
+
+    /// An expression that starts a statement: parenthesized when it starts with `build` or `if`.
     fn stmt_head_expr(&mut self, e: &Expr, no_bar: bool) {
         if starts_with_build(e) {
             self.w("(");
@@ -408,6 +418,10 @@ impl Printer {
                 }
             }
             ExprKind::Bool(b) => self.w(if *b { "true" } else { "false" }),
+            ExprKind::If {
+                branches,
+                otherwise,
+            } => self.if_chain(branches, Some(otherwise)),
             ExprKind::Call { callee, args } => {
                 self.w(&callee.name);
                 self.w("(");

@@ -1,12 +1,11 @@
 //! The builtins of `tree.intrinsic`, as the interpreter computes them.
 //!
 //! Floats compute in their own precision. `min`/`max` on floats are IEEE `minNum`/`maxNum`
-//! (a NaN operand yields the other one, as the prelude's slab test needs); `round` rounds half
-//! away from zero; `rsqrt` is `1 / sqrt`. `dot` sums the lane products left to right without
+//! (a NaN operand yields the other one, as the prelude's slab test needs); `rsqrt` is
+//! `1 / sqrt`. `dot` sums the lane products left to right without
 //! fusing (`((a0*b0 + a1*b1) + a2*b2)`), `length` is `sqrt(dot(v, v))`, `normalize` divides
 //! each lane by the length, `cross` is the usual 3-lane formula, `hmin`/`hmax`/`hsum` fold the
-//! lanes left to right. `sqrt` and `fma` are correctly rounded; `exp`, `log`, `sin` and `cos`
-//! come from the host's math library. The quantization builtins (`frame_origin`, `frame_step`,
+//! lanes left to right. `sqrt` and `fma` are correctly rounded. The quantization builtins (`frame_origin`, `frame_step`,
 //! `quant_lo`, `quant_hi`) are [`crate::tree::quant`]'s reference functions, lane by lane; the
 //! directed-rounding ones (`fadd_rd` .. `fmul_ru`, `f32` lanes) [`crate::tree::directed`]'s,
 //! the snapped-grid ones (`sg_bins`, `sg_code_up`, `sg_code_down`) [`crate::tree::snapped`]'s.
@@ -16,16 +15,22 @@ use super::Val;
 use crate::entity::TypeId;
 use crate::module::Module;
 use crate::tree::directed;
+use crate::tree::intrinsic::Intrinsic;
 use crate::tree::quant;
-use crate::tree::scalar::Scalar;
+use crate::tree::scalar::{canon32, canon64, Scalar};
 use crate::tree::snapped;
 use crate::types::{IntTy, Type};
 use std::rc::Rc;
 
 type R = Result<Val, String>;
 
+/// `f32op`/`f64op` lane-wise, as IEEE 754 operations on one operand: a NaN operand gives
+/// itself, quieted (the payload kept, as `sqrtss`/`roundss` and AArch64 do; Rust's software
+/// `trunc` would keep a signaling NaN signaling).
 fn float1(a: &Val, f32op: fn(f32) -> f32, f64op: fn(f64) -> f64) -> R {
     lanewise1(a, &|x| match x {
+        Scalar::F32(v) if v.is_nan() => Ok(Scalar::F32(f32::from_bits(v.to_bits() | 1 << 22))),
+        Scalar::F64(v) if v.is_nan() => Ok(Scalar::F64(f64::from_bits(v.to_bits() | 1 << 51))),
         Scalar::F32(v) => Ok(Scalar::F32(f32op(v))),
         Scalar::F64(v) => Ok(Scalar::F64(f64op(v))),
         _ => Err("expects floats".into()),
@@ -112,8 +117,10 @@ fn min_max_num<F: PartialOrd + Copy>(p: F, q: F, max: bool) -> F {
     }
 }
 
-/// Evaluates builtin `name` on `args`, giving a value of type `result`.
-pub fn eval(m: &Module, name: &str, args: &[Val], result: TypeId) -> R {
+/// Evaluates `intrinsic` on `args`, giving a value of type `result`.
+pub fn eval(m: &Module, intrinsic: Intrinsic, args: &[Val], result: TypeId) -> R {
+    use Intrinsic as I;
+    let name = intrinsic.name();
     let one = || {
         args.first()
             .ok_or_else(|| format!("`{name}` needs an operand"))
@@ -122,8 +129,8 @@ pub fn eval(m: &Module, name: &str, args: &[Val], result: TypeId) -> R {
         [a, b, ..] => Ok((a, b)),
         _ => Err(format!("`{name}` needs two operands")),
     };
-    match name {
-        "abs" => lanewise1(one()?, &|x| {
+    match intrinsic {
+        I::Abs => lanewise1(one()?, &|x| {
             Ok(match x {
                 Scalar::Int(v, t) => Scalar::Int(t.wrap(v.abs()), t),
                 Scalar::F32(v) => Scalar::F32(v.abs()),
@@ -131,25 +138,26 @@ pub fn eval(m: &Module, name: &str, args: &[Val], result: TypeId) -> R {
                 Scalar::Bool(_) => return Err("expects numbers".into()),
             })
         }),
-        "min" | "max" => {
+        I::Min | I::Max => {
             let (a, b) = two()?;
-            min_max(a, b, name == "max")
+            min_max(a, b, intrinsic == I::Max)
         }
-        "sqrt" => float1(one()?, f32::sqrt, f64::sqrt),
-        "rsqrt" => float1(one()?, |x| 1.0 / x.sqrt(), |x| 1.0 / x.sqrt()),
-        "floor" => float1(one()?, f32::floor, f64::floor),
-        "ceil" => float1(one()?, f32::ceil, f64::ceil),
-        "round" => float1(one()?, f32::round, f64::round),
-        "trunc" => float1(one()?, f32::trunc, f64::trunc),
-        "exp" => float1(one()?, f32::exp, f64::exp),
-        "log" => float1(one()?, f32::ln, f64::ln),
-        "sin" => float1(one()?, f32::sin, f64::sin),
-        "cos" => float1(one()?, f32::cos, f64::cos),
-        "fma" => match args {
+        I::Sqrt => float1(one()?, f32::sqrt, f64::sqrt),
+        // `sqrt` passes a NaN's payload on (as the hardware's does); the division makes the
+        // canonical NaN, as every division does.
+        I::Rsqrt => lanewise1(one()?, &|x| match x {
+            Scalar::F32(v) => Ok(canon32(1.0 / v.sqrt())),
+            Scalar::F64(v) => Ok(canon64(1.0 / v.sqrt())),
+            _ => Err("expects floats".into()),
+        }),
+        I::Floor => float1(one()?, f32::floor, f64::floor),
+        I::Ceil => float1(one()?, f32::ceil, f64::ceil),
+        I::Trunc => float1(one()?, f32::trunc, f64::trunc),
+        I::Fma => match args {
             [a, b, c] => fma3(a, b, c),
             _ => Err("`fma` needs three operands".into()),
         },
-        "fadd_rd" | "fadd_ru" | "fsub_rd" | "fsub_ru" | "fmul_rd" | "fmul_ru" => {
+        I::FaddRd | I::FaddRu | I::FsubRd | I::FsubRu | I::FmulRd | I::FmulRu => {
             let (a, b) = two()?;
             let dir = if name.ends_with("_ru") {
                 directed::Round::Up
@@ -166,7 +174,7 @@ pub fn eval(m: &Module, name: &str, args: &[Val], result: TypeId) -> R {
                 _ => Err("directed rounding takes f32 lanes".into()),
             })
         }
-        "with_axis" => match args {
+        I::WithAxis => match args {
             // A lane index outside the vector changes nothing (as the lowering's selects).
             [Val::Vector(v), Val::Int(k, _), x] => {
                 let mut out = v.clone();
@@ -177,14 +185,14 @@ pub fn eval(m: &Module, name: &str, args: &[Val], result: TypeId) -> R {
             }
             _ => Err("`with_axis` takes a vector, an integer lane index and an element".into()),
         },
-        "frame_origin" => lanewise1(one()?, &|x| match x {
+        I::FrameOrigin => lanewise1(one()?, &|x| match x {
             Scalar::F32(v) => Ok(Scalar::F32(quant::frame_origin(v))),
             _ => Err("expects f32 lanes".into()),
         }),
-        "frame_step" | "sg_bins" => match args {
+        I::FrameStep | I::SgBins => match args {
             [o, hi, m] => {
                 let m = quant_bound(m)?;
-                let f = if name == "frame_step" {
+                let f = if intrinsic == I::FrameStep {
                     quant::frame_step
                 } else {
                     snapped::sg_bins
@@ -196,13 +204,13 @@ pub fn eval(m: &Module, name: &str, args: &[Val], result: TypeId) -> R {
             }
             _ => Err(format!("`{name}` needs three operands")),
         },
-        "quant_lo" | "quant_hi" | "sg_code_up" | "sg_code_down" => match args {
+        I::QuantLo | I::QuantHi | I::SgCodeUp | I::SgCodeDown => match args {
             [v, o, s, m] => {
                 let m = quant_bound(m)?;
-                let f = match name {
-                    "quant_lo" => quant::quant_lo,
-                    "quant_hi" => quant::quant_hi,
-                    "sg_code_up" => snapped::sg_code_up,
+                let f = match intrinsic {
+                    I::QuantLo => quant::quant_lo,
+                    I::QuantHi => quant::quant_hi,
+                    I::SgCodeUp => snapped::sg_code_up,
                     _ => snapped::sg_code_down,
                 };
                 let (v, o, s) = (lanes(v)?, lanes(o)?, lanes(s)?);
@@ -223,33 +231,33 @@ pub fn eval(m: &Module, name: &str, args: &[Val], result: TypeId) -> R {
             }
             _ => Err(format!("`{name}` needs four operands")),
         },
-        "popcount" | "clz" | "ctz" => lanewise1(one()?, &|x| match x {
+        I::Popcount | I::Clz | I::Ctz => lanewise1(one()?, &|x| match x {
             Scalar::Int(v, t) => {
                 let w = t.bits();
                 let raw = (v as u128) & ((1u128 << w) - 1);
-                let n = match name {
-                    "popcount" => raw.count_ones(),
-                    "clz" => raw.leading_zeros() - (128 - w),
+                let n = match intrinsic {
+                    I::Popcount => raw.count_ones(),
+                    I::Clz => raw.leading_zeros() - (128 - w),
                     _ => raw.trailing_zeros().min(w),
                 };
                 Ok(Scalar::Int(n as i128, t))
             }
             _ => Err("expects integers".into()),
         }),
-        "isnan" => lanewise1(one()?, &|x| match x {
+        I::IsNan => lanewise1(one()?, &|x| match x {
             Scalar::F32(v) => Ok(Scalar::Bool(v.is_nan())),
             Scalar::F64(v) => Ok(Scalar::Bool(v.is_nan())),
             _ => Err("expects floats".into()),
         }),
-        "dot" => {
+        I::Dot => {
             let (a, b) = two()?;
             dot(a, b)
         }
-        "length" => {
+        I::Length => {
             let a = one()?;
             float1(&dot(a, a)?, f32::sqrt, f64::sqrt)
         }
-        "normalize" => {
+        I::Normalize => {
             let a = one()?;
             let len = float1(&dot(a, a)?, f32::sqrt, f64::sqrt)?;
             let l = lanes(a)?;
@@ -264,7 +272,7 @@ pub fn eval(m: &Module, name: &str, args: &[Val], result: TypeId) -> R {
                 .collect();
             Ok(Val::Vector(out?))
         }
-        "cross" => {
+        I::Cross => {
             let (a, b) = two()?;
             let (x, y) = (lanes(a)?, lanes(b)?);
             if x.len() != 3 || y.len() != 3 {
@@ -273,28 +281,16 @@ pub fn eval(m: &Module, name: &str, args: &[Val], result: TypeId) -> R {
             let c = |i: usize, j: usize| -> R { sub(&mul(&x[i], &y[j])?, &mul(&x[j], &y[i])?) };
             Ok(Val::Vector(vec![c(1, 2)?, c(2, 0)?, c(0, 1)?]))
         }
-        "hmin" => fold_lanes(one()?, &|a, b| min_max(a, b, false)),
-        "hmax" => fold_lanes(one()?, &|a, b| min_max(a, b, true)),
-        "hsum" => fold_lanes(one()?, &add),
-        "len" => match (one()?, scalar_type(m, result)) {
+        I::Hmin => fold_lanes(one()?, &|a, b| min_max(a, b, false)),
+        I::Hmax => fold_lanes(one()?, &|a, b| min_max(a, b, true)),
+        I::Hsum => fold_lanes(one()?, &add),
+        I::Len => match (one()?, scalar_type(m, result)) {
             (Val::Array(a) | Val::Set(a), Type::Int(t)) => {
                 Ok(Val::Int(t.wrap(a.len() as i128), *t))
             }
             _ => Err("`len` takes an array or a set and gives an integer".into()),
         },
-        "some" => Ok(Val::Option(Some(Box::new(one()?.clone())))),
-        "none" => Ok(Val::Option(None)),
-        "is_some" => match one()? {
-            Val::Option(o) => Ok(Val::Bool(o.is_some())),
-            _ => Err("expects an option".into()),
-        },
-        "unwrap" => match one()? {
-            Val::Option(Some(v)) => Ok((**v).clone()),
-            Val::Option(None) => Err("`unwrap` of `none`".into()),
-            _ => Err("expects an option".into()),
-        },
-        "set_empty" => Ok(Val::Set(Rc::new(Vec::new()))),
-        "set_insert" => match two()? {
+        I::SetInsert => match two()? {
             (Val::Set(s), v) => {
                 let mut items = (**s).clone();
                 if let Err(pos) = items.binary_search_by(|x| x.total_cmp(v)) {
@@ -304,11 +300,6 @@ pub fn eval(m: &Module, name: &str, args: &[Val], result: TypeId) -> R {
             }
             _ => Err("expects a set".into()),
         },
-        "set_contains" => match two()? {
-            (Val::Set(s), v) => Ok(Val::Bool(s.binary_search_by(|x| x.total_cmp(v)).is_ok())),
-            _ => Err("expects a set".into()),
-        },
-        _ => Err(format!("unknown intrinsic `{name}`")),
     }
 }
 

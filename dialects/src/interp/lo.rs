@@ -265,8 +265,24 @@ impl<'m> LoInterp<'m> {
             | Op::Fma
             | Op::Popcount
             | Op::Clz
-            | Op::Ctz => intrinsics::eval(m, kind.mnemonic(), vals, res_ty()?)
-                .map_err(|e| err(Some(op), e))?,
+            | Op::Ctz => {
+                use crate::tree::Intrinsic as I;
+                // The same lane semantics as the `tree` builtin of the same name.
+                let intrinsic = match kind {
+                    Op::Min => I::Min,
+                    Op::Max => I::Max,
+                    Op::Abs => I::Abs,
+                    Op::Sqrt => I::Sqrt,
+                    Op::Floor => I::Floor,
+                    Op::Ceil => I::Ceil,
+                    Op::Trunc => I::Trunc,
+                    Op::Fma => I::Fma,
+                    Op::Popcount => I::Popcount,
+                    Op::Clz => I::Clz,
+                    _ => I::Ctz,
+                };
+                intrinsics::eval(m, intrinsic, vals, res_ty()?).map_err(|e| err(Some(op), e))?
+            }
             Op::NextUp | Op::NextDown => {
                 let up = kind == Op::NextUp;
                 match sc(0)? {

@@ -420,9 +420,9 @@ impl Interp<'_> {
                 vec![Val::Int(rt.wrap(field as i128), rt)]
             }
             Op::Intrinsic => {
-                let name = o.str_attr("name").ok_or_else(|| bad("no name"))?;
+                let intrinsic = crate::tree::Intrinsic::of(o).map_err(|e| bad(&e))?;
                 let ty = self.result_type(op)?;
-                vec![super::intrinsics::eval(m, name, &args, ty).map_err(|e| bad(&e))?]
+                vec![super::intrinsics::eval(m, intrinsic, &args, ty).map_err(|e| bad(&e))?]
             }
             Op::Var => {
                 let [v] = &args[..] else {

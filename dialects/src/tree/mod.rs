@@ -12,12 +12,14 @@
 //! [`ops`] lists the op kinds, [`verify`] their rules; this module adds builder shorthands.
 
 pub mod directed;
+pub mod intrinsic;
 pub mod ops;
 pub mod quant;
 pub mod scalar;
 pub mod snapped;
 pub mod verify;
 
+pub use intrinsic::Intrinsic;
 pub use ops::{CmpPred, Op};
 
 use crate::attr::Attr;
@@ -139,11 +141,16 @@ impl Builder<'_> {
     }
 
     /// `tree.intrinsic {name}` with one result.
-    pub fn intrinsic(&mut self, name: &str, args: &[ValueId], result_type: TypeId) -> ValueId {
+    pub fn intrinsic(
+        &mut self,
+        intrinsic: Intrinsic,
+        args: &[ValueId],
+        result_type: TypeId,
+    ) -> ValueId {
         let op = self.insert(
             OpSpec::new(Op::Intrinsic)
                 .operands(args)
-                .attr("name", Attr::str(name))
+                .attr("name", Attr::str(intrinsic.name()))
                 .results(&[result_type]),
         );
         self.result(op, 0)

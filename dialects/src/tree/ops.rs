@@ -85,7 +85,7 @@ pub enum Op {
     /// `tree.call {callee = @f}` `(args...) -> (results...)` of the function `@f`.
     Call,
     /// `tree.intrinsic {name}` `(args...) -> (T)`: a builtin such as `min`, `sqrt`, `dot`; see
-    /// [`super::verify::intrinsic_signature`] for the list.
+    /// [`super::Intrinsic`] for the list.
     Intrinsic,
     /// `tree.var` `(T) -> !tree.ref<T>`: a fresh mutable cell holding the operand.
     Var,

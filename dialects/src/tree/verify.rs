@@ -373,11 +373,11 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
             })
         }
         Op::Intrinsic => {
-            let name = o.str_attr("name").ok_or("`name` must be a string")?;
+            let intrinsic = super::intrinsic::Intrinsic::of(o)?;
             if rt.len() != 1 {
                 return Err("an intrinsic has one result".into());
             }
-            intrinsic_signature(m, name, &ot, rt[0])
+            intrinsic.check(m, &ot, rt[0])
         }
         Op::Var => {
             counts(&ot, &rt, 1, 1)?;
@@ -613,146 +613,4 @@ fn verify_match(m: &Module, o: &Operation, ot: &[TypeId], rt: &[TypeId]) -> VRes
         }
     }
     Ok(())
-}
-
-/// Checks a call of the builtin `name` on operands of types `args` giving `result`.
-///
-/// Elementwise on a scalar or vector `T`: `abs min max` (numeric), `sqrt rsqrt floor ceil round
-/// trunc exp log sin cos` and `fma` (float), `popcount clz ctz` (integer), `isnan` (float to
-/// `i1` per lane). Vectors: `dot` and `length` (vector to its element), `cross` (3 lanes),
-/// `normalize`, `hmin hmax hsum` (lanes to element). Containers: `len` (array to any integer),
-/// `some none is_some unwrap` on `option<T>`, `set_empty set_insert set_contains` on `set<T>`.
-/// Quantization (`f32` vectors only): `frame_origin`, `frame_step(o, hi, int)`,
-/// `quant_lo`/`quant_hi(v, o, s, int)` giving `u32` lanes; `sg_bins` as `frame_step`,
-/// `sg_code_up`/`sg_code_down` as `quant_lo`.
-pub fn intrinsic_signature(m: &Module, name: &str, args: &[TypeId], result: TypeId) -> VResult {
-    let t = &m.types;
-    let show = |ty: TypeId| t.display(ty).to_string();
-    let is_float = |ty: TypeId| t.as_float(t.scalar_of(ty)).is_some();
-    let is_int = |ty: TypeId| t.as_int(t.scalar_of(ty)).is_some();
-    let float_vec = |ty: TypeId| t.lanes(ty).is_some() && is_float(ty);
-    let f32_vec = |ty: TypeId| {
-        t.lanes(ty).is_some() && matches!(t.get(t.scalar_of(ty)), Type::Float(FloatTy::F32))
-    };
-    let is_f32 = |ty: TypeId| matches!(t.get(t.scalar_of(ty)), Type::Float(FloatTy::F32));
-    let sig = |n: usize, ok: bool| -> VResult {
-        if args.len() != n {
-            return Err(format!("`{name}` takes {n} operands, found {}", args.len()));
-        }
-        require(ok, || {
-            let a: Vec<String> = args.iter().map(|&x| show(x)).collect();
-            format!(
-                "`{name}` does not apply to ({}) -> {}",
-                a.join(", "),
-                show(result)
-            )
-        })
-    };
-    let all_same = |n: usize| args.len() == n && args.iter().all(|&a| a == result);
-    match name {
-        "abs" => sig(1, all_same(1) && is_numeric(m, result)),
-        "min" | "max" => sig(2, all_same(2) && is_numeric(m, result)),
-        "sqrt" | "rsqrt" | "floor" | "ceil" | "round" | "trunc" | "exp" | "log" | "sin" | "cos" => {
-            sig(1, all_same(1) && is_float(result))
-        }
-        "fma" => sig(3, all_same(3) && is_float(result)),
-        "fadd_rd" | "fadd_ru" | "fsub_rd" | "fsub_ru" | "fmul_rd" | "fmul_ru" => {
-            sig(2, all_same(2) && is_f32(result))
-        }
-        "with_axis" => sig(
-            3,
-            args.len() == 3
-                && args[0] == result
-                && t.lanes(result).is_some()
-                && t.as_int(args[1]).is_some()
-                && t.scalar_of(result) == args[2],
-        ),
-        "frame_origin" => sig(1, all_same(1) && f32_vec(result)),
-        "frame_step" | "sg_bins" => sig(
-            3,
-            args.len() == 3
-                && args[0] == result
-                && args[1] == result
-                && f32_vec(result)
-                && t.as_int(args[2]).is_some(),
-        ),
-        "quant_lo" | "quant_hi" | "sg_code_up" | "sg_code_down" => sig(
-            4,
-            args.len() == 4
-                && args[0] == args[1]
-                && args[1] == args[2]
-                && f32_vec(args[0])
-                && t.lanes(result) == t.lanes(args[0])
-                && matches!(
-                    t.get(t.scalar_of(result)),
-                    Type::Int(crate::types::IntTy::U32)
-                )
-                && t.as_int(args[3]).is_some(),
-        ),
-        "popcount" | "clz" | "ctz" => sig(1, all_same(1) && is_int(result)),
-        "isnan" => sig(1, {
-            let a = args.first().copied();
-            a.is_some_and(|a| {
-                is_float(a)
-                    && t.lanes(a) == t.lanes(result)
-                    && matches!(t.get(t.scalar_of(result)), Type::Bool)
-            })
-        }),
-        "dot" => sig(
-            2,
-            args.len() == 2
-                && args[0] == args[1]
-                && float_vec(args[0])
-                && t.scalar_of(args[0]) == result,
-        ),
-        "length" => sig(
-            1,
-            args.len() == 1 && float_vec(args[0]) && t.scalar_of(args[0]) == result,
-        ),
-        "cross" => sig(
-            2,
-            all_same(2) && float_vec(result) && t.lanes(result) == Some(3),
-        ),
-        "normalize" => sig(1, all_same(1) && float_vec(result)),
-        "hmin" | "hmax" | "hsum" => sig(
-            1,
-            args.len() == 1 && t.lanes(args[0]).is_some() && t.scalar_of(args[0]) == result,
-        ),
-        "len" => sig(
-            1,
-            args.len() == 1
-                && matches!(
-                    t.get(args[0]),
-                    Type::Array { .. } | Type::Set(_) | Type::View(_)
-                )
-                && t.as_int(result).is_some(),
-        ),
-        "some" => sig(
-            1,
-            args.len() == 1 && *t.get(result) == Type::Option(args[0]),
-        ),
-        "none" => sig(0, matches!(t.get(result), Type::Option(_))),
-        "is_some" => sig(
-            1,
-            args.len() == 1
-                && matches!(t.get(args[0]), Type::Option(_))
-                && matches!(t.get(result), Type::Bool),
-        ),
-        "unwrap" => sig(
-            1,
-            args.len() == 1 && *t.get(args[0]) == Type::Option(result),
-        ),
-        "set_empty" => sig(0, matches!(t.get(result), Type::Set(_))),
-        "set_insert" => sig(
-            2,
-            args.len() == 2 && args[0] == result && *t.get(result) == Type::Set(args[1]),
-        ),
-        "set_contains" => sig(
-            2,
-            args.len() == 2
-                && *t.get(args[0]) == Type::Set(args[1])
-                && matches!(t.get(result), Type::Bool),
-        ),
-        _ => Err(format!("unknown intrinsic `{name}`")),
-    }
 }

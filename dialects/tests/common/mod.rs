@@ -443,7 +443,7 @@ impl Gen<'_> {
                     );
                     scope.push(b.result(lane, 0));
                     let x = self.value_of(b, scope, self.t.f32t).unwrap();
-                    scope.push(b.intrinsic("min", &[x, x], self.t.f32t));
+                    scope.push(b.intrinsic(scion_ir::tree::Intrinsic::Min, &[x, x], self.t.f32t));
                 }
             }
             _ => {

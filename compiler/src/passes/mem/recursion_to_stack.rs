@@ -153,6 +153,23 @@ fn exits_quietly(m: &Module, mut b: BlockId) -> bool {
     false
 }
 
+/// Whether `v` points into the function's own frame: a `lo.stack_slot` (a `tree.var` cell) or
+/// an offset from one. After the rewrite one frame serves every call, so such a pointer would
+/// alias between the calls it is passed to.
+fn in_frame(m: &Module, mut v: ValueId) -> bool {
+    for _ in 0..64 {
+        let ValueDef::Result(op, _) = m.values[v].def else {
+            return false;
+        };
+        match m.ops[op].kind {
+            OpKind::Lo(L::StackSlot) => return true,
+            OpKind::Lo(L::PtrAdd) => v = m.ops[op].operands[0],
+            _ => return false,
+        }
+    }
+    false
+}
+
 fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), Diagnostic> {
     if !m.funcs[f].results.is_empty() {
         return Err(not_tail(m, calls[0], "the function returns values"));
@@ -191,6 +208,14 @@ fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), D
         for &c in cs {
             for (i, &a) in m.ops[c].operands.iter().enumerate() {
                 if a != params[i] {
+                    if in_frame(m, a) {
+                        return Err(not_tail(
+                            m,
+                            c,
+                            "it passes a cell of the caller's frame (a `let mut` local), which \
+                             one explicit stack for all calls cannot keep per call",
+                        ));
+                    }
                     changed.insert(i);
                 }
             }

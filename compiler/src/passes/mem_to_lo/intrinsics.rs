@@ -7,25 +7,26 @@
 //! `lo.mul_rd`): NVPTX has them per instruction, CPU backends expand them
 //! (`scion_ir::lo::directed`). `isnan` is `x != x`; `rsqrt` is `1 / sqrt`; `length`
 //! is `sqrt(dot(v, v))`; `normalize` divides each lane by the length; `with_axis(v, k, x)`
-//! selects `x` into lane `k` (a `k` outside the lanes changes nothing). Intrinsics without a
-//! scalar form here (transcendentals, `round`, options, sets) are reported, never guessed; the
-//! quantization builtins are [`super::quant`]'s.
+//! selects `x` into lane `k` (a `k` outside the lanes changes nothing). Sets have no scalar
+//! form here and are reported, never guessed; the quantization builtins are [`super::quant`]'s.
 
 use super::{FnLower, R};
 use scion_ir::attr::Attr;
 use scion_ir::entity::{BlockId, TypeId, ValueId};
 use scion_ir::lo::Op as L;
-use scion_ir::tree::CmpPred;
+use scion_ir::tree::{CmpPred, Intrinsic};
 use scion_ir::OpSpec;
 
-/// Lowers intrinsic `name` on operand leaves `ins`, giving leaves of types `tys`.
+/// Lowers `intrinsic` on operand leaves `ins`, giving leaves of types `tys`.
 pub(super) fn lower(
     cx: &mut FnLower<'_>,
     cur: BlockId,
-    name: &str,
+    intrinsic: Intrinsic,
     ins: &[Vec<ValueId>],
     tys: &[TypeId],
 ) -> R<Vec<ValueId>> {
+    use Intrinsic as I;
+    let name = intrinsic.name();
     let arg = |i: usize| -> R<Vec<ValueId>> {
         ins.get(i)
             .cloned()
@@ -56,27 +57,31 @@ pub(super) fn lower(
             })
             .collect())
     };
-    if let Some(quantized) = super::quant::lower(cx, cur, name, ins) {
-        return quantized;
-    }
-    Ok(match name {
-        "abs" => lanewise1(cx, L::Abs)?,
-        "sqrt" => lanewise1(cx, L::Sqrt)?,
-        "floor" => lanewise1(cx, L::Floor)?,
-        "ceil" => lanewise1(cx, L::Ceil)?,
-        "trunc" => lanewise1(cx, L::Trunc)?,
-        "popcount" => lanewise1(cx, L::Popcount)?,
-        "clz" => lanewise1(cx, L::Clz)?,
-        "ctz" => lanewise1(cx, L::Ctz)?,
-        "min" => lanewise2(cx, L::Min, false)?,
-        "max" => lanewise2(cx, L::Max, false)?,
-        "fadd_rd" => lanewise2(cx, L::AddRd, false)?,
-        "fadd_ru" => lanewise2(cx, L::AddRu, false)?,
-        "fsub_rd" => lanewise2(cx, L::AddRd, true)?,
-        "fsub_ru" => lanewise2(cx, L::AddRu, true)?,
-        "fmul_rd" => lanewise2(cx, L::MulRd, false)?,
-        "fmul_ru" => lanewise2(cx, L::MulRu, false)?,
-        "fma" => {
+    Ok(match intrinsic {
+        I::FrameOrigin
+        | I::FrameStep
+        | I::QuantLo
+        | I::QuantHi
+        | I::SgBins
+        | I::SgCodeUp
+        | I::SgCodeDown => super::quant::lower(cx, cur, intrinsic, ins)?,
+        I::Abs => lanewise1(cx, L::Abs)?,
+        I::Sqrt => lanewise1(cx, L::Sqrt)?,
+        I::Floor => lanewise1(cx, L::Floor)?,
+        I::Ceil => lanewise1(cx, L::Ceil)?,
+        I::Trunc => lanewise1(cx, L::Trunc)?,
+        I::Popcount => lanewise1(cx, L::Popcount)?,
+        I::Clz => lanewise1(cx, L::Clz)?,
+        I::Ctz => lanewise1(cx, L::Ctz)?,
+        I::Min => lanewise2(cx, L::Min, false)?,
+        I::Max => lanewise2(cx, L::Max, false)?,
+        I::FaddRd => lanewise2(cx, L::AddRd, false)?,
+        I::FaddRu => lanewise2(cx, L::AddRu, false)?,
+        I::FsubRd => lanewise2(cx, L::AddRd, true)?,
+        I::FsubRu => lanewise2(cx, L::AddRu, true)?,
+        I::FmulRd => lanewise2(cx, L::MulRd, false)?,
+        I::FmulRu => lanewise2(cx, L::MulRu, false)?,
+        I::Fma => {
             let (a, b, c) = (arg(0)?, arg(1)?, arg(2)?);
             (0..a.len())
                 .map(|i| {
@@ -85,7 +90,7 @@ pub(super) fn lower(
                 })
                 .collect()
         }
-        "rsqrt" => arg(0)?
+        I::Rsqrt => arg(0)?
             .into_iter()
             .map(|x| {
                 let ty = cx.ty_of(x);
@@ -94,12 +99,12 @@ pub(super) fn lower(
                 cx.e1(cur, L::Div, &[one, s], ty)
             })
             .collect(),
-        "isnan" => arg(0)?
+        I::IsNan => arg(0)?
             .into_iter()
             .map(|x| cx.cmp(cur, CmpPred::Ne, x, x))
             .collect(),
-        "dot" => vec![dot(cx, cur, &arg(0)?, &arg(1)?)?],
-        "with_axis" => {
+        I::Dot => vec![dot(cx, cur, &arg(0)?, &arg(1)?)?],
+        I::WithAxis => {
             // Lane `i` is `k == i ? x : v[i]`; a `k` outside the lanes changes nothing.
             let (v, k, x) = (arg(0)?, arg(1)?, arg(2)?);
             let (&[k], &[x]) = (k.as_slice(), x.as_slice()) else {
@@ -119,13 +124,13 @@ pub(super) fn lower(
                 })
                 .collect()
         }
-        "length" => {
+        I::Length => {
             let a = arg(0)?;
             let d = dot(cx, cur, &a, &a)?;
             let ty = cx.ty_of(d);
             vec![cx.e1(cur, L::Sqrt, &[d], ty)]
         }
-        "normalize" => {
+        I::Normalize => {
             let a = arg(0)?;
             let d = dot(cx, cur, &a, &a)?;
             let ty = cx.ty_of(d);
@@ -134,7 +139,7 @@ pub(super) fn lower(
                 .map(|&x| cx.e1(cur, L::Div, &[x, len], ty))
                 .collect()
         }
-        "cross" => {
+        I::Cross => {
             let (a, b) = (arg(0)?, arg(1)?);
             if a.len() != 3 || b.len() != 3 {
                 return Err(("`cross` needs 3 lanes".into(), None));
@@ -147,10 +152,10 @@ pub(super) fn lower(
             };
             vec![c(1, 2), c(2, 0), c(0, 1)]
         }
-        "hmin" | "hmax" | "hsum" => {
-            let op = match name {
-                "hmin" => L::Min,
-                "hmax" => L::Max,
+        I::Hmin | I::Hmax | I::Hsum => {
+            let op = match intrinsic {
+                I::Hmin => L::Min,
+                I::Hmax => L::Max,
                 _ => L::Add,
             };
             let a = arg(0)?;
@@ -164,7 +169,7 @@ pub(super) fn lower(
             }
             vec![acc]
         }
-        "len" => {
+        I::Len => {
             let Some(&ty) = tys.first() else {
                 return Err(("`len` without a result".into(), None));
             };
@@ -176,7 +181,12 @@ pub(super) fn lower(
                 None,
             ));
         }
-        _ => return Err((format!("the intrinsic `{name}` has no lo form"), None)),
+        I::SetInsert => {
+            return Err((
+                "sets (`insert`) have no machine form yet; the interpreters run them".into(),
+                None,
+            ))
+        }
     })
 }
 

@@ -16,18 +16,19 @@ use scion_ir::lo::Op as L;
 use scion_ir::module::ValueDef;
 use scion_ir::op::OpKind;
 use scion_ir::tree::quant::{FLT_MIN, MIN_STEP};
-use scion_ir::tree::CmpPred;
+use scion_ir::tree::{CmpPred, Intrinsic};
 use scion_ir::types::{FloatTy, IntTy};
 use scion_ir::OpSpec;
 
-/// Lowers the quantization builtin `name` on operand leaves `ins`; `None` when `name` is not
-/// one of them.
+/// Lowers the quantization builtin `intrinsic` on operand leaves `ins`.
 pub(super) fn lower(
     cx: &mut FnLower<'_>,
     cur: BlockId,
-    name: &str,
+    intrinsic: Intrinsic,
     ins: &[Vec<ValueId>],
-) -> Option<R<Vec<ValueId>>> {
+) -> R<Vec<ValueId>> {
+    use Intrinsic as I;
+    let name = intrinsic.name();
     let arg = |i: usize| -> R<Vec<ValueId>> {
         ins.get(i)
             .cloned()
@@ -43,9 +44,9 @@ pub(super) fn lower(
         }
     };
     let mut q = Q { cx, cur };
-    Some(match name {
-        "frame_origin" => arg(0).map(|x| x.into_iter().map(|x| q.frame_origin(x)).collect()),
-        "frame_step" => (|| {
+    match intrinsic {
+        I::FrameOrigin => arg(0).map(|x| x.into_iter().map(|x| q.frame_origin(x)).collect()),
+        I::FrameStep => (|| {
             let (o, hi) = (arg(0)?, arg(1)?);
             let m = q.bound(scalar(2)?);
             Ok(o.iter()
@@ -53,13 +54,13 @@ pub(super) fn lower(
                 .map(|(&o, &hi)| q.frame_step(o, hi, m.0))
                 .collect())
         })(),
-        "quant_lo" | "quant_hi" => (|| {
+        I::QuantLo | I::QuantHi => (|| {
             let (v, o, s) = (arg(0)?, arg(1)?, arg(2)?);
             let m = q.bound(scalar(3)?);
             Ok((0..v.len().min(o.len()).min(s.len()))
                 .map(|i| {
                     let b = q.code_above(v[i], o[i], s[i], m);
-                    if name == "quant_lo" {
+                    if intrinsic == I::QuantLo {
                         let a = q.code_below(v[i], o[i], s[i], m);
                         let u32t = q.u32t();
                         q.cx.e1(q.cur, L::Min, &[a, b], u32t)
@@ -69,7 +70,7 @@ pub(super) fn lower(
                 })
                 .collect())
         })(),
-        "sg_bins" => (|| {
+        I::SgBins => (|| {
             let (wlo, whi) = (arg(0)?, arg(1)?);
             let m = q.bound(scalar(2)?);
             Ok(wlo
@@ -78,16 +79,16 @@ pub(super) fn lower(
                 .map(|(&lo, &hi)| q.sg_frame(lo, hi, m.0).1)
                 .collect())
         })(),
-        "sg_code_up" | "sg_code_down" => (|| {
+        I::SgCodeUp | I::SgCodeDown => (|| {
             let (v, wlo, whi) = (arg(0)?, arg(1)?, arg(2)?);
             let m = q.bound(scalar(3)?);
-            let up = name == "sg_code_up";
+            let up = intrinsic == I::SgCodeUp;
             Ok((0..v.len().min(wlo.len()).min(whi.len()))
                 .map(|i| q.sg_code(v[i], wlo[i], whi[i], m, up))
                 .collect())
         })(),
-        _ => return None,
-    })
+        other => Err((format!("`{other}` is not a quantization builtin"), None)),
+    }
 }
 
 /// The code bound as a `u32` value, and its value when it is a constant.

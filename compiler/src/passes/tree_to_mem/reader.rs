@@ -15,7 +15,7 @@ use crate::syntax::ast::{BinaryOp, Expr, ExprKind, UnaryOp};
 use rustc_hash::FxHashMap;
 use scion_ir::attr::Attr;
 use scion_ir::diag::Diagnostic;
-use scion_ir::tree::{CmpPred, Op};
+use scion_ir::tree::{CmpPred, Intrinsic, Op};
 use scion_ir::types::Type;
 use scion_ir::{mem, Builder, InsertPoint, Module, OpSpec, TypeId, ValueId};
 
@@ -669,29 +669,17 @@ impl<'a> Reader<'a> {
                 .vector(&vals)
                 .ok_or_else(|| unsupported(Some(e.span), "a vector constructor with mixed lanes"));
         }
-        const SAME_TYPE: [&str; 16] = [
-            "fma",
-            "min",
-            "max",
-            "abs",
-            "sqrt",
-            "floor",
-            "ceil",
-            "round",
-            "trunc",
-            "fadd_rd",
-            "fadd_ru",
-            "fsub_rd",
-            "fsub_ru",
-            "fmul_rd",
-            "fmul_ru",
-            "with_axis",
-        ];
         match vals.first() {
-            Some(&first) if SAME_TYPE.contains(&callee) => {
-                let t = m.values[first].ty;
-                Ok(self.builder(m, false).intrinsic(callee, &vals, t))
-            }
+            Some(&first) => match Intrinsic::from_name(callee) {
+                Some(i) if i.keeps_first_type() => {
+                    let t = m.values[first].ty;
+                    Ok(self.builder(m, false).intrinsic(i, &vals, t))
+                }
+                _ => Err(unsupported(
+                    Some(e.span),
+                    format!("a call of `{callee}` in a layout expression"),
+                )),
+            },
             _ => Err(unsupported(
                 Some(e.span),
                 format!("a call of `{callee}` in a layout expression"),

@@ -74,6 +74,7 @@ impl Parser<'_> {
                 Keyword::This
                     | Keyword::Parent
                     | Keyword::Build
+                    | Keyword::If
                     | Keyword::True
                     | Keyword::False
                     | Keyword::Inf
@@ -311,6 +312,20 @@ impl Parser<'_> {
             TokenKind::LParen => {
                 self.bump();
                 return self.paren_or_tuple(start);
+            }
+            TokenKind::Keyword(Keyword::If) => {
+                let (branches, otherwise) = self.with_no_bar(false, |p| p.if_parts())?;
+                let Some(otherwise) = otherwise else {
+                    return Err(self.expected("`else` (an `if` expression needs one)"));
+                };
+                let span = start.to(self.prev_span());
+                return Ok(self.mk_expr(
+                    ExprKind::If {
+                        branches,
+                        otherwise,
+                    },
+                    span,
+                ));
             }
             _ => return Err(self.expected("an expression")),
         };

@@ -8,6 +8,9 @@ use crate::syntax::errors::SyntaxError;
 use crate::syntax::token::{Keyword, TokenKind};
 use scion_ir::diag::Span;
 
+/// The parts of an `if`: each condition with its block, and the `else` block.
+pub(crate) type IfParts = (Vec<(Expr, Stmt)>, Option<Box<Stmt>>);
+
 impl Parser<'_> {
     pub(crate) fn mk_stmt(&mut self, kind: StmtKind, span: Span) -> Stmt {
         Stmt {
@@ -33,6 +36,7 @@ impl Parser<'_> {
             }
             TokenKind::Keyword(Keyword::Let) => {
                 self.bump();
+                let mutable = self.eat_kw(Keyword::Mut);
                 let name = self.ident("a name after `let`")?;
                 let ty = if self.eat(&TokenKind::Colon) {
                     Some(self.ty()?)
@@ -42,7 +46,15 @@ impl Parser<'_> {
                 self.expect(&TokenKind::Assign)?;
                 let value = self.expr()?;
                 let span = start.to(value.span);
-                Ok(self.mk_stmt(StmtKind::Let { name, ty, value }, span))
+                Ok(self.mk_stmt(
+                    StmtKind::Let {
+                        name,
+                        ty,
+                        value,
+                        mutable,
+                    },
+                    span,
+                ))
             }
             TokenKind::Keyword(Keyword::Return) => {
                 self.bump();
@@ -118,6 +130,19 @@ impl Parser<'_> {
     }
 
     fn if_stmt(&mut self, start: Span) -> PResult<Stmt> {
+        let (branches, otherwise) = self.if_parts()?;
+        let span = start.to(self.prev_span());
+        Ok(self.mk_stmt(
+            StmtKind::If {
+                branches,
+                otherwise,
+            },
+            span,
+        ))
+    }
+
+    /// After `if`: the conditions with their blocks and the `else` block, if any.
+    pub(crate) fn if_parts(&mut self) -> PResult<IfParts> {
         self.bump();
         let mut branches = Vec::new();
         let cond = self.expr_free()?;
@@ -139,14 +164,7 @@ impl Parser<'_> {
                 break;
             }
         }
-        let span = start.to(self.prev_span());
-        Ok(self.mk_stmt(
-            StmtKind::If {
-                branches,
-                otherwise,
-            },
-            span,
-        ))
+        Ok((branches, otherwise))
     }
 
     /// `match e { | P -> s | P -> s ... }` (the `|` before the first arm is optional).
