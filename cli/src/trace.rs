@@ -18,12 +18,13 @@ use scion_host::jit::{Codegen, JitClosestHit};
 use scion_host::mem_interp::{layout_boxes, MemInterpBackend, LIBRARY_LAYOUTS};
 use scion_host::quantized::{Boxes, DecodedTree};
 use scion_runtime::batch::BatchDriver;
+use scion_runtime::bvh::wide::collapse;
 use scion_runtime::bvh::{build_median, build_sah_binned, LogicalNode, LogicalTree, SahOptions};
 use scion_runtime::geom::{Hit, Ray, Triangle};
 use scion_runtime::query::{
     axis_rays, hits_checksum, primary_rays_n, read_rays, secondary_rays, write_hits,
 };
-use scion_runtime::reference::closest_hits_tree_stats;
+use scion_runtime::reference::{closest_hits_tree_stats, closest_hits_wide_stats};
 use scion_runtime::scene::{load_obj, Scene};
 use scion_runtime::timing::{measure_with, Timing, TimingPlan};
 use std::time::{Duration, Instant};
@@ -268,6 +269,20 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
             s.max_pending,
             if matches!(boxes, Boxes::Exact) { "" } else { " of the decoded boxes" }
         );
+        // The same tree collapsed to 4 and 8 children per node: the work a wide layout's
+        // traversal would do (nearest first, scion_runtime::reference::closest_hit_wide).
+        let w4 = collapse::<4>(&traversed);
+        let w8 = collapse::<8>(&traversed);
+        let s4 = closest_hits_wide_stats(&w4, &traversed.primitives, &rays, &driver);
+        let s8 = closest_hits_wide_stats(&w8, &traversed.primitives, &rays, &driver);
+        for (w, n, s) in [(4, w4.nodes.len(), s4), (8, w8.nodes.len(), s8)] {
+            println!(
+                "{w}-wide       {:.2} box tests, {:.2} nodes visited, {:.2} triangle tests per ray; {n} nodes (the tree collapsed, reference traversal)",
+                per(s.boxes_tested),
+                per(s.nodes_visited),
+                per(s.triangles_tested),
+            );
+        }
     }
     // The same number as the C library's `scion_hits_checksum` (examples/cpp prints it too).
     println!("checksum: {:016x}", hits_checksum(&hits));

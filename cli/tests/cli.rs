@@ -363,3 +363,46 @@ fn a_bad_rays_file_is_an_error() {
         "{e}"
     );
 }
+
+#[test]
+fn stats_report_the_work_per_ray_of_the_binary_and_the_wide_trees() {
+    let dir = scratch("stats");
+    let scene = write(&dir, "cube.obj", CUBE);
+    let o = scion(&[
+        "trace",
+        "--scene",
+        &scene,
+        "--backend",
+        "reference",
+        "--rays",
+        "secondary",
+        "--n",
+        "64",
+        "--runs",
+        "1",
+        "--leaf-size",
+        "1",
+        "--stats",
+    ]);
+    let stdout = text(&o.stdout);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    // Every ray starts inside the cube and hits one face; twelve one-triangle leaves.
+    assert!(stdout.contains("work/ray "), "{stdout}");
+    let line = |prefix: &str| {
+        stdout
+            .lines()
+            .find(|l| l.starts_with(prefix))
+            .unwrap_or_else(|| panic!("no `{prefix}` line in {stdout}"))
+            .to_string()
+    };
+    // Twelve leaves under 11 binary interior nodes: fewer wide nodes, each of 2 to 8 slots.
+    let w4 = line("4-wide");
+    let w8 = line("8-wide");
+    // "...per ray; N nodes (the tree collapsed, ...)"
+    let nodes = |l: &str| -> usize {
+        let tail = l.rsplit("; ").next().unwrap();
+        tail.split_whitespace().next().unwrap().parse().unwrap()
+    };
+    assert!((2..=11).contains(&nodes(&w4)), "{w4}");
+    assert!((1..=nodes(&w4)).contains(&nodes(&w8)), "{w4} / {w8}");
+}

@@ -1,7 +1,8 @@
 //! Logical BVHs and their builders: triangles -> [`LogicalTree`] (architecture §5).
 //!
 //! [`logical`] holds the tree form every generated constructor reads; [`sah_binned`] and
-//! [`median`] build it; [`chain`] builds a maximally deep tree for stack-limit tests.
+//! [`median`] build it; [`chain`] builds a maximally deep tree for stack-limit tests;
+//! [`wide`] collapses it to four- or eight-wide nodes.
 //!
 //! The top-down builders are deterministic: the same input gives the same tree, bit for bit,
 //! whatever the number of threads. Large ranges (at least [`PARALLEL_MIN`] primitives) build
@@ -14,6 +15,7 @@ pub mod logical;
 pub mod median;
 pub mod reinsert;
 pub mod sah_binned;
+pub mod wide;
 
 pub use chain::{build_caterpillar, DeepSide};
 pub use logical::{

@@ -103,7 +103,7 @@ impl NodeStack {
 
 /// The algorithm's update of `best` by one triangle.
 #[inline]
-fn consider(ray: &Ray, tri: &Triangle, best: &mut (f32, u32)) {
+pub(crate) fn consider(ray: &Ray, tri: &Triangle, best: &mut (f32, u32)) {
     let d = hit_distance(ray, tri);
     if d < f32::INFINITY && (d < best.0 || (d == best.0 && tri.id < best.1)) {
         *best = (d, tri.id);

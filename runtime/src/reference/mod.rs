@@ -1,12 +1,14 @@
 //! Layout-free reference results (architecture §6): what every unquantized layout must return
 //! bit for bit. [`prelude`] is the Rust image of `library/prelude.scion`'s arithmetic;
 //! [`closest_hit`] is closest-hit ray tracing (paper Figure 4) by brute force and by logical
-//! tree traversal.
+//! tree traversal; [`closest_hit_wide`] traverses a wide tree the same way.
 
 pub mod closest_hit;
+pub mod closest_hit_wide;
 pub mod prelude;
 
 pub use closest_hit::{
     closest_hit_brute, closest_hit_tree, closest_hit_tree_stats, closest_hits_brute,
     closest_hits_tree, closest_hits_tree_stats, why_pruned, TraversalStats,
 };
+pub use closest_hit_wide::{closest_hit_wide, closest_hit_wide_stats, closest_hits_wide_stats};
