@@ -180,7 +180,7 @@ fn run(m: &Module, name: &str, floats: &[f32]) -> Result<Vec<(u8, u64)>, String>
 #[test]
 fn dsl_optimizations_keep_every_result_bit() {
     let base = tree_module();
-    let small = optimized(&base, scion_compiler::passes::mem_inline::DEFAULT_MAX_OPS);
+    let small = optimized(&base, scion_compiler::passes::mem::inline::DEFAULT_MAX_OPS);
     let all = optimized(&base, 100_000);
     // The optimizations did fire: the helpers are gone from the wrappers, and with the large
     // threshold nothing non-recursive is called any more.

@@ -173,7 +173,7 @@ fn prelude_functions_agree_in_tree_lo_cranelift_and_llvm() {
     scion_ir::verify(&lo).expect("lo verifies");
     // The JIT runs the module after lo-inline (the slab test inlined into its callers).
     let mut inlined = lo.clone();
-    scion_compiler::passes::lo_inline::run(&mut inlined, 48);
+    scion_compiler::passes::lo::inline::run(&mut inlined, 48);
     scion_ir::verify(&inlined).expect("inlined lo verifies");
     let jit = JitModule::compile(&inlined).expect("compiles");
     let llvm0 = scion_llvm::JitModule::compile(&inlined, 0).expect("llvm -O0 compiles");

@@ -99,7 +99,7 @@ fn check_seed(seed: u64) -> Result<usize, String> {
         .map_err(|e| format!("lo does not verify: {e:?}\n{}", scion_ir::print_module(&lo)))?;
     // The JIT runs the module after lo-inline, the lo interpreter the one before.
     let mut inlined = lo.clone();
-    scion_compiler::passes::lo_inline::run(&mut inlined, 48);
+    scion_compiler::passes::lo::inline::run(&mut inlined, 48);
     scion_ir::verify(&inlined).map_err(|e| format!("inlined lo does not verify: {e:?}"))?;
     let jit = JitModule::compile_with(&inlined, &[("ext", ext as *const u8)])
         .map_err(|e| format!("{e}\n{}", scion_ir::print_module(&inlined)))?;

@@ -103,6 +103,7 @@
 
 pub mod attr;
 pub mod builder;
+pub mod data_layout;
 pub mod diag;
 pub mod entity;
 pub mod interp;

@@ -128,7 +128,7 @@ impl EmulatedGpu {
                 .collect::<Vec<_>>();
             shapes.push((func.name.clone(), params));
         }
-        scion_compiler::passes::lo_host_kernels::run(&mut m).map_err(|d| d.to_string())?;
+        scion_compiler::passes::lo::host_kernels::run(&mut m).map_err(|d| d.to_string())?;
         let code = Code::compile(&m, codegen)?;
         let mut kernels = BTreeMap::new();
         for (name, params) in shapes {

@@ -105,13 +105,9 @@ fn record(out: &mut String, name: &str, what: &str, r: &Record) {
     }
 }
 
+/// The size of a record field (a scalar leaf; pointers and references are 8 bytes).
 fn scalar_size(ty: &Type) -> u64 {
-    match ty {
-        Type::Bool => 1,
-        Type::Int(t) => u64::from(t.bits() / 8),
-        Type::Float(f) => u64::from(f.bits() / 8),
-        _ => 8,
-    }
+    scion_ir::data_layout::scalar_type_size(ty).unwrap_or(8)
 }
 
 /// The header text. `root` is the layout's reference type (an integer or `ptr`).

@@ -1,20 +1,15 @@
 //! The pass registry: every pass the compiler knows, one line each (name, summary, input and
 //! output level, constructor).
 //!
-//! Generic passes that work on any dialect (`const-fold`, `dce`) come from `scion-ir`; passes
-//! that need the compiler's knowledge of layouts are registered here next to them
-//! ([`tree_to_mem`], [`mem_inline`], [`mem_cse`]) and below them to `lo` ([`mem_to_lo`], [`recursion_to_stack`],
-//! [`lo_inline`]). Pass order lives in `driver/pipelines.rs` alone.
+//! Generic passes that work on any dialect (`const-fold`, `dce`) come from `scion-ir`; the
+//! compiler's own passes sit under the level they transform or between the two they connect:
+//! [`tree_to_mem`] (the specializations, `tree` to `mem`), [`mem`] (`mem-inline`, `mem-cse`),
+//! [`mem_to_lo`] (`mem` to `lo`) and [`lo`] (`recursion-to-stack`, `lo-inline`,
+//! `lo-host-kernels`). Pass order lives in `driver/pipelines.rs` alone.
 
-pub mod lo_host_kernels;
-pub mod lo_inline;
-#[path = "mem/cse.rs"]
-pub mod mem_cse;
-#[path = "mem/inline.rs"]
-pub mod mem_inline;
+pub mod lo;
+pub mod mem;
 pub mod mem_to_lo;
-#[path = "mem/recursion_to_stack.rs"]
-pub mod recursion_to_stack;
 pub mod tree_to_mem;
 
 use scion_ir::pass::{Level, PassInfo, PassRegistry};
@@ -42,14 +37,14 @@ pub fn registry() -> PassRegistry {
             "inline calls of small non-recursive tree/mem functions (option max-ops, default 32)",
         input: Level::Any,
         output: Level::Any,
-        create: || Box::new(mem_inline::MemInline),
+        create: || Box::new(mem::inline::MemInline),
     });
     r.register(PassInfo {
         name: "mem-cse",
         summary: "reuse dominating equivalent pure tree/mem ops: layout and cell loads, pure calls",
         input: Level::Any,
         output: Level::Any,
-        create: || Box::new(mem_cse::MemCse),
+        create: || Box::new(mem::cse::MemCse),
     });
     lower_passes(&mut r);
     r
@@ -69,20 +64,20 @@ fn lower_passes(reg: &mut PassRegistry) {
         summary: "recursive traversals to a loop over a fixed stack (status 1 on overflow)",
         input: scion_ir::pass::Level::Lo,
         output: scion_ir::pass::Level::Lo,
-        create: || Box::new(recursion_to_stack::RecursionToStack),
+        create: || Box::new(lo::recursion_to_stack::RecursionToStack),
     });
     reg.register(scion_ir::PassInfo {
         name: "lo-inline",
         summary: "inline calls of small leaf functions in lo (option max-ops, default 48)",
         input: scion_ir::pass::Level::Lo,
         output: scion_ir::pass::Level::Lo,
-        create: || Box::new(lo_inline::LoInline),
+        create: || Box::new(lo::inline::LoInline),
     });
     reg.register(scion_ir::PassInfo {
         name: "lo-host-kernels",
         summary: "GPU kernels to host functions taking the thread index as a last u64 parameter (host emulation of a launch)",
         input: scion_ir::pass::Level::Lo,
         output: scion_ir::pass::Level::Lo,
-        create: || Box::new(lo_host_kernels::LoHostKernels),
+        create: || Box::new(lo::host_kernels::LoHostKernels),
     });
 }

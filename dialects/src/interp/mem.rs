@@ -11,47 +11,15 @@
 use super::{err, Interp, InterpError, Val};
 use crate::entity::{OpId, TypeId};
 use crate::mem::Op;
-use crate::module::Module;
 use crate::types::{FloatTy, IntTy, Type};
 use std::rc::Rc;
 
 /// The first address handed out (so that 0 is never a valid pointer).
 const BASE: u64 = 0x1000;
 
-/// Size and alignment of a plain-data type, as `mem.load` lays it out.
-pub fn size_align(m: &Module, ty: TypeId) -> Option<(u64, u64)> {
-    Some(match m.types.get(ty) {
-        Type::Bool => (1, 1),
-        Type::Int(t) => (t.bits() as u64 / 8, t.bits() as u64 / 8),
-        Type::Float(f) => (f.bits() as u64 / 8, f.bits() as u64 / 8),
-        Type::Ptr => (8, 8),
-        Type::Vector { elem, lanes } => {
-            let (s, a) = size_align(m, *elem)?;
-            (s * *lanes as u64, a)
-        }
-        Type::Array { elem, len: Some(n) } => {
-            let (s, a) = size_align(m, *elem)?;
-            (round_up(s, a) * n, a)
-        }
-        Type::Tuple(fields) => record(m, fields)?,
-        Type::Adt(name) => {
-            let adt = m.adt(name).filter(|a| a.variants.is_empty())?;
-            let fields: Vec<TypeId> = adt.shared.iter().map(|f| f.ty).collect();
-            record(m, &fields)?
-        }
-        _ => return None,
-    })
-}
-
-fn record(m: &Module, fields: &[TypeId]) -> Option<(u64, u64)> {
-    let (mut off, mut align) = (0, 1);
-    for &f in fields {
-        let (s, a) = size_align(m, f)?;
-        off = round_up(off, a) + s;
-        align = align.max(a);
-    }
-    Some((round_up(off, align), align))
-}
+/// Size and alignment of a plain-data type, as `mem.load` lays it out
+/// ([`crate::data_layout`], the same model as `mem-to-lo`'s).
+pub use crate::data_layout::size_align;
 
 fn round_up(x: u64, a: u64) -> u64 {
     x.div_ceil(a) * a

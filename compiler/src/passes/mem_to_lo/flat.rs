@@ -7,10 +7,8 @@
 //! copies of `T`'s leaves; `!tree.ref<T>` is one `ptr` to a cell holding a `T`. The unit tuple
 //! has no leaves. Sum ADTs, slices, sets and options have no scalar form here.
 //!
-//! Memory layout (the layout model's rule for plain data): members in order, each at its
-//! natural alignment; a scalar's alignment is its size (`i1` one byte), a vector's is its
-//! element's (so `vector<3xf32>` is 12 bytes, align 4), an aggregate's is its largest member's
-//! and its size is rounded up to it. `AABB` is 24 bytes and `Triangle(p0, p1, p2, id)` 40.
+//! Memory layout: [`scion_ir::data_layout`] (one model for `mem-to-lo`, the interpreter and the C
+//! ABI), re-exported here as [`layout`].
 
 use scion_ir::entity::TypeId;
 use scion_ir::types::{FloatTy, Type};
@@ -71,65 +69,7 @@ fn push_leaves(m: &Module, ty: TypeId, out: &mut Vec<Type>) -> Result<(), String
     Ok(())
 }
 
-/// Size and alignment in bytes of a scalar leaf type.
-pub fn scalar_size(m: &Module, ty: TypeId) -> Option<u64> {
-    Some(match m.types.get(ty) {
-        Type::Bool => 1,
-        Type::Int(t) => u64::from(t.bits() / 8),
-        Type::Float(FloatTy::F32) => 4,
-        Type::Float(FloatTy::F64) | Type::Ptr | Type::Ref(_) => 8,
-        _ => return None,
-    })
-}
-
-/// The memory layout of `ty`: size, alignment, and the byte offset of each leaf (in the order
-/// of [`leaves`]).
-pub fn layout(m: &Module, ty: TypeId) -> Result<(u64, u64, Vec<u64>), String> {
-    let mut offs = Vec::new();
-    let (size, align) = place(m, ty, 0, &mut offs)?;
-    Ok((size, align, offs))
-}
-
-fn place(m: &Module, ty: TypeId, base: u64, offs: &mut Vec<u64>) -> Result<(u64, u64), String> {
-    if let Some(s) = scalar_size(m, ty) {
-        offs.push(base);
-        return Ok((s, s));
-    }
-    let members: Vec<TypeId> = match m.types.get(ty) {
-        Type::Vector { elem, lanes } => vec![*elem; *lanes as usize],
-        Type::Tuple(elems) => elems.clone(),
-        Type::Array { elem, len: Some(n) } => vec![*elem; *n as usize],
-        Type::Adt(name) => match m.adt(name) {
-            Some(def) if def.is_record() => def.shared.iter().map(|f| f.ty).collect(),
-            _ => return Err(format!("`{name}` has no plain-data layout")),
-        },
-        Type::View(_) => {
-            // Three 8-byte leaves: first element, length, stride.
-            for k in 0..3 {
-                offs.push(base + 8 * k);
-            }
-            return Ok((24, 8));
-        }
-        _ => {
-            return Err(format!(
-                "values of type {} have no memory layout",
-                m.types.display(ty)
-            ))
-        }
-    };
-    let (mut size, mut align) = (0u64, 1u64);
-    for t in members {
-        let mark = offs.len();
-        let (s, a) = place(m, t, 0, offs)?;
-        size = size.div_ceil(a) * a;
-        for o in &mut offs[mark..] {
-            *o += base + size;
-        }
-        size += s;
-        align = align.max(a);
-    }
-    Ok((size.div_ceil(align) * align, align))
-}
+pub use scion_ir::data_layout::layout;
 
 #[cfg(test)]
 mod tests {
@@ -137,19 +77,12 @@ mod tests {
     use scion_ir::module::{AdtDef, Field};
 
     #[test]
-    fn record_layouts_follow_natural_alignment() {
+    fn records_have_one_leaf_per_scalar() {
         let mut m = Module::new();
         let f32t = m.types.f32();
         let u32t = m.types.u32();
         let v3 = m.types.vector(f32t, 3);
         let f = |n: &str, ty| Field { name: n.into(), ty };
-        let aabb = m
-            .declare_adt(AdtDef {
-                name: "AABB".into(),
-                shared: vec![f("low", v3), f("high", v3)],
-                variants: vec![],
-            })
-            .unwrap();
         let tri = m
             .declare_adt(AdtDef {
                 name: "Triangle".into(),
@@ -157,14 +90,7 @@ mod tests {
                 variants: vec![],
             })
             .unwrap();
-        assert_eq!(layout(&m, aabb).unwrap().0, 24);
-        let (size, align, offs) = layout(&m, tri).unwrap();
-        assert_eq!((size, align), (40, 4));
-        assert_eq!(offs[9], 36);
-        let u8t = m.types.int(scion_ir::types::IntTy::U8);
-        let f64t = m.types.float(FloatTy::F64);
-        let t = m.types.tuple(vec![u8t, f64t, u8t]);
-        assert_eq!(layout(&m, t).unwrap(), (24, 8, vec![0, 8, 16]));
         assert_eq!(leaves(&m, tri).unwrap().len(), 10);
+        assert_eq!(layout(&m, tri).unwrap().2.len(), 10);
     }
 }
