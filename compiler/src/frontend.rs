@@ -7,18 +7,16 @@
 
 use crate::abi::{self, EntrySig, EntryTarget};
 use crate::driver::cli::{Emit, Options, Target};
+use crate::driver::lower;
 use crate::layout::model::LayoutModel;
 use crate::layout::{check_build, check_layout};
+use crate::passes::lo::entries::EntryRequest;
+use crate::passes::prune::UserFiles;
 use crate::passes::tree_to_mem::LayoutSpec;
 use crate::syntax::ast::{Item, Program};
 use crate::{irgen, passes, sema, syntax};
-use rustc_hash::FxHashSet;
-use scion_ir::attr::Attr;
 use scion_ir::diag::{Diagnostic, Diagnostics, FileId, InternalError, SourceMap};
-use scion_ir::entity::FuncId;
-use scion_ir::op::OpKind;
 use scion_ir::pass::{PassCx, PassError, PassManager};
-use scion_ir::tree::Op;
 use scion_ir::Module;
 
 /// The files of one compilation.
@@ -182,34 +180,43 @@ pub fn compile(
         }
         cx.insert_ext(spec);
     }
-    if let Err(e) = run_pipeline(&mut module, pipeline, popts, &mut cx, &mut out) {
-        match e {
-            PassError::Diagnostics(d) => out.diagnostics.extend(d),
-            PassError::Internal(i) => out.internal_error = Some(i),
-        }
+    // One pipeline to the requested output: the given passes, then pruning, the lowering and
+    // the entries as the output needs them (driver::lower).
+    let pipeline = lower::complete(pipeline.to_vec(), emit, entry.is_some());
+    cx.insert_ext(UserFiles(fe.inputs.to_vec()));
+    if let Some(sig) = &entry {
+        cx.insert_ext(EntryRequest {
+            sig: sig.clone(),
+            target: popts.entry_target,
+        });
+    }
+    if let Err(d) = lower::lowering_options(&mut cx, &pipeline, popts.stack_size) {
+        out.diagnostics.push(d);
         return out;
     }
-    keep_reachable(&mut module, fe.inputs);
+    let stopped = match run_pipeline(&mut module, &pipeline, popts, &mut cx, &mut out) {
+        Ok(stopped) => stopped,
+        Err(e) => {
+            match e {
+                PassError::Diagnostics(d) => out.diagnostics.extend(d),
+                PassError::Internal(i) => out.internal_error = Some(i),
+            }
+            return out;
+        }
+    };
     out.entry = entry.clone();
-    if matches!(emit, Emit::Llvm | Emit::Asm | Emit::Obj | Emit::Ptx) {
-        let entry = entry.as_ref().map(|s| (s, popts.entry_target));
-        match crate::driver::lower::lower_with_entries(&mut module, popts.stack_size, entry) {
-            Ok(warnings) => {
-                out.diagnostics.extend(warnings);
-                out.lo_module = Some(module);
-            }
-            Err(PassError::Diagnostics(d)) => out.diagnostics.extend(d),
-            Err(PassError::Internal(i)) => out.internal_error = Some(i),
-        }
+    if stopped {
+        // `--stop-after`: the IR where the pipeline stopped, whatever the output asked for.
+        out.output = Some(scion_ir::print::print_module(&module));
         return out;
     }
-    if matches!(emit, Emit::Lo | Emit::Clif | Emit::Header) {
-        let entry = entry.as_ref().map(|s| (s, popts.entry_target));
-        match crate::driver::lower::emit_low(&mut module, emit, popts.stack_size, entry) {
-            Ok((text, warnings)) => {
-                out.diagnostics.extend(warnings);
-                out.output = Some(text);
-            }
+    if emit.is_llvm() {
+        out.lo_module = Some(module);
+        return out;
+    }
+    if lower::needs_lo(emit) {
+        match lower::render_low(&module, emit, entry.as_ref()) {
+            Ok(text) => out.output = Some(text),
             Err(PassError::Diagnostics(d)) => out.diagnostics.extend(d),
             Err(PassError::Internal(i)) => out.internal_error = Some(i),
         }
@@ -245,13 +252,14 @@ fn entry_request_error(emit: Emit, popts: &PassOptions) -> Option<Diagnostic> {
     }
 }
 
+/// Runs `pipeline` on `m`; returns whether `--stop-after` ended it early.
 fn run_pipeline(
     m: &mut Module,
     pipeline: &[String],
     popts: &PassOptions,
     cx: &mut PassCx,
     out: &mut CompileResult,
-) -> Result<(), PassError> {
+) -> Result<bool, PassError> {
     let registry = passes::registry();
     let mut pm = PassManager::from_names(&registry, pipeline)
         .map_err(|d| PassError::Diagnostics(d.into()))?;
@@ -266,7 +274,7 @@ fn run_pipeline(
     if popts.time_passes {
         out.dumps.push_str(&report.timing_table());
     }
-    Ok(())
+    Ok(report.stopped_early)
 }
 
 /// `: A, B` listing the layouts of `program` (or ` no layout`), for notes.
@@ -297,58 +305,4 @@ fn user_items(program: &Program, inputs: &[FileId]) -> Program {
             .collect(),
         node_count: program.node_count,
     }
-}
-
-/// Drops the functions that no function of `inputs` reaches (prelude helpers nobody calls), so
-/// that `--emit=tree` shows the user's code and exactly what it depends on.
-fn keep_reachable(m: &mut Module, inputs: &[FileId]) {
-    let mut live: FxHashSet<FuncId> = FxHashSet::default();
-    let mut work: Vec<FuncId> = m
-        .func_order
-        .iter()
-        .copied()
-        .filter(|&f| {
-            m.func_spans
-                .get(f)
-                .is_some_and(|s| inputs.contains(&s.file))
-        })
-        .collect();
-    while let Some(f) = work.pop() {
-        if !live.insert(f) {
-            continue;
-        }
-        for callee in callees(m, f) {
-            if let Some(g) = m.func_by_name(&callee) {
-                work.push(g);
-            }
-        }
-    }
-    let dead: Vec<FuncId> = m
-        .func_order
-        .iter()
-        .copied()
-        .filter(|f| !live.contains(f))
-        .collect();
-    for f in dead {
-        m.remove_func(f);
-    }
-}
-
-fn callees(m: &Module, f: FuncId) -> Vec<String> {
-    let mut names = Vec::new();
-    let mut regions = vec![m.funcs[f].body];
-    while let Some(r) = regions.pop() {
-        for &b in &m.regions[r].blocks {
-            for &op in &m.blocks[b].ops {
-                let o = &m.ops[op];
-                if o.kind == OpKind::Tree(Op::Call) {
-                    if let Some(Attr::Sym(s)) = o.attr("callee") {
-                        names.push(s.clone());
-                    }
-                }
-                regions.extend(o.regions.iter().copied());
-            }
-        }
-    }
-    names
 }

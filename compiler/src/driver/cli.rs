@@ -97,8 +97,10 @@ Examples:
     scionc --emit=tree library/algorithms/closest_hit.scion library/layouts/pbrt.scion
   Only check a layout and report every diagnostic:
     scionc --emit=check library/layouts/ptr.scion
-  Show the pass pipeline of -O2 without running it:
+  Show the pass pipeline of -O2 without running it (the lowering to lo and the entry points
+  are passes too, so --print-after-all, --stop-after and --time-passes see them):
     scionc -O2 --print-pipeline library/algorithms/closest_hit.scion
+    scionc -O3 --emit=asm --layout LinearBVH --entry closest_hit --print-pipeline
   Compare -O3 with and without the DSL optimizations (mem-inline, const-fold, mem-cse, dce):
     scionc -O3 --emit=mem --layout LinearBVH closest_hit.scion pbrt.scion
     scionc -O3 --no-dsl-opt --emit=mem --layout LinearBVH closest_hit.scion pbrt.scion

@@ -10,10 +10,12 @@
 //!   specializations, the lowering and the backend's own optimizations stay. It is the
 //!   baseline of the benchmark of what the DSL optimizations gain (`scripts/bench-dslopt.sh`).
 //! * `--emit=mem` (with `--layout`), and `--emit=lo|clif` with `--layout`:
-//!   `destructor-specialize` and `constructor-specialize` first, then the level's passes
-//!   (`--emit=lo|clif` then lower to `lo` in `driver::lower`). `--emit=header` always
-//!   specializes (it needs `--layout` and `--entry`).
-//! * After lowering, `--entry A` adds the exported entry points (`abi::entries`), last.
+//!   `destructor-specialize` and `constructor-specialize` first, then the level's passes.
+//!   `--emit=header` always specializes (it needs `--layout` and `--entry`).
+//! * Then `prune-functions`, and for an output made from `lo` the lowering (`mem-to-lo`,
+//!   `recursion-to-stack`, `lo-inline`) and with `--entry A` the exported entry points
+//!   (`add-entries`) last: [`super::lower::complete`], also after an explicit `--passes` list
+//!   (which may do its own lowering by naming `mem-to-lo`).
 
 use super::cli::{Emit, Options};
 use crate::passes;
@@ -62,6 +64,7 @@ pub fn select(opts: &Options) -> Result<Vec<String>, Diagnostic> {
             names
         }
     };
+    let names = super::lower::complete(names, opts.emit, opts.entry.is_some());
     let reg = passes::registry();
     for n in &names {
         if reg.get(n).is_none() {

@@ -10,6 +10,7 @@
 pub mod lo;
 pub mod mem;
 pub mod mem_to_lo;
+pub mod prune;
 pub mod tree_to_mem;
 
 use scion_ir::pass::{Level, PassInfo, PassRegistry};
@@ -46,6 +47,13 @@ pub fn registry() -> PassRegistry {
         output: Level::Any,
         create: || Box::new(mem::cse::MemCse),
     });
+    r.register(PassInfo {
+        name: "prune-functions",
+        summary: "drop functions that no function of the user's files reaches (scionc adds it before the lowering)",
+        input: Level::Any,
+        output: Level::Any,
+        create: || Box::new(prune::PruneFunctions),
+    });
     lower_passes(&mut r);
     r
 }
@@ -72,6 +80,13 @@ fn lower_passes(reg: &mut PassRegistry) {
         input: scion_ir::pass::Level::Lo,
         output: scion_ir::pass::Level::Lo,
         create: || Box::new(lo::inline::LoInline),
+    });
+    reg.register(scion_ir::PassInfo {
+        name: "add-entries",
+        summary: "add the exported C entry points of --entry (needs --entry and --layout; last)",
+        input: scion_ir::pass::Level::Lo,
+        output: scion_ir::pass::Level::Lo,
+        create: || Box::new(lo::entries::AddEntries),
     });
     reg.register(scion_ir::PassInfo {
         name: "lo-host-kernels",
