@@ -336,21 +336,9 @@ impl<'a> Checker<'a> {
                 branches,
                 otherwise,
             } => {
-                let mut tails = Vec::new();
-                for (cond, body) in branches {
-                    let c = self.infer_expr(cond);
-                    self.expect(&c, &Ty::bool(), cond.span, "an `if` condition");
-                    self.push_scope();
-                    tails.push((self.check_stmt(body, tail), tail_span(body)));
-                    self.pop_scope();
-                }
+                let tails = self.check_if_branches(branches, otherwise.as_deref(), tail);
                 match otherwise {
-                    Some(o) => {
-                        self.push_scope();
-                        tails.push((self.check_stmt(o, tail), tail_span(o)));
-                        self.pop_scope();
-                        self.join_tails(tails, tail)
-                    }
+                    Some(_) => self.join_tails(tails, tail),
                     None => Tail::NoValue,
                 }
             }
@@ -380,17 +368,7 @@ impl<'a> Checker<'a> {
     /// `if c { s } elif c { s } else { s }` as an expression: each branch's tail is a value of
     /// one type (or leaves the function); a branch without one is E0240.
     pub(super) fn infer_if(&mut self, branches: &[(Expr, Stmt)], otherwise: &Stmt) -> Ty {
-        let mut tails = Vec::new();
-        for (cond, body) in branches {
-            let c = self.infer_expr(cond);
-            self.expect(&c, &Ty::bool(), cond.span, "an `if` condition");
-            self.push_scope();
-            tails.push((self.check_stmt(body, true), tail_span(body)));
-            self.pop_scope();
-        }
-        self.push_scope();
-        tails.push((self.check_stmt(otherwise, true), tail_span(otherwise)));
-        self.pop_scope();
+        let tails = self.check_if_branches(branches, Some(otherwise), true);
         if let Some((_, span)) = tails.iter().find(|t| t.0 == Tail::NoValue) {
             self.error(SemaError::IfWithoutValue { span: *span });
             return Ty::Error;
@@ -401,6 +379,30 @@ impl<'a> Checker<'a> {
             // the context asks for.
             _ => self.fresh(VarKind::General),
         }
+    }
+
+    /// Checks the conditions (booleans) and the branches of an `if`, each branch in its own
+    /// scope; returns each branch's tail with its span, the `else` last.
+    fn check_if_branches(
+        &mut self,
+        branches: &[(Expr, Stmt)],
+        otherwise: Option<&Stmt>,
+        tail: bool,
+    ) -> Vec<(Tail, Span)> {
+        let mut tails = Vec::new();
+        for (cond, body) in branches {
+            let c = self.infer_expr(cond);
+            self.expect(&c, &Ty::bool(), cond.span, "an `if` condition");
+            self.push_scope();
+            tails.push((self.check_stmt(body, tail), tail_span(body)));
+            self.pop_scope();
+        }
+        if let Some(o) = otherwise {
+            self.push_scope();
+            tails.push((self.check_stmt(o, tail), tail_span(o)));
+            self.pop_scope();
+        }
+        tails
     }
 
     fn join_tails(&mut self, tails: Vec<(Tail, Span)>, tail: bool) -> Tail {

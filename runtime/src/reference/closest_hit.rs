@@ -238,11 +238,23 @@ pub fn closest_hits_tree_stats(
     rays: &[Ray],
     driver: &BatchDriver,
 ) -> TraversalStats {
+    sum_stats(rays, driver, |r, s| {
+        closest_hit_tree_stats(tree, r, s);
+    })
+}
+
+/// `count` run on every ray in parallel blocks of 64, the counters summed (the deepest stack is
+/// the largest).
+pub(crate) fn sum_stats(
+    rays: &[Ray],
+    driver: &BatchDriver,
+    count: impl Fn(&Ray, &mut TraversalStats) + Sync,
+) -> TraversalStats {
     let total = std::sync::Mutex::new(TraversalStats::default());
     driver.run(rays.len(), |begin, end| {
         let mut s = TraversalStats::default();
         for r in &rays[begin..end] {
-            closest_hit_tree_stats(tree, r, &mut s);
+            count(r, &mut s);
         }
         total.lock().unwrap_or_else(|p| p.into_inner()).add(&s);
     });

@@ -10,7 +10,7 @@
 //! tests its primitives in order. With the tie rule the hits equal the binary traversal's and
 //! brute force's (see `closest_hit` for the one known exception, rays lying in a box face).
 
-use super::closest_hit::{consider, TraversalStats};
+use super::closest_hit::{consider, sum_stats, TraversalStats};
 use super::prelude::{distmin_of, slab_ray};
 use crate::batch::BatchDriver;
 use crate::bvh::wide::{WideChild, WideTree};
@@ -107,15 +107,9 @@ pub fn closest_hits_wide_stats<const W: usize>(
     rays: &[Ray],
     driver: &BatchDriver,
 ) -> TraversalStats {
-    let total = std::sync::Mutex::new(TraversalStats::default());
-    driver.run(rays.len(), |begin, end| {
-        let mut s = TraversalStats::default();
-        for r in &rays[begin..end] {
-            closest_hit_wide_stats(tree, primitives, r, &mut s);
-        }
-        total.lock().unwrap_or_else(|p| p.into_inner()).add(&s);
-    });
-    total.into_inner().unwrap_or_else(|p| p.into_inner())
+    sum_stats(rays, driver, |r, s| {
+        closest_hit_wide_stats(tree, primitives, r, s);
+    })
 }
 
 #[cfg(test)]
