@@ -270,3 +270,24 @@ impl Options {
         Ok(())
     }
 }
+
+/// Rejects `--target`/`--cpu` with an output that does not use them.
+pub fn check_flags(opts: &Options) -> Result<(), scion_ir::diag::Diagnostic> {
+    if opts.emit.is_llvm() || opts.emit == Emit::Header {
+        return Ok(());
+    }
+    // With `--entry`, `--target=nvptx64` adds the GPU kernels to `--emit=lo`.
+    if opts.emit == Emit::Lo && opts.entry.is_some() && opts.cpu.is_none() {
+        return Ok(());
+    }
+    let flag = match (&opts.target, &opts.cpu) {
+        (Some(_), _) => "--target",
+        (None, Some(_)) => "--cpu",
+        (None, None) => return Ok(()),
+    };
+    Err(scion_ir::diag::Diagnostic::error(
+        "E0920",
+        format!("`{flag}` has no effect on `--emit={}`", opts.emit.as_str()),
+    )
+    .with_note("it selects the machine code of --emit=llvm|asm|obj|ptx"))
+}

@@ -43,27 +43,6 @@ pub fn select_target(opts: &Options) -> Result<scion_llvm::Target, Diagnostic> {
     Ok(target)
 }
 
-/// Rejects `--target`/`--cpu` with an output that does not use them.
-pub fn check_flags(opts: &Options) -> Result<(), Diagnostic> {
-    if opts.emit.is_llvm() || opts.emit == Emit::Header {
-        return Ok(());
-    }
-    // With `--entry`, `--target=nvptx64` adds the GPU kernels to `--emit=lo`.
-    if opts.emit == Emit::Lo && opts.entry.is_some() && opts.cpu.is_none() {
-        return Ok(());
-    }
-    let flag = match (&opts.target, &opts.cpu) {
-        (Some(_), _) => "--target",
-        (None, Some(_)) => "--cpu",
-        (None, None) => return Ok(()),
-    };
-    Err(Diagnostic::error(
-        "E0920",
-        format!("`{flag}` has no effect on `--emit={}`", opts.emit.as_str()),
-    )
-    .with_note("it selects the machine code of --emit=llvm|asm|obj|ptx"))
-}
-
 /// Compiles `m` as the options ask.
 pub fn emit(m: &Module, opts: &Options) -> Result<Vec<u8>, Diagnostic> {
     let target = select_target(opts)?;

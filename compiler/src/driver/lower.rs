@@ -82,8 +82,15 @@ pub fn render_low(m: &Module, emit: Emit, entry: Option<&EntrySig>) -> Result<St
                 })?;
             abi::header::render(sig, &root)
         }
+        #[cfg(feature = "backends")]
         Emit::Clif => scion_clif::print_clif(m)
             .map_err(|e| PassError::Internal(InternalError::new(e.to_string())))?,
+        #[cfg(not(feature = "backends"))]
+        Emit::Clif => {
+            return Err(PassError::Diagnostics(
+                super::codegen::missing(Emit::Clif).into(),
+            ))
+        }
         _ => scion_ir::print::print_module(m),
     })
 }

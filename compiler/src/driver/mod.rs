@@ -5,6 +5,11 @@
 //! here panics on user input.
 
 pub mod cli;
+#[cfg(feature = "backends")]
+pub mod codegen;
+/// Without the `backends` feature: the LLVM outputs are an error (E0922).
+#[cfg(not(feature = "backends"))]
+#[path = "codegen_none.rs"]
 pub mod codegen;
 pub mod lower;
 pub mod pipelines;

@@ -34,7 +34,7 @@ pub fn run(opts: &Options) -> i32 {
         let _ = write!(err, "{}", d.render(&SourceMap::new()));
         return EXIT_USER_ERROR;
     }
-    let early = super::codegen::check_flags(opts).and_then(|()| {
+    let early = super::cli::check_flags(opts).and_then(|()| {
         if opts.emit.is_llvm() {
             super::codegen::select_target(opts).map(|_| ())
         } else {
