@@ -13,6 +13,7 @@ use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 use scion_clif::JitModule;
 use scion_compiler::passes::mem_to_lo::lower_module;
+use scion_ir::backend::{Backend, JitCode};
 use scion_ir::diag::FileId;
 use scion_ir::entity::TypeId;
 use scion_ir::interp::lo::LoInterp;
@@ -107,11 +108,32 @@ fn keys(vs: &[Val]) -> Vec<(u8, u64)> {
     vs.iter().map(Val::bits_key).collect()
 }
 
+/// Every code generator under test, with its name: Cranelift and LLVM at -O0 and -O3.
+fn backends() -> Vec<Box<dyn Backend>> {
+    vec![
+        Box::new(scion_clif::Cranelift),
+        Box::new(scion_llvm::Llvm { opt_level: 0 }),
+        Box::new(scion_llvm::Llvm { opt_level: 3 }),
+    ]
+}
+
+/// `m` compiled by every backend of [`backends`].
+fn compiled(m: &Module) -> Vec<(String, Box<dyn JitCode>)> {
+    backends()
+        .iter()
+        .map(|b| {
+            (
+                b.name(),
+                b.jit(m).unwrap_or_else(|e| panic!("{}: {e}", b.name())),
+            )
+        })
+        .collect()
+}
+
 fn check_all(
     tree: &Module,
     lo: &Module,
-    jit: &JitModule,
-    llvm: &[&scion_llvm::JitModule],
+    engines: &[(String, Box<dyn JitCode>)],
     floats: &[f32],
 ) -> Result<(), String> {
     for &name in FUNCS {
@@ -132,29 +154,18 @@ fn check_all(
         let lo_out = LoInterp::new(lo)
             .call(name, flat.clone())
             .map_err(|e| format!("{name}: lo interpreter: {e}"))?;
-        let jit_out = jit
-            .call(name, &flat)
-            .map_err(|e| format!("{name}: jit: {e}"))?;
         if keys(&want_flat) != keys(&lo_out) {
             return Err(format!(
                 "{name}({flat:?}): tree {want_flat:?} but lo interpreter {lo_out:?}"
             ));
         }
-        if keys(&want_flat) != keys(&jit_out) {
-            return Err(format!(
-                "{name}({:x?}): tree {:x?} but JIT {:x?}",
-                keys(&flat),
-                keys(&want_flat),
-                keys(&jit_out)
-            ));
-        }
-        for l in llvm {
-            let out = l
+        for (engine, code) in engines {
+            let out = code
                 .call(name, &flat)
-                .map_err(|e| format!("{name}: llvm: {e}"))?;
+                .map_err(|e| format!("{name}: {engine}: {e}"))?;
             if keys(&want_flat) != keys(&out) {
                 return Err(format!(
-                    "{name}({:x?}): tree {:x?} but LLVM {:x?}",
+                    "{name}({:x?}): tree {:x?} but {engine} {:x?}",
                     keys(&flat),
                     keys(&want_flat),
                     keys(&out)
@@ -175,9 +186,7 @@ fn prelude_functions_agree_in_tree_lo_cranelift_and_llvm() {
     let mut inlined = lo.clone();
     scion_compiler::passes::lo::inline::run(&mut inlined, 48);
     scion_ir::verify(&inlined).expect("inlined lo verifies");
-    let jit = JitModule::compile(&inlined).expect("compiles");
-    let llvm0 = scion_llvm::JitModule::compile(&inlined, 0).expect("llvm -O0 compiles");
-    let llvm3 = scion_llvm::JitModule::compile(&inlined, 3).expect("llvm -O3 compiles");
+    let engines = compiled(&inlined);
     let cases = common::cases(if cfg!(debug_assertions) { 300 } else { 3000 });
     let mut runner = TestRunner::new(Config {
         cases,
@@ -185,9 +194,7 @@ fn prelude_functions_agree_in_tree_lo_cranelift_and_llvm() {
     });
     let result = runner.run(
         &prop::collection::vec(common::special_f32(), 24),
-        |floats| {
-            check_all(&tree, &lo, &jit, &[&llvm0, &llvm3], &floats).map_err(TestCaseError::fail)
-        },
+        |floats| check_all(&tree, &lo, &engines, &floats).map_err(TestCaseError::fail),
     );
     if let Err(e) = result {
         panic!("{e}");
@@ -231,8 +238,7 @@ fn a_real_hit_is_found_by_every_engine() {
     args.iter().for_each(|a| flatten(a, &mut flat));
     let out = jit.call("t_hit", &flat).unwrap();
     assert!(matches!(out[0], Val::F32(t) if t == 1.0), "{out:?}");
-    let llvm = scion_llvm::JitModule::compile(&lo, 2).expect("llvm compiles");
-    check_all(&tree, &lo, &jit, &[&llvm], &floats).unwrap();
+    check_all(&tree, &lo, &compiled(&lo), &floats).unwrap();
 }
 
 /// Integer intrinsics and conversions on every width: bit counts, shifts, division (including

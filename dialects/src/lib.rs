@@ -102,6 +102,7 @@
 #![warn(missing_docs)]
 
 pub mod attr;
+pub mod backend;
 pub mod builder;
 pub mod data_layout;
 pub mod diag;

@@ -26,6 +26,7 @@ use scion_compiler::abi::{EntrySig, EntryTarget};
 use scion_compiler::driver::cli::Emit;
 use scion_compiler::driver::pipelines::for_level_with;
 use scion_compiler::frontend::PassOptions;
+use scion_ir::backend::{Backend, JitCode};
 use scion_ir::types::{FloatTy, IntTy, Type};
 use scion_ir::Module;
 use scion_runtime::bvh::LogicalTree;
@@ -84,30 +85,26 @@ pub enum Codegen {
     Llvm(u8),
 }
 
-/// The compiled module: keeps the machine code alive.
-pub(crate) enum Code {
-    Cranelift(Box<scion_clif::JitModule>),
-    Llvm(scion_llvm::JitModule),
+impl Codegen {
+    /// The code generator as a [`Backend`].
+    pub fn backend(self) -> Box<dyn Backend> {
+        match self {
+            Codegen::Cranelift => Box::new(scion_clif::Cranelift),
+            Codegen::Llvm(opt_level) => Box::new(scion_llvm::Llvm { opt_level }),
+        }
+    }
 }
+
+/// The compiled module: keeps the machine code alive.
+pub(crate) struct Code(Box<dyn JitCode>);
 
 impl Code {
     pub(crate) fn compile(m: &Module, codegen: Codegen) -> Result<Code, String> {
-        Ok(match codegen {
-            Codegen::Cranelift => {
-                let jit = scion_clif::JitModule::compile(m).map_err(|e| e.to_string())?;
-                Code::Cranelift(Box::new(jit))
-            }
-            Codegen::Llvm(level) => {
-                Code::Llvm(scion_llvm::JitModule::compile(m, level).map_err(|e| e.to_string())?)
-            }
-        })
+        codegen.backend().jit(m).map(Code)
     }
 
     pub(crate) fn function_ptr(&self, name: &str) -> Option<*const u8> {
-        match self {
-            Code::Cranelift(j) => j.function_ptr(name),
-            Code::Llvm(j) => j.function_ptr(name),
-        }
+        self.0.function_ptr(name)
     }
 }
 

@@ -179,3 +179,27 @@ fn trampoline(
         .map_err(|e| ClifError(format!("{name}: {e:?}")))?;
     Ok(id)
 }
+
+/// Cranelift as a [`scion_ir::backend::Backend`]: [`JitModule::compile`].
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Cranelift;
+
+impl scion_ir::backend::Backend for Cranelift {
+    fn name(&self) -> String {
+        "cranelift".to_string()
+    }
+
+    fn jit(&self, m: &Module) -> Result<Box<dyn scion_ir::backend::JitCode>, String> {
+        Ok(Box::new(JitModule::compile(m).map_err(|e| e.to_string())?))
+    }
+}
+
+impl scion_ir::backend::JitCode for JitModule {
+    fn function_ptr(&self, name: &str) -> Option<*const u8> {
+        JitModule::function_ptr(self, name)
+    }
+
+    fn call(&self, name: &str, args: &[Val]) -> Result<Vec<Val>, String> {
+        JitModule::call(self, name, args).map_err(|e| e.to_string())
+    }
+}

@@ -25,7 +25,7 @@
 pub mod jit;
 pub mod translate;
 
-pub use jit::{ClifError, JitModule};
+pub use jit::{ClifError, Cranelift, JitModule};
 
 use cranelift_codegen::settings::{self, Configurable};
 use cranelift_frontend::FunctionBuilderContext;

@@ -288,3 +288,32 @@ fn store_slot<'c>(
     b.build_store(at, v).map_err(err)?;
     Ok(())
 }
+
+/// LLVM's JIT at an `-O` level as a [`scion_ir::backend::Backend`]: [`JitModule::compile`].
+#[derive(Clone, Copy, Debug)]
+pub struct Llvm {
+    /// LLVM's pipeline `default<O{opt_level}>` (0 to 3).
+    pub opt_level: u8,
+}
+
+impl scion_ir::backend::Backend for Llvm {
+    fn name(&self) -> String {
+        format!("llvm -O{}", self.opt_level)
+    }
+
+    fn jit(&self, m: &Module) -> Result<Box<dyn scion_ir::backend::JitCode>, String> {
+        Ok(Box::new(
+            JitModule::compile(m, self.opt_level).map_err(|e| e.to_string())?,
+        ))
+    }
+}
+
+impl scion_ir::backend::JitCode for JitModule {
+    fn function_ptr(&self, name: &str) -> Option<*const u8> {
+        JitModule::function_ptr(self, name)
+    }
+
+    fn call(&self, name: &str, args: &[Val]) -> Result<Vec<Val>, String> {
+        JitModule::call(self, name, args).map_err(|e| e.to_string())
+    }
+}

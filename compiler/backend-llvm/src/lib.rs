@@ -34,7 +34,7 @@ pub mod jit;
 pub mod target;
 pub mod translate;
 
-pub use jit::JitModule;
+pub use jit::{JitModule, Llvm};
 pub use target::Target;
 
 use inkwell::context::Context;
