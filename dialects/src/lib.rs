@@ -101,6 +101,11 @@
 
 #![warn(missing_docs)]
 
+/// docs/howto-add-a-backend.md, compiled and run as a doctest so the how-to follows the traits.
+#[cfg(doctest)]
+#[doc = include_str!("../../docs/howto-add-a-backend.md")]
+pub struct HowtoAddABackend;
+
 pub mod attr;
 pub mod backend;
 pub mod builder;
