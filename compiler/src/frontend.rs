@@ -269,8 +269,11 @@ fn run_pipeline(
     }
     pm.options.stop_after = popts.stop_after.clone();
     pm.options.time_passes = popts.time_passes;
-    let report = pm.run(m, cx, &mut out.dumps)?;
+    let result = pm.run(m, cx, &mut out.dumps);
+    // Warnings of the passes that ran come out even when a later pass fails (W0970 explains
+    // an E0916 of `add-entries`).
     out.diagnostics.extend(std::mem::take(&mut cx.diagnostics));
+    let report = result?;
     if popts.time_passes {
         out.dumps.push_str(&report.timing_table());
     }
