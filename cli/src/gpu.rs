@@ -58,6 +58,7 @@ pub fn compile_kit(
     .map_err(|e| fail("front end", e))?;
     let m = lo.module;
     let buffers: Vec<String> = lo.entry.buffers.iter().map(|b| b.name.clone()).collect();
+    let logical = lo.entry.logical;
     let opts = scion_llvm::Options {
         target: scion_llvm::Target::Nvptx64,
         cpu: cpu.map(String::from),
@@ -67,7 +68,7 @@ pub fn compile_kit(
         .map_err(|e| fail("LLVM", e.to_string()))?;
     let ptx = String::from_utf8(ptx).map_err(|_| fail("LLVM", "PTX is not UTF-8".into()))?;
     Ok((
-        PtxKit::new(name, ALGORITHM, buffers, boxes, &ptx),
+        PtxKit::new(name, ALGORITHM, buffers, boxes, logical, &ptx),
         start.elapsed(),
     ))
 }
@@ -153,6 +154,7 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
         &kit.layout,
         &kit.algorithm,
         kit.buffers.clone(),
+        kit.logical.clone(),
     )
     .map_err(gpu_err)?;
     let module_time = t.elapsed();

@@ -83,6 +83,9 @@ pub struct CompileResult {
     /// With `--entry`: the C signature of the exported entry points (their records and the
     /// layout's buffers, as `--emit=header` describes them), once the pipeline has run.
     pub entry: Option<EntrySig>,
+    /// With `--layout`: the logical tree its constructor reads (`layout::logical`), when the
+    /// runtime can fill it (otherwise `constructor-specialize` reports why).
+    pub logical: Option<scion_runtime::bvh::schema::Schema>,
     /// IR dumps and timing reports asked for by the pass options (for standard error).
     pub dumps: String,
 }
@@ -168,6 +171,11 @@ pub fn compile(
             return out;
         };
         let model = LayoutModel::from_ast(decl, &program);
+        out.logical = model
+            .adt
+            .as_ref()
+            .and_then(|a| crate::layout::logical::LogicalAbi::derive(&module, a).ok())
+            .map(|l| l.schema);
         let spec = LayoutSpec::new(model);
         if let Some(algorithm) = &popts.entry {
             match abi::signature(&program, &module, algorithm, &spec) {

@@ -50,9 +50,18 @@ struct Scene {
     adt: Val,
     nodes: Vec<u8>,
     prims: Vec<u8>,
-    /// The runtime's logical tree nodes (design note §3: kind, bounds, child[2], prim_offset,
-    /// prim_count; 44 bytes), in the same pre-order; primitives are `prims`.
+    /// The logical nodes of the prelude's `BVH` (`scion_runtime::bvh::schema::binary_bvh`:
+    /// kind @0, bounds @4, left @28 and right @32 or nprims: u16 @28 and data @32; 36 bytes),
+    /// in the same pre-order; primitives are `prims`.
     logical: Vec<u8>,
+}
+
+/// Bytes of a logical node of `BVH`.
+const LOGICAL: usize = 36;
+
+#[test]
+fn the_logical_node_is_the_runtimes() {
+    assert_eq!(scion_runtime::bvh::schema::binary_bvh().node_size as usize, LOGICAL);
 }
 
 fn put(buf: &mut [u8], at: usize, bytes: &[u8]) {
@@ -91,10 +100,10 @@ fn build(tris: &mut [Tri], depth: usize, s: &mut Scene) -> Val {
     let bounds_val = rec("AABB", None, vec![v3(lo), v3(hi)]);
     let me = s.nodes.len() / 32;
     s.nodes.extend_from_slice(&[0u8; 32]);
-    s.logical.extend_from_slice(&[0u8; 44]);
+    s.logical.extend_from_slice(&[0u8; LOGICAL]);
     for (k, x) in lo.iter().chain(hi.iter()).enumerate() {
         s.nodes[me * 32 + 4 * k..me * 32 + 4 * k + 4].copy_from_slice(&x.to_le_bytes());
-        put(&mut s.logical, me * 44 + 4 + 4 * k, &x.to_le_bytes());
+        put(&mut s.logical, me * LOGICAL + 4 + 4 * k, &x.to_le_bytes());
     }
     if tris.len() <= 3 {
         let p_o = (s.prims.len() / 40) as u32;
@@ -117,12 +126,12 @@ fn build(tris: &mut [Tri], depth: usize, s: &mut Scene) -> Val {
         }
         s.nodes[me * 32 + 24..me * 32 + 28].copy_from_slice(&p_o.to_le_bytes());
         s.nodes[me * 32 + 28..me * 32 + 30].copy_from_slice(&(tris.len() as u16).to_le_bytes());
-        put(&mut s.logical, me * 44, &1u32.to_le_bytes());
-        put(&mut s.logical, me * 44 + 36, &p_o.to_le_bytes());
+        put(&mut s.logical, me * LOGICAL, &1u32.to_le_bytes());
+        put(&mut s.logical, me * LOGICAL + 32, &p_o.to_le_bytes());
         put(
             &mut s.logical,
-            me * 44 + 40,
-            &(tris.len() as u32).to_le_bytes(),
+            me * LOGICAL + 28,
+            &(tris.len() as u16).to_le_bytes(),
         );
         return rec(
             "BVH",
@@ -145,10 +154,10 @@ fn build(tris: &mut [Tri], depth: usize, s: &mut Scene) -> Val {
     let right = build(r, depth + 1, s);
     let c_o = (right_index - me) as u32;
     s.nodes[me * 32 + 24..me * 32 + 28].copy_from_slice(&c_o.to_le_bytes());
-    put(&mut s.logical, me * 44 + 28, &(me as u32 + 1).to_le_bytes());
+    put(&mut s.logical, me * LOGICAL + 28, &(me as u32 + 1).to_le_bytes());
     put(
         &mut s.logical,
-        me * 44 + 32,
+        me * LOGICAL + 32,
         &(right_index as u32).to_le_bytes(),
     );
     rec("BVH", Some(0), vec![bounds_val, left, right])

@@ -10,7 +10,6 @@ use crate::args::DevicePtr;
 use crate::driver::{self, check, check_what, DriverInfo};
 use crate::error::{CudaError, CUDA_ERROR_INVALID_DEVICE, CUDA_ERROR_OUT_OF_MEMORY};
 use cudarc::driver::sys;
-use scion_runtime::bvh::LogicalNode;
 use scion_runtime::geom::{Ray, Triangle};
 use std::ffi::{c_char, c_int, c_void, CStr};
 
@@ -38,8 +37,6 @@ unsafe impl<T: DeviceCopy, const N: usize> DeviceCopy for [T; N] {}
 unsafe impl DeviceCopy for Ray {}
 // SAFETY: `#[repr(C)]`, nine `f32`s and a `u32` (40 bytes), no padding.
 unsafe impl DeviceCopy for Triangle {}
-// SAFETY: `#[repr(C)]`, `u32`, six `f32`s and four `u32`s (44 bytes), no padding.
-unsafe impl DeviceCopy for LogicalNode {}
 
 /// The bytes of a `DeviceCopy` slice.
 pub fn bytes_of<T: DeviceCopy>(data: &[T]) -> &[u8] {

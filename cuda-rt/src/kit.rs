@@ -26,11 +26,14 @@ pub struct PtxKit {
     pub buffers: Vec<String>,
     /// How the layout stores boxes.
     pub boxes: Boxes,
+    /// The logical tree the packing kernels read.
+    pub logical: Schema,
     /// The PTX (with the comment lines; PTX ignores them).
     pub ptx: String,
 }
 
 use scion_ir::tree::quant::Boxes;
+use scion_runtime::bvh::schema::Schema;
 use scion_runtime::bvh::LogicalTree;
 use std::borrow::Cow;
 
@@ -43,12 +46,15 @@ impl PtxKit {
         algorithm: &str,
         buffers: Vec<String>,
         boxes: Boxes,
+        logical: Schema,
         ptx: &str,
     ) -> PtxKit {
         let mut text = format!(
-            "{TAG}layout {layout}\n{TAG}algorithm {algorithm}\n{TAG}buffers {}\n{TAG}boxes {}\n",
+            "{TAG}layout {layout}\n{TAG}algorithm {algorithm}\n{TAG}buffers {}\n{TAG}boxes {}\n\
+             {TAG}logical {}\n",
             buffers.join(","),
-            boxes.name()
+            boxes.name(),
+            logical.to_text()
         );
         text.push_str(ptx);
         PtxKit {
@@ -56,6 +62,7 @@ impl PtxKit {
             algorithm: algorithm.into(),
             buffers,
             boxes,
+            logical,
             ptx: text,
         }
     }
@@ -90,7 +97,10 @@ impl PtxKit {
                 format!("`{TAG}boxes {name}`: unknown boxes (known: exact, global-q16)")
             })?,
         };
+        let logical = Schema::from_text(&field("logical")?)
+            .map_err(|e| format!("`{TAG}logical`: {e}"))?;
         Ok(PtxKit {
+            logical,
             layout: field("layout")?,
             algorithm: field("algorithm")?,
             buffers: buffers
@@ -108,6 +118,7 @@ impl PtxKit {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use scion_runtime::bvh::schema::binary_bvh;
 
     #[test]
     fn round_trips_and_stays_ptx() {
@@ -117,12 +128,13 @@ mod tests {
             "closest_hit",
             vec!["nodes".into(), "primitives".into(), "globals".into()],
             Boxes::GlobalQ16,
+            scion_runtime::bvh::schema::binary_bvh(),
             ptx,
         );
         assert!(kit.ptx.ends_with(ptx));
         assert!(kit.ptx.lines().take(4).all(|l| l.starts_with("//")));
         assert_eq!(PtxKit::parse(&kit.ptx).unwrap(), kit);
-        let none = PtxKit::new("L", "A", vec![], Boxes::Exact, ptx);
+        let none = PtxKit::new("L", "A", vec![], Boxes::Exact, binary_bvh(), ptx);
         assert_eq!(
             PtxKit::parse(&none.ptx).unwrap().buffers,
             Vec::<String>::new()
@@ -131,7 +143,12 @@ mod tests {
 
     #[test]
     fn boxes_default_to_exact_and_must_be_known() {
-        let old = "// scion-gpu layout L\n// scion-gpu algorithm a\n// scion-gpu buffers b\n";
+        let old = format!(
+            "// scion-gpu layout L\n// scion-gpu algorithm a\n// scion-gpu buffers b\n\
+             // scion-gpu logical {}\n",
+            binary_bvh().to_text()
+        );
+        let old = old.as_str();
         assert_eq!(PtxKit::parse(old).unwrap().boxes, Boxes::Exact);
         let bad = format!("{old}// scion-gpu boxes q8\n");
         let e = PtxKit::parse(&bad).unwrap_err();
@@ -157,7 +174,7 @@ mod tests {
             root: 0,
             primitives: vec![],
         };
-        let kit = |boxes| PtxKit::new("L", "a", vec![], boxes, "");
+        let kit = |boxes| PtxKit::new("L", "a", vec![], boxes, binary_bvh(), "");
         assert!(matches!(
             kit(Boxes::Exact).reference_tree(&tree),
             Cow::Borrowed(_)

@@ -13,6 +13,7 @@ use crate::args::{DevicePtr, Grid, KernelArg, THREADS_PER_BLOCK};
 use crate::device::{Device, DeviceCopy};
 use crate::error::CudaError;
 use crate::launcher::{CudaLauncher, Launcher};
+use scion_runtime::bvh::schema::{LogicalBytes, Schema};
 use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Hit, Ray};
 use std::time::{Duration, Instant};
@@ -26,7 +27,7 @@ const _: () = assert!(std::mem::size_of::<Ray>() == 32);
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct DeviceTreeView {
-    /// Device address of the 44-byte logical nodes.
+    /// Device address of the logical nodes (the layout's schema, 8-aligned).
     pub nodes: u64,
     /// Number of nodes.
     pub node_count: u32,
@@ -48,8 +49,14 @@ unsafe impl DeviceCopy for DeviceTreeView {}
 const _: () = assert!(std::mem::size_of::<DeviceTreeView>() == 32);
 
 impl DeviceTreeView {
-    /// The view of `tree` whose arrays were uploaded at `nodes` and `prims`.
-    pub fn new(tree: &LogicalTree, nodes: DevicePtr, prims: DevicePtr) -> Result<Self, CudaError> {
+    /// The view of `tree`, its nodes `bytes`, whose arrays were uploaded at `nodes` and
+    /// `prims`.
+    pub fn new(
+        tree: &LogicalTree,
+        bytes: &LogicalBytes,
+        nodes: DevicePtr,
+        prims: DevicePtr,
+    ) -> Result<Self, CudaError> {
         let count = |n: usize, what: &str| {
             u32::try_from(n).map_err(|_| {
                 CudaError::Host(format!(
@@ -59,8 +66,8 @@ impl DeviceTreeView {
         };
         Ok(DeviceTreeView {
             nodes: nodes.0,
-            node_count: count(tree.nodes.len(), "nodes")?,
-            root: tree.root,
+            node_count: count(bytes.node_count, "nodes")?,
+            root: bytes.root,
             prims: prims.0,
             prim_count: count(tree.primitives.len(), "triangles")?,
             pad: 0,
@@ -217,6 +224,7 @@ pub struct GpuPipeline<L: Launcher> {
     launcher: L,
     names: KernelNames,
     buffers: Vec<String>,
+    logical: Schema,
     root: RootRef,
     /// Summed stack frames of the non-kernel functions, from the JIT log.
     frames: Option<u64>,
@@ -257,26 +265,35 @@ pub struct GpuTrace {
 impl<'d> GpuPipeline<CudaLauncher<'d>> {
     /// Loads `ptx` on `device` and checks its kernels for layout `layout` and algorithm
     /// `algorithm`; `buffers` names the layout's buffers in plan order (their count is what
-    /// `@L.sizes` writes).
+    /// `@L.sizes` writes), `logical` the shape of the logical nodes `@L.build` reads.
     pub fn new(
         device: &'d Device,
         ptx: &str,
         layout: &str,
         algorithm: &str,
         buffers: Vec<String>,
+        logical: Schema,
     ) -> Result<GpuPipeline<CudaLauncher<'d>>, CudaError> {
-        GpuPipeline::with_launcher(CudaLauncher::load(device, ptx)?, layout, algorithm, buffers)
+        GpuPipeline::with_launcher(
+            CudaLauncher::load(device, ptx)?,
+            layout,
+            algorithm,
+            buffers,
+            logical,
+        )
     }
 }
 
 impl<L: Launcher> GpuPipeline<L> {
     /// Checks the kernels `launcher` has loaded for layout `layout` and algorithm
-    /// `algorithm`; `buffers` names the layout's buffers in plan order.
+    /// `algorithm`; `buffers` names the layout's buffers in plan order, `logical` the shape of
+    /// the logical nodes.
     pub fn with_launcher(
         launcher: L,
         layout: &str,
         algorithm: &str,
         buffers: Vec<String>,
+        logical: Schema,
     ) -> Result<GpuPipeline<L>, CudaError> {
         let names = KernelNames::new(layout, algorithm);
         let root = check_kernels(&names, |k| launcher.params(k))?;
@@ -291,6 +308,7 @@ impl<L: Launcher> GpuPipeline<L> {
             launcher,
             names,
             buffers,
+            logical,
             root,
             frames,
         })
@@ -336,9 +354,10 @@ impl<L: Launcher> GpuPipeline<L> {
         }
         let dev = &self.launcher;
         let ptr = |b: &L::Buffer| KernelArg::Ptr(dev.address(b));
-        let nodes = dev.upload("logical nodes", &tree.nodes)?;
+        let bytes = LogicalBytes::fill(tree, &self.logical).map_err(CudaError::Host)?;
+        let nodes = dev.upload("logical nodes", bytes.nodes())?;
         let prims = dev.upload("logical triangles", &tree.primitives)?;
-        let view = DeviceTreeView::new(tree, dev.address(&nodes), dev.address(&prims))?;
+        let view = DeviceTreeView::new(tree, &bytes, dev.address(&nodes), dev.address(&prims))?;
         let view = dev.upload("logical tree view", &[view])?;
         let count = self.buffers.len();
         let sizes_buf = dev.alloc("buffer sizes", 8 * count as u64)?;
@@ -514,7 +533,8 @@ mod tests {
             })
             .collect();
         let tree = build_sah_binned(&tris, &SahOptions::default());
-        let v = DeviceTreeView::new(&tree, DevicePtr(0x1000), DevicePtr(0x2000)).unwrap();
+        let lb = LogicalBytes::fill(&tree, &scion_runtime::bvh::schema::binary_bvh()).unwrap();
+        let v = DeviceTreeView::new(&tree, &lb, DevicePtr(0x1000), DevicePtr(0x2000)).unwrap();
         let bytes = crate::device::bytes_of(std::slice::from_ref(&v));
         let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap());
         let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap());

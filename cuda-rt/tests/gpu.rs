@@ -6,6 +6,7 @@
 mod common;
 
 use common::{device_or_skip, stack_limit_lock, PROBE_PTX};
+use scion_runtime::bvh::schema::binary_bvh;
 use scion_cuda::error::STATUS_STACK_OVERFLOW;
 use scion_cuda::trace::{GpuPipeline, RootRef};
 use scion_cuda::{CudaError, DevicePtr, Grid, KernelArg, Module};
@@ -193,7 +194,7 @@ fn pipeline_packs_on_the_device_and_traces() {
         return;
     };
     let names = vec!["triangles".to_string(), "count".to_string()];
-    let p = GpuPipeline::new(&dev, PROBE_PTX, "Fixture", "probe", names).unwrap();
+    let p = GpuPipeline::new(&dev, PROBE_PTX, "Fixture", "probe", names, binary_bvh()).unwrap();
     assert_eq!(p.root_ref(), RootRef::U32);
     let tree = build_sah_binned(&triangles(300), &SahOptions::default());
     let lock = stack_limit_lock();
@@ -246,7 +247,7 @@ fn pipeline_rejects_a_module_without_the_kernels() {
     let Some(dev) = device_or_skip("pipeline_rejects_a_module_without_the_kernels") else {
         return;
     };
-    let e = GpuPipeline::new(&dev, PROBE_PTX, "LinearBVH", "closest_hit", vec![])
+    let e = GpuPipeline::new(&dev, PROBE_PTX, "LinearBVH", "closest_hit", vec![], binary_bvh())
         .err()
         .unwrap();
     assert!(

@@ -79,8 +79,10 @@ int main(int argc, char **argv) {
     if (scion_tree_build(scene, 0, &tree, err, sizeof err) != SCION_RT_OK) {
         return fail("building the tree", err);
     }
+    // The tree's nodes in the shape the layout's constructor reads: the prelude's `BVH`, whose
+    // node struct and schema the generated header declares.
     ScionTreeView view;
-    if (scion_tree_view(tree, &view, err, sizeof err) != SCION_RT_OK) {
+    if (scion_tree_view(tree, &scion_logical_BVH, &view, err, sizeof err) != SCION_RT_OK) {
         return fail("viewing the tree", err);
     }
 

@@ -12,7 +12,8 @@
 
 use crate::backend::Backend;
 use scion_runtime::batch::BatchDriver;
-use scion_runtime::bvh::{LogicalNode, LogicalTree};
+use scion_runtime::bvh::schema::{LogicalBytes, Schema};
+use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Hit, Ray, Triangle};
 use std::fmt;
 use std::sync::Mutex;
@@ -32,18 +33,33 @@ pub struct BufferSpec {
     pub align: usize,
 }
 
+/// The logical tree handed to a layout's code: the runtime's tree and, for code generated
+/// from a `build`, its nodes in the schema of the layout's tree type.
+#[derive(Clone, Copy)]
+pub struct LogicalInput<'a> {
+    /// The tree.
+    pub tree: &'a LogicalTree,
+    /// Its nodes as [`LayoutCode::schema`] describes them (`None` when the code has none).
+    pub bytes: Option<&'a LogicalBytes>,
+}
+
 /// The entry points of one algorithm specialized to one layout (design note §3).
 pub trait LayoutCode: Sync {
     /// The layout's name.
     fn layout(&self) -> String;
+    /// The shape of the logical nodes `sizes` and `build` read, for generated code
+    /// ([`LogicalInput::bytes`] is then filled in it); `None` for code that reads the tree.
+    fn schema(&self) -> Option<&Schema> {
+        None
+    }
     /// The layout's buffers, in the order `@L.sizes` and `@L.build` use.
     fn buffers(&self) -> Vec<BufferSpec>;
     /// `@L.sizes`: writes each buffer's byte size for `tree` into `sizes`
     /// (`sizes.len() == buffers().len()`).
-    fn sizes(&self, tree: &LogicalTree, sizes: &mut [u64]);
+    fn sizes(&self, tree: &LogicalInput<'_>, sizes: &mut [u64]);
     /// `@L.build`: packs `tree` into the buffers (each exactly its size, aligned); 0 or an
     /// error status.
-    fn build(&self, tree: &LogicalTree, buffers: &mut [&mut [u8]]) -> i32;
+    fn build(&self, tree: &LogicalInput<'_>, buffers: &mut [&mut [u8]]) -> i32;
     /// The batch entry: traces `queries[i]` into `results[i]` (in/out, initialized by the
     /// caller) for every `i`, in order; 0, or the status of the first failing query, after
     /// which it stops.
@@ -60,8 +76,8 @@ pub trait LayoutCode: Sync {
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct LogicalTreeView {
-    /// `tree.nodes` (44-byte `LogicalNode`s).
-    pub nodes: *const LogicalNode,
+    /// The nodes in the schema's form ([`LogicalBytes::nodes`]).
+    pub nodes: *const u8,
     /// Number of nodes.
     pub node_count: u32,
     /// Index of the root, `u32::MAX` for the empty tree.
@@ -73,12 +89,12 @@ pub struct LogicalTreeView {
 }
 
 impl LogicalTreeView {
-    /// The view of `tree`; `None` when a count does not fit `u32`.
-    pub fn new(tree: &LogicalTree) -> Option<LogicalTreeView> {
+    /// The view of `bytes`, the nodes of `tree`; `None` when a count does not fit `u32`.
+    pub fn new(tree: &LogicalTree, bytes: &LogicalBytes) -> Option<LogicalTreeView> {
         Some(LogicalTreeView {
-            nodes: tree.nodes.as_ptr(),
-            node_count: u32::try_from(tree.nodes.len()).ok()?,
-            root: tree.root,
+            nodes: bytes.nodes().as_ptr(),
+            node_count: u32::try_from(bytes.node_count).ok()?,
+            root: bytes.root,
             prims: tree.primitives.as_ptr(),
             prim_count: u32::try_from(tree.primitives.len()).ok()?,
         })
@@ -140,8 +156,19 @@ impl Packed {
                 nonempty: false,
             });
         }
+        let bytes = match code.schema() {
+            Some(schema) => Some(
+                LogicalBytes::fill(tree, schema)
+                    .map_err(|e| format!("the logical tree of `{}`: {e}", code.layout()))?,
+            ),
+            None => None,
+        };
+        let input = LogicalInput {
+            tree,
+            bytes: bytes.as_ref(),
+        };
         let mut sizes = vec![0u64; specs.len()];
-        code.sizes(tree, &mut sizes);
+        code.sizes(&input, &mut sizes);
         let mut storage = Vec::with_capacity(specs.len());
         let mut ranges = Vec::with_capacity(specs.len());
         for (spec, &size) in specs.iter().zip(&sizes) {
@@ -163,7 +190,7 @@ impl Packed {
             .zip(&ranges)
             .map(|(b, &(o, n))| &mut b[o..o + n])
             .collect();
-        let status = code.build(tree, &mut views);
+        let status = code.build(&input, &mut views);
         if status != STATUS_OK {
             return Err(format!(
                 "@{}.build failed with status {status}",

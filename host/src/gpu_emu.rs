@@ -17,6 +17,7 @@ use crate::backend::Backend;
 use crate::jit::{library_lo, Code, Codegen, LoOptions, ALGORITHM};
 use crate::quantized::Boxes;
 use scion_compiler::abi::EntryTarget;
+use scion_runtime::bvh::schema::Schema;
 use scion_cuda::args::PackedArgs;
 use scion_cuda::device::{bytes_of, check_copy_len, DeviceCopy};
 use scion_cuda::ptx::PtxParam;
@@ -59,6 +60,7 @@ pub struct EmulatedGpu {
     workers: usize,
     layout: String,
     buffers: Vec<String>,
+    logical: Schema,
     codegen: Codegen,
     /// Front end, `lo-host-kernels` and machine code.
     pub compile_time: Duration,
@@ -94,6 +96,7 @@ impl EmulatedGpu {
         let mut gpu = EmulatedGpu::from_module(lo.module, codegen, workers)?;
         gpu.layout = lo.entry.layout.clone();
         gpu.buffers = buffers;
+        gpu.logical = lo.entry.logical.clone();
         gpu.compile_time = start.elapsed();
         Ok(gpu)
     }
@@ -156,6 +159,7 @@ impl EmulatedGpu {
             workers,
             layout: String::new(),
             buffers: Vec::new(),
+            logical: scion_runtime::bvh::schema::binary_bvh(),
             codegen,
             compile_time: start.elapsed(),
         })
@@ -179,7 +183,9 @@ impl EmulatedGpu {
     /// The pipeline of closest hit over these kernels (`scion_cuda::trace`).
     pub fn into_pipeline(self) -> Result<GpuPipeline<EmulatedGpu>, String> {
         let (layout, buffers) = (self.layout.clone(), self.buffers.clone());
-        GpuPipeline::with_launcher(self, &layout, ALGORITHM, buffers).map_err(|e| e.to_string())
+        let logical = self.logical.clone();
+        GpuPipeline::with_launcher(self, &layout, ALGORITHM, buffers, logical)
+            .map_err(|e| e.to_string())
     }
 
     fn kernel(&self, name: &str) -> Result<&HostKernel, CudaError> {

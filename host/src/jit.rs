@@ -20,7 +20,7 @@
 
 #![allow(unsafe_code)]
 
-use crate::contract::{BufferSpec, LayoutCode, LogicalTreeView, STATUS_OK};
+use crate::contract::{BufferSpec, LayoutCode, LogicalInput, LogicalTreeView, STATUS_OK};
 use crate::mem_interp::compile_library;
 use scion_compiler::abi::{EntrySig, EntryTarget};
 use scion_compiler::driver::cli::Emit;
@@ -29,7 +29,7 @@ use scion_compiler::frontend::PassOptions;
 use scion_ir::backend::{Backend, JitCode};
 use scion_ir::types::{FloatTy, IntTy, Type};
 use scion_ir::Module;
-use scion_runtime::bvh::LogicalTree;
+use scion_runtime::bvh::schema::Schema;
 use scion_runtime::geom::Ray;
 use std::collections::HashMap;
 use std::sync::Mutex;
@@ -121,6 +121,7 @@ pub struct JitClosestHit {
     _code: Code,
     layout: String,
     buffers: Vec<BufferSpec>,
+    schema: Schema,
     sizes: SizesFn,
     build: BuildFn,
     refs: Refs,
@@ -177,7 +178,7 @@ pub fn library_lo(stem: &str, layout: &str, o: &LoOptions) -> Result<LibraryLo, 
         entry_target: o.target,
         ..PassOptions::default()
     };
-    let (module, entry) = compile_library(stem, Emit::Lo, &pipeline, &popts)?;
+    let (module, entry, _) = compile_library(stem, Emit::Lo, &pipeline, &popts)?;
     let entry = entry.ok_or("no entry signature")?;
     Ok(LibraryLo { module, entry })
 }
@@ -284,6 +285,7 @@ impl JitClosestHit {
             _code: jit,
             layout: layout.to_string(),
             buffers,
+            schema: sig.logical.clone(),
             sizes,
             build,
             refs,
@@ -380,8 +382,11 @@ impl LayoutCode for JitClosestHit {
     fn buffers(&self) -> Vec<BufferSpec> {
         self.buffers.clone()
     }
-    fn sizes(&self, tree: &LogicalTree, sizes: &mut [u64]) {
-        let Some(view) = LogicalTreeView::new(tree) else {
+    fn schema(&self) -> Option<&Schema> {
+        Some(&self.schema)
+    }
+    fn sizes(&self, tree: &LogicalInput<'_>, sizes: &mut [u64]) {
+        let Some(view) = tree.bytes.and_then(|b| LogicalTreeView::new(tree.tree, b)) else {
             sizes.fill(u64::MAX);
             return;
         };
@@ -393,8 +398,8 @@ impl LayoutCode for JitClosestHit {
             *s = o;
         }
     }
-    fn build(&self, tree: &LogicalTree, buffers: &mut [&mut [u8]]) -> i32 {
-        let Some(view) = LogicalTreeView::new(tree) else {
+    fn build(&self, tree: &LogicalInput<'_>, buffers: &mut [&mut [u8]]) -> i32 {
+        let Some(view) = tree.bytes.and_then(|b| LogicalTreeView::new(tree.tree, b)) else {
             return -1;
         };
         if buffers.len() != self.buffers.len() {

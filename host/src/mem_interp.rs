@@ -27,6 +27,7 @@ use scion_ir::interp::{Interp, Val};
 use scion_ir::op::OpKind;
 use scion_ir::types::IntTy;
 use scion_ir::Module;
+use scion_runtime::bvh::schema::{LogicalBytes, Schema};
 use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Hit, Ray, Triangle};
 use std::time::{Duration, Instant};
@@ -69,18 +70,20 @@ pub struct MemClosestHit {
     module: Module,
     layout: String,
     buffers: usize,
+    schema: Schema,
 }
 
 /// Compiles `closest_hit.scion` with the prelude and the library layout in file `stem` through
 /// the front end (`frontend::compile`, as scionc does) to `emit` with `pipeline` and `popts`,
-/// and parses the printed module back. Output: the module and, with `popts.entry`, the entries'
-/// C signature; errors are rendered diagnostics.
+/// and parses the printed module back. Output: the module, with `popts.entry` the entries' C
+/// signature, and with `popts.layout` the schema of the logical tree its constructor reads;
+/// errors are rendered diagnostics.
 pub fn compile_library(
     stem: &str,
     emit: Emit,
     pipeline: &[String],
     popts: &PassOptions,
-) -> Result<(Module, Option<EntrySig>), String> {
+) -> Result<(Module, Option<EntrySig>, Option<Schema>), String> {
     let text = layout_source(stem).ok_or_else(|| format!("no library layout `{stem}`"))?;
     let mut sources = SourceMap::new();
     let prelude = [sources.add(PRELUDE_NAME, PRELUDE)];
@@ -109,7 +112,7 @@ pub fn compile_library(
             d.render(&sources)
         )
     })?;
-    Ok((module, r.entry))
+    Ok((module, r.entry, r.logical))
 }
 
 impl MemClosestHit {
@@ -120,7 +123,8 @@ impl MemClosestHit {
             ..PassOptions::default()
         };
         let pipeline = ["destructor-specialize", "constructor-specialize"].map(String::from);
-        let (module, _) = compile_library(stem, Emit::Mem, &pipeline, &popts)?;
+        let (module, _, schema) = compile_library(stem, Emit::Mem, &pipeline, &popts)?;
+        let schema = schema.ok_or_else(|| format!("layout `{layout}` has no logical tree"))?;
         for f in ["closest_hit", "sizes", "build", "node"] {
             let name = if f == "closest_hit" {
                 f.to_string()
@@ -143,6 +147,7 @@ impl MemClosestHit {
             module,
             layout: layout.to_string(),
             buffers,
+            schema,
         })
     }
 
@@ -169,7 +174,7 @@ impl MemClosestHit {
     /// finds the root's reference.
     fn pack(&self, it: &mut Interp<'_>, tree: &LogicalTree) -> Result<Packing, String> {
         let l = &self.layout;
-        let view = put_tree(it, tree)?;
+        let (view, root_index) = put_tree(it, tree, &self.schema)?;
         let start = Instant::now();
         let ptr = |a: u64| Val::Int(i128::from(a), IntTy::U64);
         let sizes_at = it.alloc_bytes(&vec![0u8; 8 * self.buffers.max(1)], 8);
@@ -205,7 +210,7 @@ impl MemClosestHit {
                 vec![
                     ptr(view),
                     ptr(b),
-                    Val::Int(i128::from(tree.root), IntTy::U32),
+                    Val::Int(i128::from(root_index), IntTy::U32),
                     c,
                     k,
                     s,
@@ -272,18 +277,10 @@ struct Packing {
     time: Duration,
 }
 
-/// The logical tree's C-ABI bytes in `it`'s memory; returns the `LogicalTreeView` address.
-fn put_tree(it: &mut Interp<'_>, tree: &LogicalTree) -> Result<u64, String> {
-    let mut nb = Vec::with_capacity(44 * tree.nodes.len());
-    for n in &tree.nodes {
-        nb.extend(n.kind.to_le_bytes());
-        for x in n.bounds {
-            nb.extend(x.to_le_bytes());
-        }
-        for w in [n.child[0], n.child[1], n.prim_offset, n.prim_count] {
-            nb.extend(w.to_le_bytes());
-        }
-    }
+/// The logical tree's C-ABI bytes in `it`'s memory (its nodes in `schema`'s form, 40-byte
+/// triangles); returns the `LogicalTreeView` address and the root's index.
+fn put_tree(it: &mut Interp<'_>, tree: &LogicalTree, schema: &Schema) -> Result<(u64, u32), String> {
+    let lb = LogicalBytes::fill(tree, schema)?;
     let mut pb = Vec::with_capacity(40 * tree.primitives.len());
     for t in &tree.primitives {
         for p in [t.p0, t.p1, t.p2] {
@@ -294,16 +291,16 @@ fn put_tree(it: &mut Interp<'_>, tree: &LogicalTree) -> Result<u64, String> {
         pb.extend(t.id.to_le_bytes());
     }
     let count = |n: usize| u32::try_from(n).map_err(|_| format!("{n} does not fit u32"));
-    let na = it.alloc_bytes(&nb, 4);
+    let na = it.alloc_bytes(lb.nodes(), 8);
     let pa = it.alloc_bytes(&pb, 4);
     let mut h = Vec::with_capacity(32);
     h.extend(na.to_le_bytes());
-    h.extend(count(tree.nodes.len())?.to_le_bytes());
-    h.extend(tree.root.to_le_bytes());
+    h.extend(count(lb.node_count)?.to_le_bytes());
+    h.extend(lb.root.to_le_bytes());
     h.extend(pa.to_le_bytes());
     h.extend(count(tree.primitives.len())?.to_le_bytes());
     h.extend(0u32.to_le_bytes());
-    Ok(it.alloc_bytes(&h, 8))
+    Ok((it.alloc_bytes(&h, 8), lb.root))
 }
 
 /// [`MemClosestHit`] as a [`Backend`] on `threads` threads (each packs its own copy).

@@ -5,8 +5,9 @@
  * Build: cc -std=c11 -include scion_closest_hit_L.h -DLAYOUT=L replay.c L.o -o replay
  * Run:   replay IN.rply OUT.hits [IN.rply OUT.hits ...]
  *
- * IN (little-endian): "SCNRPLY1", u32 node_count, u32 root (UINT32_MAX: empty tree),
- * u32 prim_count, u32 ray_count, then node_count ScionLogicalNode (44 bytes each),
+ * IN (little-endian): "SCNRPLY2", u32 node_count, u32 root (UINT32_MAX: empty tree),
+ * u32 prim_count, u32 ray_count, u32 node_size, then node_count logical nodes of node_size
+ * bytes each (the layout's ScionLogical_<Type>, as the runtime's schema fill writes them),
  * prim_count ScionTriangle (40 bytes each) and ray_count scion_closest_hit_query (32 bytes).
  * OUT: ray_count scion_closest_hit_result (8 bytes: t, id), each started at (tmax, UINT32_MAX).
  * Exit status 0, or 1 with one line on stderr naming the file and what failed. */
@@ -42,19 +43,21 @@ static int replay(const char *in_path, const char *out_path) {
     FILE *f = fopen(in_path, "rb");
     if (!f) return fail(in_path, "cannot open");
     char magic[8];
-    uint32_t head[4];
-    if (!read_exact(f, magic, 8) || memcmp(magic, "SCNRPLY1", 8) != 0 ||
+    uint32_t head[5];
+    if (!read_exact(f, magic, 8) || memcmp(magic, "SCNRPLY2", 8) != 0 ||
         !read_exact(f, head, sizeof head)) {
         fclose(f);
         return fail(in_path, "not a replay file");
     }
     uint32_t node_count = head[0], root = head[1], prim_count = head[2], ray_count = head[3];
-    ScionLogicalNode *nodes = malloc(sizeof *nodes * (node_count + 1));
+    size_t node_bytes = (size_t)head[4] * node_count;
+    /* 8-aligned, as ScionTreeView.nodes must be. */
+    unsigned char *nodes = aligned_alloc(8, (node_bytes + 8) / 8 * 8);
     ScionTriangle *prims = malloc(sizeof *prims * (prim_count + 1));
     scion_closest_hit_query *rays = malloc(sizeof *rays * (ray_count + 1));
     scion_closest_hit_result *results = malloc(sizeof *results * (ray_count + 1));
     if (!nodes || !prims || !rays || !results) return fail(in_path, "out of memory");
-    int ok = read_exact(f, nodes, sizeof *nodes * node_count) &&
+    int ok = read_exact(f, nodes, node_bytes) &&
              read_exact(f, prims, sizeof *prims * prim_count) &&
              read_exact(f, rays, sizeof *rays * ray_count);
     fclose(f);

@@ -13,6 +13,7 @@ use scion_host::mem_interp::LIBRARY_LAYOUTS;
 use scion_host::oracle::tree_depth;
 use scion_host::quantized::DecodedTree;
 use scion_runtime::batch::BatchDriver;
+use scion_runtime::bvh::schema::{binary_bvh, LogicalBytes};
 use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Hit, Ray, Vec3};
 use scion_runtime::reference::{closest_hit_tree_stats, closest_hits_tree, TraversalStats};
@@ -75,25 +76,22 @@ fn cases() -> Vec<Case> {
 }
 
 /// The replay file of `tests/replay/replay.c`.
+/// The nodes are in the shape of the prelude's `BVH`, the tree type of every library layout.
 fn write_replay(path: &Path, tree: &LogicalTree, rays: &[Ray]) {
-    let mut b = b"SCNRPLY1".to_vec();
+    let nodes = LogicalBytes::fill(tree, &binary_bvh()).expect("the runtime fills `BVH`");
+    let mut b = b"SCNRPLY2".to_vec();
     let u = |b: &mut Vec<u8>, v: u32| b.extend_from_slice(&v.to_le_bytes());
     let f = |b: &mut Vec<u8>, v: f32| b.extend_from_slice(&v.to_le_bytes());
     for v in [
-        tree.nodes.len() as u32,
-        tree.root,
+        nodes.node_count as u32,
+        nodes.root,
         tree.primitives.len() as u32,
         rays.len() as u32,
+        nodes.node_size as u32,
     ] {
         u(&mut b, v);
     }
-    for n in &tree.nodes {
-        u(&mut b, n.kind);
-        n.bounds.iter().for_each(|&x| f(&mut b, x));
-        n.child.iter().for_each(|&c| u(&mut b, c));
-        u(&mut b, n.prim_offset);
-        u(&mut b, n.prim_count);
-    }
+    b.extend_from_slice(nodes.nodes());
     for t in &tree.primitives {
         for p in [t.p0, t.p1, t.p2] {
             [p.x, p.y, p.z].iter().for_each(|&x| f(&mut b, x));

@@ -15,6 +15,7 @@ use scion_host::contract::LogicalTreeView;
 use scion_host::mem_interp::compile_library;
 use scion_ir::diag::SourceMap;
 use scion_runtime::batch::BatchDriver;
+use scion_runtime::bvh::schema::{LogicalBytes, Schema};
 use scion_runtime::bvh::{build_sah_binned, LogicalTree, SahOptions};
 use scion_runtime::geom::{Hit, Ray};
 use scion_runtime::query::{hits_checksum, primary_rays_n, secondary_rays};
@@ -32,7 +33,7 @@ type BatchPtrFn =
     unsafe extern "C" fn(*const *mut u8, *const Ray, *mut [u32; 2], u64, u64, *const u8) -> i32;
 
 /// The `lo` text of `scionc -O2 --emit=lo --layout NAME --entry closest_hit`.
-fn entries_lo(stem: &str, layout: &str) -> String {
+fn entries_lo(stem: &str, layout: &str) -> (String, Schema) {
     let mut pipeline = vec![
         "destructor-specialize".to_string(),
         "constructor-specialize".to_string(),
@@ -43,10 +44,11 @@ fn entries_lo(stem: &str, layout: &str) -> String {
         entry: Some("closest_hit".to_string()),
         ..PassOptions::default()
     };
-    let (m, entry) =
+    let (m, entry, schema) =
         compile_library(stem, Emit::Lo, &pipeline, &popts).unwrap_or_else(|e| panic!("{e}"));
-    assert!(entry.is_some(), "--entry gives the entries' signature");
-    scion_ir::print_module(&m)
+    let entry = entry.expect("--entry gives the entries' signature");
+    assert_eq!(Some(&entry.logical), schema.as_ref(), "one logical tree per layout");
+    (scion_ir::print_module(&m), entry.logical)
 }
 
 fn jit(lo: &str) -> JitModule {
@@ -76,13 +78,14 @@ impl Aligned {
 
 /// Runs the four entries of `layout` on `tree` and `rays` the way a C host does.
 fn trace_with_entries(stem: &str, layout: &str, tree: &LogicalTree, rays: &[Ray]) -> Vec<Hit> {
-    let lo = entries_lo(stem, layout);
+    let (lo, schema) = entries_lo(stem, layout);
     let code = jit(&lo);
     let f = |name: &str| {
         code.function_ptr(name)
             .unwrap_or_else(|| panic!("no `@{name}` in the JIT"))
     };
-    let view = LogicalTreeView::new(tree).expect("a tree the view can describe");
+    let bytes = LogicalBytes::fill(tree, &schema).expect("the runtime fills the schema");
+    let view = LogicalTreeView::new(tree, &bytes).expect("a tree the view can describe");
     let pointer_refs = lo.contains(&format!(
         "func @scion_{layout}_root(%0: ptr, %1: ptr) -> (ptr)"
     ));
@@ -186,7 +189,7 @@ fn exported_entries_trace_like_the_reference() {
 fn non_exported_functions_are_local_but_the_entries_are_callable() {
     // The module has export functions, so the backend keeps the rest local; the JIT still
     // finds the entries by name.
-    let lo = entries_lo("pbrt", "LinearBVH");
+    let (lo, _) = entries_lo("pbrt", "LinearBVH");
     assert!(
         lo.contains("func @scion_LinearBVH_root(%0: ptr, %1: ptr) -> (u32) attributes {export}")
     );
@@ -206,10 +209,12 @@ fn the_root_of_an_empty_tree_is_zero() {
     use scion_ir::types::IntTy;
     let tree = build_sah_binned(&gen::empty().triangles, &SahOptions::default());
     assert!(tree.is_empty());
-    let view = LogicalTreeView::new(&tree).unwrap();
     let addr = |p: *const u8| Val::Int(p as usize as i128, IntTy::U64);
     for (stem, layout) in [("pbrt", "LinearBVH"), ("ptr", "PtrBVH")] {
-        let code = jit(&entries_lo(stem, layout));
+        let (lo, schema) = entries_lo(stem, layout);
+        let code = jit(&lo);
+        let bytes = LogicalBytes::fill(&tree, &schema).unwrap();
+        let view = LogicalTreeView::new(&tree, &bytes).unwrap();
         let mut sizes = [0u64; 16];
         let sizes_ptr = sizes.as_mut_ptr() as *const u8;
         let view_ptr = &view as *const LogicalTreeView as *const u8;

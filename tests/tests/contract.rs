@@ -5,7 +5,9 @@
 mod common;
 
 use common::{Flat32, STACK};
-use scion_host::contract::{BufferSpec, LayoutCode, Packed, TraceFailure, STATUS_STACK_OVERFLOW};
+use scion_host::contract::{
+    BufferSpec, LayoutCode, LogicalInput, Packed, TraceFailure, STATUS_STACK_OVERFLOW,
+};
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::{build_sah_binned, LogicalTree, SahOptions};
 use scion_runtime::geom::{Ray, Vec3};
@@ -87,10 +89,10 @@ impl LayoutCode for Refuses {
             align: 64,
         }]
     }
-    fn sizes(&self, tree: &LogicalTree, sizes: &mut [u64]) {
-        sizes[0] = tree.nodes.len() as u64;
+    fn sizes(&self, input: &LogicalInput<'_>, sizes: &mut [u64]) {
+        sizes[0] = input.tree.nodes.len() as u64;
     }
-    fn build(&self, _: &LogicalTree, buffers: &mut [&mut [u8]]) -> i32 {
+    fn build(&self, _: &LogicalInput<'_>, buffers: &mut [&mut [u8]]) -> i32 {
         assert_eq!(buffers[0].as_ptr() as usize % 64, 0);
         3
     }
@@ -121,7 +123,7 @@ fn build_statuses_and_the_empty_tree() {
 #[cfg(target_pointer_width = "64")]
 fn logical_tree_view_abi() {
     use scion_host::contract::LogicalTreeView;
-    use scion_runtime::bvh::LogicalNode;
+    use scion_runtime::bvh::schema::{binary_bvh, LogicalBytes};
     use scion_runtime::geom::Triangle;
     use std::mem::{offset_of, size_of};
     assert_eq!(size_of::<LogicalTreeView>(), 32);
@@ -130,13 +132,11 @@ fn logical_tree_view_abi() {
     assert_eq!(offset_of!(LogicalTreeView, root), 12);
     assert_eq!(offset_of!(LogicalTreeView, prims), 16);
     assert_eq!(offset_of!(LogicalTreeView, prim_count), 24);
-    assert_eq!(size_of::<LogicalNode>(), 44);
-    assert_eq!(offset_of!(LogicalNode, child), 28);
-    assert_eq!(offset_of!(LogicalNode, prim_offset), 36);
     assert_eq!(size_of::<Triangle>(), 40);
     let scene = gen::one_triangle();
     let tree = build_sah_binned(&scene.triangles, &SahOptions::default());
-    let v = LogicalTreeView::new(&tree).unwrap();
+    let bytes = LogicalBytes::fill(&tree, &binary_bvh()).unwrap();
+    let v = LogicalTreeView::new(&tree, &bytes).unwrap();
     assert_eq!((v.node_count, v.root, v.prim_count), (1, 0, 1));
-    assert_eq!(v.nodes, tree.nodes.as_ptr());
+    assert_eq!(v.nodes, bytes.nodes().as_ptr());
 }

@@ -15,7 +15,7 @@
 //! (`node_count == 0`) it returns 0 without reading any node.
 
 use super::{EntrySig, EntryTarget, Role};
-use crate::passes::tree_to_mem::constructor::abi;
+use crate::passes::tree_to_mem::constructor::view;
 use scion_ir::attr::Attr;
 use scion_ir::diag::Diagnostic;
 use scion_ir::entity::{BlockId, TypeId, ValueId};
@@ -226,7 +226,7 @@ fn root_fn(m: &mut Module, sig: &EntrySig, t: &Tys, kernel: bool) {
     let place = m.add_block(body, &[]);
     let empty = m.add_block(body, &[]);
     let mut b = Builder::at_end(m, entry);
-    let count = b.lo_load(a[0], abi::VIEW_NODE_COUNT as i64, t.u32);
+    let count = b.lo_load(a[0], view::NODE_COUNT as i64, t.u32);
     let zero = b.lo_int(t.u32, 0);
     let none = b.lo_cmp(CmpPred::Eq, count, zero);
     b.lo_cond_br(none, (empty, &[]), (place, &[]));
@@ -234,7 +234,7 @@ fn root_fn(m: &mut Module, sig: &EntrySig, t: &Tys, kernel: bool) {
     let null = b.lo_int(t.root, 0);
     b.lo_ret(&[null]);
     b.set_insertion_point_to_end(place);
-    let i = b.lo_load(a[0], abi::VIEW_ROOT as i64, t.u32);
+    let i = b.lo_load(a[0], view::ROOT as i64, t.u32);
     let cells: Vec<ValueId> = (0..3)
         .map(|_| {
             let c = b.lo_stack_slot(4, 4);

@@ -16,14 +16,6 @@ use std::fmt::Write;
 pub const CONTRACT_TYPES: &str = "\
 #ifndef SCION_ABI_TYPES_DEFINED
 #define SCION_ABI_TYPES_DEFINED
-/* One node of the logical tree (44 bytes). */
-typedef struct ScionLogicalNode {
-    uint32_t kind;        /* 0 interior, 1 leaf */
-    float bounds[6];      /* low x, y, z, high x, y, z */
-    uint32_t child[2];    /* interior: left and right child */
-    uint32_t prim_offset; /* leaf: first primitive */
-    uint32_t prim_count;  /* leaf: number of primitives */
-} ScionLogicalNode;
 /* A triangle (40 bytes), the same in the logical tree and in packed layouts. */
 typedef struct ScionTriangle {
     float p0[3];
@@ -31,19 +23,36 @@ typedef struct ScionTriangle {
     float p2[3];
     uint32_t id;
 } ScionTriangle;
-/* The logical tree as generated code reads it (32 bytes). */
+/* The logical tree as generated code reads it (32 bytes): node_count nodes of the layout's
+ * tree type (its ScionLogical_<Type> struct in the layout's header), 8-byte aligned. */
 typedef struct ScionTreeView {
-    const ScionLogicalNode *nodes;
+    const void *nodes;
     uint32_t node_count;
     uint32_t root; /* UINT32_MAX for the empty tree */
     const ScionTriangle *prims;
     uint32_t prim_count;
 } ScionTreeView;
-SCION_STATIC_ASSERT(sizeof(ScionLogicalNode) == 44, \"ScionLogicalNode is 44 bytes\");
+/* What the runtime writes into a field of a logical node (docs/c-abi.md). */
+#define SCION_ROLE_BOUNDS 1       /* the node's box: float[6] */
+#define SCION_ROLE_CHILD_BOUNDS 2 /* the boxes of child slots slot..slot+count: float[count][6] */
+#define SCION_ROLE_CHILDREN 3     /* child slots slot..slot+count: uint32_t node indices */
+#define SCION_ROLE_PRIM_COUNT 4   /* a leaf's primitive count: an unsigned int of width bytes */
+#define SCION_ROLE_PRIM_OFFSET 5  /* a leaf's first primitive: uint32_t */
+#define SCION_SHARED 0xFFFFFFFFu  /* `variant` of a field every variant has */
+typedef struct ScionLogicalField {
+    uint32_t role, variant, offset, slot, count, width;
+} ScionLogicalField;
+/* The shape of a tree type's logical nodes (its scion_logical_<Type> constant). */
+typedef struct ScionLogicalSchema {
+    uint32_t node_size, node_align, interior, leaf, arity, field_count;
+    const ScionLogicalField *fields;
+} ScionLogicalSchema;
 SCION_STATIC_ASSERT(sizeof(ScionTriangle) == 40, \"ScionTriangle is 40 bytes\");
 SCION_STATIC_ASSERT(sizeof(ScionTreeView) == 32, \"ScionTreeView is 32 bytes\");
 SCION_STATIC_ASSERT(offsetof(ScionTreeView, root) == 12, \"ScionTreeView.root at 12\");
 SCION_STATIC_ASSERT(offsetof(ScionTreeView, prims) == 16, \"ScionTreeView.prims at 16\");
+SCION_STATIC_ASSERT(sizeof(ScionLogicalField) == 24, \"ScionLogicalField is 24 bytes\");
+SCION_STATIC_ASSERT(sizeof(ScionLogicalSchema) == 32, \"ScionLogicalSchema is 32 bytes\");
 #endif
 ";
 
@@ -127,6 +136,8 @@ pub fn render(sig: &EntrySig, root: &Type) -> String {
     s.push_str(STATIC_ASSERT);
     s.push_str("\n#ifdef __cplusplus\nextern \"C\" {\n#endif\n\n");
     s.push_str(CONTRACT_TYPES);
+    s.push('\n');
+    s.push_str(&sig.logical_c);
     s.push('\n');
     s.push_str(
         "/* Status codes: 0 success; batch entries return 1 when a traversal stack overflowed. */\n\

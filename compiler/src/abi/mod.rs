@@ -12,6 +12,7 @@
 
 pub mod entries;
 pub mod header;
+pub mod logical_c;
 pub mod record;
 
 use crate::passes::tree_to_mem::LayoutSpec;
@@ -61,6 +62,10 @@ pub struct EntrySig {
     pub result: Record,
     /// The layout's buffers, in the order of the `%B` table.
     pub buffers: Vec<BufferInfo>,
+    /// The logical tree `scion_L_build` reads: the runtime's schema of the tree type.
+    pub logical: scion_runtime::bvh::schema::Schema,
+    /// Its C declarations (the node struct and the schema constant).
+    pub logical_c: String,
 }
 
 impl EntrySig {
@@ -260,6 +265,12 @@ pub fn signature(
             align: b.align,
         })
         .collect();
+    let model_adt = spec.model.adt.as_ref().expect("the layout realizes a tree type");
+    let logical = crate::layout::logical::LogicalAbi::derive(m, model_adt).map_err(|e| {
+        Diagnostic::error("E0380", format!("the logical tree of `{}`: {e}", model_adt.name))
+            .with_primary(spec.model.span, "layout declared here")
+            .with_note("constructor specialization reads the logical tree the runtime builds")
+    })?;
     Ok(EntrySig {
         algorithm: algorithm.to_string(),
         layout,
@@ -267,6 +278,8 @@ pub fn signature(
         query,
         result,
         buffers,
+        logical_c: logical_c::render(&logical, m),
+        logical: logical.schema,
     })
 }
 

@@ -11,6 +11,7 @@
 pub mod adt;
 pub mod domain;
 pub mod dump;
+pub mod logical;
 pub mod model;
 mod place;
 pub mod plan;

@@ -143,6 +143,7 @@ fn run(a: &Args) -> Result<bool, String> {
         &kit.layout,
         &kit.algorithm,
         kit.buffers.clone(),
+        kit.logical.clone(),
     )
     .map_err(|e| e.to_string())?;
     let load = t.elapsed();

@@ -1,7 +1,9 @@
 //! Scenes and logical trees: `scion_scene_*`, `scion_tree_*`.
 
 use crate::ffi::{bad_arg, guard, report, Status, SCION_RT_ERR_EMPTY, SCION_RT_ERR_SCENE};
-use rt::bvh::{build_sah_binned, LogicalNode, LogicalTree, SahOptions};
+use rt::bvh::schema::{LogicalBytes, Schema, SchemaField};
+use rt::bvh::{build_sah_binned, LogicalTree, SahOptions};
+use std::sync::Mutex;
 use rt::geom::Triangle;
 use rt::scene::{load_obj, Scene};
 use std::ffi::{c_char, CStr};
@@ -11,17 +13,39 @@ pub struct ScionScene {
     pub(crate) scene: Scene,
 }
 
-/// A logical tree over a scene's triangles (opaque to C).
+/// A logical tree over a scene's triangles (opaque to C), with its nodes in every schema a
+/// view was asked for (kept as long as the tree, so views stay valid).
 pub struct ScionTree {
     pub(crate) tree: LogicalTree,
+    pub(crate) filled: Mutex<Vec<(Schema, Box<LogicalBytes>)>>,
+}
+
+/// A tree type's logical-node shape as C passes it (`ScionLogicalSchema`, 32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct ScionLogicalSchema {
+    /// Bytes per node.
+    pub node_size: u32,
+    /// Alignment of a node.
+    pub node_align: u32,
+    /// Kind of the interior variant.
+    pub interior: u32,
+    /// Kind of the leaf variant.
+    pub leaf: u32,
+    /// Child slots of an interior node.
+    pub arity: u32,
+    /// Number of `fields`.
+    pub field_count: u32,
+    /// The fields (`ScionLogicalField`, 24 bytes each).
+    pub fields: *const SchemaField,
 }
 
 /// The logical tree as generated code reads it (`ScionTreeView`, 32 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct ScionTreeView {
-    /// The nodes (44-byte `ScionLogicalNode`s).
-    pub nodes: *const LogicalNode,
+    /// The nodes, in the schema of the layout's tree type.
+    pub nodes: *const u8,
     /// How many.
     pub node_count: u32,
     /// The root's index, `u32::MAX` for the empty tree.
@@ -33,7 +57,8 @@ pub struct ScionTreeView {
 }
 
 const _: () = assert!(std::mem::size_of::<ScionTreeView>() == 32);
-const _: () = assert!(std::mem::size_of::<LogicalNode>() == 44);
+const _: () = assert!(std::mem::size_of::<ScionLogicalSchema>() == 32);
+const _: () = assert!(std::mem::size_of::<SchemaField>() == 24);
 const _: () = assert!(std::mem::size_of::<Triangle>() == 40);
 
 /// `scion_scene_load`.
@@ -131,7 +156,10 @@ pub unsafe extern "C" fn scion_tree_build(
             opts.max_leaf = max_leaf as usize;
         }
         let tree = build_sah_binned(&s.scene.triangles, &opts);
-        let h = Box::into_raw(Box::new(ScionTree { tree }));
+        let h = Box::into_raw(Box::new(ScionTree {
+            tree,
+            filled: Mutex::new(Vec::new()),
+        }));
         // SAFETY: `out` is writable.
         unsafe { *out = h };
         Ok(())
@@ -143,11 +171,12 @@ pub unsafe extern "C" fn scion_tree_build(
 /// `scion_tree_view`.
 ///
 /// # Safety
-/// `tree` is NULL or a live handle; `view` is NULL or writable; `err` as
-/// `ffi::write_error`.
+/// `tree` is NULL or a live handle; `schema` is NULL or points to a schema whose `fields`
+/// holds `field_count` fields; `view` is NULL or writable; `err` as `ffi::write_error`.
 #[no_mangle]
 pub unsafe extern "C" fn scion_tree_view(
     tree: *const ScionTree,
+    schema: *const ScionLogicalSchema,
     view: *mut ScionTreeView,
     err: *mut c_char,
     err_len: usize,
@@ -157,13 +186,46 @@ pub unsafe extern "C" fn scion_tree_view(
         let Some(t) = (unsafe { tree.as_ref() }) else {
             return Err(bad_arg("scion_tree_view: `tree` must not be NULL"));
         };
+        // SAFETY: NULL or a valid schema (the caller's contract).
+        let Some(c) = (unsafe { schema.as_ref() }) else {
+            return Err(bad_arg("scion_tree_view: `schema` must not be NULL"));
+        };
         if view.is_null() {
             return Err(bad_arg("scion_tree_view: `view` must not be NULL"));
         }
+        if c.fields.is_null() && c.field_count > 0 {
+            return Err(bad_arg("scion_tree_view: the schema's `fields` is NULL"));
+        }
+        let fields = if c.field_count == 0 {
+            Vec::new()
+        } else {
+            // SAFETY: `fields` holds `field_count` fields (the caller's contract).
+            unsafe { std::slice::from_raw_parts(c.fields, c.field_count as usize) }.to_vec()
+        };
+        let schema = Schema {
+            adt: "ScionLogicalSchema".to_string(),
+            node_size: c.node_size,
+            node_align: c.node_align,
+            interior: c.interior,
+            leaf: c.leaf,
+            arity: c.arity,
+            fields,
+        };
+        let mut filled = t.filled.lock().map_err(|_| bad_arg("scion_tree_view: a view of this tree panicked"))?;
+        let at = match filled.iter().position(|(s, _)| *s == schema) {
+            Some(at) => at,
+            None => {
+                let lb = LogicalBytes::fill(&t.tree, &schema)
+                    .map_err(|e| bad_arg(format!("scion_tree_view: {e}")))?;
+                filled.push((schema, Box::new(lb)));
+                filled.len() - 1
+            }
+        };
+        let lb = &filled[at].1;
         let v = ScionTreeView {
-            nodes: t.tree.nodes.as_ptr(),
-            node_count: t.tree.nodes.len() as u32,
-            root: t.tree.root,
+            nodes: lb.nodes().as_ptr(),
+            node_count: lb.node_count as u32,
+            root: lb.root,
             prims: t.tree.primitives.as_ptr(),
             prim_count: t.tree.primitives.len() as u32,
         };

@@ -67,14 +67,32 @@ fn the_c_path_matches_the_rust_path() {
         prim_count: 0,
     };
     // SAFETY: a live handle and an out pointer.
-    let s = unsafe { scion_tree_view(tree, &mut view, err.as_mut_ptr(), err.len()) };
+    let binary = rt::bvh::schema::binary_bvh();
+    let schema = ScionLogicalSchema {
+        node_size: binary.node_size,
+        node_align: binary.node_align,
+        interior: binary.interior,
+        leaf: binary.leaf,
+        arity: binary.arity,
+        field_count: binary.fields.len() as u32,
+        fields: binary.fields.as_ptr(),
+    };
+    // SAFETY: a live handle, a schema with its fields, and an out pointer.
+    let s = unsafe { scion_tree_view(tree, &schema, &mut view, err.as_mut_ptr(), err.len()) };
     assert_eq!(s, SCION_RT_OK);
     assert_eq!(view.node_count as usize, rust_tree.nodes.len());
     assert_eq!(view.prim_count as usize, rust_tree.primitives.len());
     assert_eq!(view.root, rust_tree.root);
-    // SAFETY: the view points into the live tree.
-    let nodes = unsafe { std::slice::from_raw_parts(view.nodes, view.node_count as usize) };
-    assert_eq!(nodes, &rust_tree.nodes[..]);
+    let expect = rt::bvh::schema::LogicalBytes::fill(&rust_tree, &binary).unwrap();
+    // SAFETY: the view points into bytes the live tree keeps.
+    let nodes = unsafe { std::slice::from_raw_parts(view.nodes, expect.nodes().len()) };
+    assert_eq!(nodes, expect.nodes());
+    // A schema the runtime cannot fill is refused with a message.
+    let bad = ScionLogicalSchema { node_size: 3, ..schema };
+    // SAFETY: as above.
+    let s = unsafe { scion_tree_view(tree, &bad, &mut view, err.as_mut_ptr(), err.len()) };
+    assert_ne!(s, SCION_RT_OK);
+    assert!(msg(&err).contains("node size 3"), "{}", msg(&err));
 
     let n = 3001u64;
     let mut rays = vec![ScionRay::default(); n as usize];

@@ -15,6 +15,7 @@ pub mod logical;
 pub mod median;
 pub mod reinsert;
 pub mod sah_binned;
+pub mod schema;
 pub mod wide;
 
 pub use chain::{build_caterpillar, DeepSide};

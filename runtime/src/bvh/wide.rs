@@ -146,7 +146,7 @@ fn empty_node<const W: usize>() -> WideNode<W> {
 }
 
 /// The binary nodes that become the children of the wide node made from interior `bin`.
-fn open(tree: &LogicalTree, bin: u32, width: usize) -> Vec<u32> {
+pub(crate) fn open(tree: &LogicalTree, bin: u32, width: usize) -> Vec<u32> {
     let mut slots: Vec<u32> = tree.nodes[bin as usize].child.to_vec();
     while slots.len() < width {
         let mut best: Option<(usize, f64)> = None;

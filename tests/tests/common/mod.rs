@@ -11,8 +11,8 @@
 
 #![allow(dead_code)]
 
-use scion_host::contract::{BufferSpec, LayoutCode, STATUS_OK, STATUS_STACK_OVERFLOW};
-use scion_runtime::bvh::{LogicalTree, NO_NODE};
+use scion_host::contract::{BufferSpec, LayoutCode, LogicalInput, STATUS_OK, STATUS_STACK_OVERFLOW};
+use scion_runtime::bvh::NO_NODE;
 use scion_runtime::geom::{Aabb, Ray, Triangle, Vec3};
 use scion_runtime::reference::prelude::{distmin_of, hit_distance, slab_ray};
 
@@ -52,12 +52,14 @@ impl LayoutCode for Flat32 {
         ]
     }
 
-    fn sizes(&self, tree: &LogicalTree, sizes: &mut [u64]) {
+    fn sizes(&self, input: &LogicalInput<'_>, sizes: &mut [u64]) {
+        let tree = input.tree;
         sizes[0] = 32 * tree.nodes.len() as u64;
         sizes[1] = 40 * tree.primitives.len() as u64;
     }
 
-    fn build(&self, tree: &LogicalTree, buffers: &mut [&mut [u8]]) -> i32 {
+    fn build(&self, input: &LogicalInput<'_>, buffers: &mut [&mut [u8]]) -> i32 {
+        let tree = input.tree;
         if tree.nodes.len() >= 1 << 31 {
             return 2;
         }

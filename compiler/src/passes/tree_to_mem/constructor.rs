@@ -23,6 +23,7 @@
 //! ADT of another shape is reported (E0380).
 
 use super::reader::Reader;
+use crate::layout::logical::{LogicalAbi, LogicalField, Slot, PRIM_STRIDE};
 use super::{spec_of, unsupported, LayoutSpec};
 use crate::layout::model::GroupKind;
 use crate::layout::plan::BufferKind;
@@ -38,20 +39,13 @@ use scion_ir::{
     ValueId,
 };
 
-/// Byte offsets of the logical tree's C structs.
-pub mod abi {
-    pub const VIEW_NODES: u64 = 0;
-    pub const VIEW_NODE_COUNT: u64 = 8;
-    pub const VIEW_ROOT: u64 = 12;
-    pub const VIEW_PRIMS: u64 = 16;
-    pub const VIEW_PRIM_COUNT: u64 = 24;
-    pub const NODE_STRIDE: u64 = 44;
-    pub const NODE_KIND: u64 = 0;
-    pub const NODE_BOUNDS: u64 = 4;
-    pub const NODE_CHILD: u64 = 28;
-    pub const NODE_PRIM_OFFSET: u64 = 36;
-    pub const NODE_PRIM_COUNT: u64 = 40;
-    pub const PRIM_STRIDE: u64 = 40;
+/// Byte offsets of `ScionTreeView`, the header `%tree` points to.
+pub mod view {
+    pub const NODES: u64 = 0;
+    pub const NODE_COUNT: u64 = 8;
+    pub const ROOT: u64 = 12;
+    pub const PRIMS: u64 = 16;
+    pub const PRIM_COUNT: u64 = 24;
 }
 
 /// The pass object.
@@ -133,32 +127,14 @@ fn attr(m: &Module, f: FuncId, key: &str) -> String {
 fn generate(m: &mut Module, spec: &LayoutSpec, ours: &[FuncId]) -> Result<(), Diagnostic> {
     let lname = spec.model.name.name.clone();
     let span = Some(spec.model.span);
-    let adt_name = spec
+    let model_adt = spec
         .model
         .adt
         .as_ref()
-        .map(|a| a.name.clone())
         .ok_or_else(|| unsupported(span, "a layout whose tree type is unknown"))?;
-    let adt = m
-        .adt(&adt_name)
-        .cloned()
-        .ok_or_else(|| unsupported(span, "the tree type is not declared"))?;
-    let tree_ty = m.types.adt(&adt_name);
-    // Interior: the variant with recursive fields; Leaf: the other.
-    let recursive =
-        |v: &scion_ir::module::Variant| v.fields.iter().filter(|f| f.ty == tree_ty).count();
-    let (interior, leaf) = match adt.variants.as_slice() {
-        [a, b] if recursive(a) == 2 && recursive(b) == 0 => (a.name.clone(), b.name.clone()),
-        [a, b] if recursive(b) == 2 && recursive(a) == 0 => (b.name.clone(), a.name.clone()),
-        _ => {
-            return Err(unsupported(
-                span,
-                format!(
-                    "constructor specialization packs binary BVHs (`{adt_name}` has another shape)"
-                ),
-            ))
-        }
-    };
+    let logical = LogicalAbi::derive(m, model_adt).map_err(|e| unsupported(span, e))?;
+    let interior = logical.variants[logical.interior].0.clone();
+    let leaf = logical.variants[logical.leaf].0.clone();
     let find = |v: &str| ours.iter().copied().find(|&f| attr(m, f, "variant") == v);
     let (Some(fi), Some(fl)) = (find(&interior), find(&leaf)) else {
         return Err(unsupported(
@@ -167,15 +143,10 @@ fn generate(m: &mut Module, spec: &LayoutSpec, ours: &[FuncId]) -> Result<(), Di
         ));
     };
     let root_fn = find("root");
-    let logical_of = |v: &str| -> Vec<TypeId> {
-        adt.fields_of(Some(v))
-            .unwrap_or_default()
-            .iter()
-            .map(|f| f.ty)
-            .collect()
-    };
-    let (li, ll) = (logical_of(&interior), logical_of(&leaf));
-    let shared: Vec<TypeId> = adt.shared.iter().map(|f| f.ty).collect();
+    let li = logical.variants[logical.interior].1.clone();
+    let ll = logical.variants[logical.leaf].1.clone();
+    let shared: Vec<LogicalField> = li[..logical.shared].to_vec();
+    let stride = logical.node_size;
     let post = attr(m, fi, "order") == "post";
     let ref_ty = m.funcs[fi]
         .results
@@ -203,25 +174,18 @@ fn generate(m: &mut Module, spec: &LayoutSpec, ours: &[FuncId]) -> Result<(), Di
         let (tree, i) = (args[0], args[2]);
         let pass = [args[0], args[1], args[3], args[4], args[5]];
         let mut bd = Builder::at_end(m, node_entry);
-        let nodes = load(&mut bd, tree, None, abi::VIEW_NODES, 0, ptr);
-        let kind = load(
-            &mut bd,
-            nodes,
-            Some(i),
-            abi::NODE_KIND,
-            abi::NODE_STRIDE,
-            u32t,
-        );
-        let zero = bd.const_int(u32t, 0);
-        let is_interior = bd.cmp(CmpPred::Eq, kind, zero);
+        let nodes = load(&mut bd, tree, None, view::NODES, 0, ptr);
+        let kind = load(&mut bd, nodes, Some(i), 0, stride, u32t);
+        let want = bd.const_int(u32t, logical.interior as i128);
+        let is_interior = bd.cmp(CmpPred::Eq, kind, want);
         let fi_name = bd.m.funcs[fi].name.clone();
         let fl_name = bd.m.funcs[fl].name.clone();
         let fi_params = bd.m.funcs[fi].params.clone();
         let fl_params = bd.m.funcs[fl].params.clone();
-        let prims = load(&mut bd, tree, None, abi::VIEW_PRIMS, 0, ptr);
+        let prims = load(&mut bd, tree, None, view::PRIMS, 0, ptr);
         let failed = std::cell::RefCell::new(None);
-        let arm = |bd: &mut Builder<'_>, name: &str, params: &[TypeId], logical: &[TypeId]| {
-            match logical_fields(bd, params, logical, nodes, prims, i, tree_ty) {
+        let arm = |bd: &mut Builder<'_>, name: &str, params: &[TypeId], logical: &[LogicalField]| {
+            match logical_fields(bd, params, logical, nodes, prims, i, stride) {
                 Ok(vals) => {
                     let all: Vec<ValueId> = pass.iter().copied().chain(vals).collect();
                     let c = bd.call(name, &all, &[ref_ty]);
@@ -249,7 +213,7 @@ fn generate(m: &mut Module, spec: &LayoutSpec, ours: &[FuncId]) -> Result<(), Di
     }
     super::entries::sizes_fn(m, spec, &lname)?;
     super::entries::build_fn(
-        m, spec, &lname, &node_name, root_fn, ref_ty, &shared, tree_ty,
+        m, spec, &lname, &node_name, root_fn, ref_ty, &shared, stride,
     )?;
     Ok(())
 }
@@ -283,49 +247,69 @@ pub(super) fn store(bd: &mut Builder<'_>, base: ValueId, offset: u64, v: ValueId
     );
 }
 
-/// The logical fields of node `i` for a build function's parameter types (after `%tree`..).
+/// The logical fields of node `i` for a build function's parameter types (after `%tree`..):
+/// `fields` says where each sits in the node (`layout::logical`).
 pub(super) fn logical_fields(
     bd: &mut Builder<'_>,
     params: &[TypeId],
-    logical: &[TypeId],
+    fields: &[LogicalField],
     nodes: ValueId,
     prims: ValueId,
     i: ValueId,
-    tree_ty: TypeId,
+    stride: u64,
 ) -> Result<Vec<ValueId>, String> {
     let u32t = bd.m.types.u32();
     let mut out = Vec::new();
-    let mut child = 0;
-    for (&p, &l) in params.iter().zip(logical) {
-        let ty = bd.m.types.get(p).clone();
-        let v = match ty {
-            Type::Adt(name) if name == "AABB" => load(bd, nodes, Some(i), abi::NODE_BOUNDS, abi::NODE_STRIDE, p),
-            _ if l == tree_ty && p == u32t && child < 2 => {
-                // A recursive field (logical child index).
-                let v = load(bd, nodes, Some(i), abi::NODE_CHILD + 4 * child, abi::NODE_STRIDE, u32t);
-                child += 1;
-                v
-            }
-            Type::Int(_) => {
-                let n = load(bd, nodes, Some(i), abi::NODE_PRIM_COUNT, abi::NODE_STRIDE, u32t);
-                if p == u32t {
-                    n
+    for (&p, f) in params.iter().zip(fields) {
+        let v = match &f.slot {
+            Slot::Value { offset } => {
+                let v = load(bd, nodes, Some(i), *offset, stride, f.ty);
+                if p == f.ty {
+                    v
+                } else if matches!(bd.m.types.get(p), Type::Int(_)) {
+                    bd.cast(v, p)
                 } else {
-                    bd.cast(n, p)
+                    return Err(format!(
+                        "`{}` as {} (the logical tree holds {})",
+                        f.name,
+                        bd.m.types.display(p),
+                        bd.m.types.display(f.ty)
+                    ));
                 }
             }
-            Type::View(elem) if matches!(bd.m.types.get(elem), Type::Adt(n) if n == "Triangle") => {
-                let start = load(bd, nodes, Some(i), abi::NODE_PRIM_OFFSET, abi::NODE_STRIDE, u32t);
-                let len = load(bd, nodes, Some(i), abi::NODE_PRIM_COUNT, abi::NODE_STRIDE, u32t);
+            Slot::Children { offset, count: 1 } if p == u32t => {
+                load(bd, nodes, Some(i), *offset, stride, u32t)
+            }
+            Slot::Children { offset, count } => match bd.m.types.get(p).clone() {
+                Type::Array { elem, len: Some(n) } if elem == u32t && n == *count => {
+                    load(bd, nodes, Some(i), *offset, stride, p)
+                }
+                _ => {
+                    return Err(format!(
+                        "the children `{}` as {} ({count} logical node indices)",
+                        f.name,
+                        bd.m.types.display(p)
+                    ))
+                }
+            },
+            Slot::Prims { offset, count } => {
+                let start = load(bd, nodes, Some(i), *offset, stride, u32t);
+                let (Some(cf), Type::View(_)) = (fields.get(*count), bd.m.types.get(p)) else {
+                    return Err(format!("the primitives `{}` as {}", f.name, bd.m.types.display(p)));
+                };
+                let Slot::Value { offset: co } = cf.slot else {
+                    return Err(format!("the length of `{}`", f.name));
+                };
+                let len = load(bd, nodes, Some(i), co, stride, cf.ty);
+                let len = if cf.ty == u32t { len } else { bd.cast(len, u32t) };
                 let op = bd.insert(
                     OpSpec::new(mem::Op::View)
                         .operands(&[prims, start, len])
                         .results(&[p])
-                        .attr("stride", Attr::Int(abi::PRIM_STRIDE as i128)),
+                        .attr("stride", Attr::Int(PRIM_STRIDE as i128)),
                 );
                 bd.result(op, 0)
             }
-            _ => return Err(format!("a logical field of type {} (the logical tree has AABB bounds, two children, and triangles)", bd.m.types.display(p))),
         };
         out.push(v);
     }

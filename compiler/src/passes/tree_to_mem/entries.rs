@@ -3,7 +3,8 @@
 //! (globals, `build root`, then the tree from its root). See `constructor.rs` for the whole
 //! contract and `docs/design/specialization.md` §3.1 for the C ABI.
 
-use super::constructor::{abi, load, logical_fields, store};
+use super::constructor::{load, logical_fields, store, view};
+use crate::layout::logical::LogicalField;
 use super::reader::Reader;
 use super::{unsupported, LayoutSpec};
 use crate::layout::plan::Count;
@@ -22,8 +23,8 @@ pub(super) fn sizes_fn(m: &mut Module, spec: &LayoutSpec, lname: &str) -> Result
     m.func_spans.insert(f, spec.model.span);
     let args = m.blocks[entry].args.to_vec();
     let mut bd = Builder::at_end(m, entry);
-    let nc = load(&mut bd, args[0], None, abi::VIEW_NODE_COUNT, 0, u32t);
-    let pc = load(&mut bd, args[0], None, abi::VIEW_PRIM_COUNT, 0, u32t);
+    let nc = load(&mut bd, args[0], None, view::NODE_COUNT, 0, u32t);
+    let pc = load(&mut bd, args[0], None, view::PRIM_COUNT, 0, u32t);
     for (i, buf) in spec.plan.buffers.iter().enumerate() {
         let count = match &buf.count {
             Count::One => bd.const_int(u32t, 1),
@@ -64,8 +65,8 @@ pub(super) fn build_fn(
     node_name: &str,
     root_fn: Option<FuncId>,
     ref_ty: TypeId,
-    shared: &[TypeId],
-    tree_ty: TypeId,
+    shared: &[LogicalField],
+    stride: u64,
 ) -> Result<(), Diagnostic> {
     let ptr = m.ty(Type::Ptr);
     let u32t = m.types.u32();
@@ -80,9 +81,9 @@ pub(super) fn build_fn(
     let cursor = bd.var(zero);
     let szero = bd.const_int(i32t, 0);
     let status = bd.var(szero);
-    let nc = load(&mut bd, tree, None, abi::VIEW_NODE_COUNT, 0, u32t);
-    let root = load(&mut bd, tree, None, abi::VIEW_ROOT, 0, u32t);
-    let pc = load(&mut bd, tree, None, abi::VIEW_PRIM_COUNT, 0, u32t);
+    let nc = load(&mut bd, tree, None, view::NODE_COUNT, 0, u32t);
+    let root = load(&mut bd, tree, None, view::ROOT, 0, u32t);
+    let pc = load(&mut bd, tree, None, view::PRIM_COUNT, 0, u32t);
     // The globals that size arrays: node and primitive counts.
     let first = bd.ret(&[szero]);
     let mut rd = Reader::new(spec, b, vec![], InsertPoint::Before(first));
@@ -124,9 +125,9 @@ pub(super) fn build_fn(
         &[],
         |bd| {
             if let Some((name, params)) = &root_call {
-                let nodes = load(bd, tree, None, abi::VIEW_NODES, 0, ptr);
-                let prims = load(bd, tree, None, abi::VIEW_PRIMS, 0, ptr);
-                match logical_fields(bd, params, shared, nodes, prims, root, tree_ty) {
+                let nodes = load(bd, tree, None, view::NODES, 0, ptr);
+                let prims = load(bd, tree, None, view::PRIMS, 0, ptr);
+                match logical_fields(bd, params, shared, nodes, prims, root, stride) {
                     Ok(vals) => {
                         let all: Vec<ValueId> = pass.iter().copied().chain(vals).collect();
                         bd.call(name, &all, &[]);

@@ -1,0 +1,413 @@
+//! The logical tree a layout's constructor reads, derived from the `type` declaration it
+//! realizes: one description ([`LogicalAbi`]) from which the constructor's reader
+//! (`constructor-specialize`), the C struct of `--emit=header` and the runtime's filler
+//! (`scion_runtime::bvh::schema`, through [`LogicalAbi::schema`]) all follow.
+//!
+//! Input: the `tree` module's ADT (field types) and the layout model's ADT (array lengths by
+//! name, `Triangle[nprims]`). Output: every variant's logical fields with their byte offsets
+//! and what the runtime writes into them, or the reason the runtime cannot fill the type.
+//!
+//! Node form (the runtime's, `scion_runtime::bvh::schema`): `kind: u32` at 0 (the variant's
+//! index), the shared fields, then each variant's fields from the same offset, at natural
+//! alignment (`scion_ir::data_layout`). A child is a `u32` node index and an array of `n`
+//! children `u32[n]`; a primitive array `Triangle[count]` is its first primitive (`u32`), its
+//! length the integer field `count` names.
+
+use crate::layout::model::Adt;
+use crate::syntax::ast::{ArrayLen, TypeExprKind};
+use scion_ir::data_layout::size_align;
+use scion_ir::module::{AdtDef, Module};
+use scion_ir::types::Type;
+use scion_ir::TypeId;
+use scion_runtime::bvh::schema::{Role, Schema, SchemaField, SHARED};
+
+/// How a logical field sits in a node.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Slot {
+    /// Read as its own type at this offset (bounds, counts).
+    Value {
+        /// Byte offset in the node.
+        offset: u64,
+    },
+    /// Child slots `first .. first + count`, `u32` indices from this offset (one child when
+    /// the field is the tree type, `count` when it is an array of children).
+    Children {
+        /// Byte offset in the node.
+        offset: u64,
+        /// Number of children.
+        count: u64,
+    },
+    /// A primitive array: its first primitive (`u32`) at `offset`, its length the logical
+    /// field `count` of the same variant.
+    Prims {
+        /// Byte offset of the first-primitive index.
+        offset: u64,
+        /// Index (in the variant's logical fields) of the length field.
+        count: usize,
+    },
+}
+
+/// One logical field of a variant.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LogicalField {
+    /// Its name.
+    pub name: String,
+    /// Its logical type.
+    pub ty: TypeId,
+    /// Where it sits.
+    pub slot: Slot,
+}
+
+/// The logical tree of one tree type.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LogicalAbi {
+    /// The tree type's name.
+    pub adt: String,
+    /// Per variant (kind order): its name and logical fields, shared ones first.
+    pub variants: Vec<(String, Vec<LogicalField>)>,
+    /// Number of shared fields (the first of every variant's).
+    pub shared: usize,
+    /// Where the variants' own fields start.
+    pub variant_base: u64,
+    /// Kind of the interior variant.
+    pub interior: usize,
+    /// Kind of the leaf variant.
+    pub leaf: usize,
+    /// Bytes per node.
+    pub node_size: u64,
+    /// Alignment of a node.
+    pub node_align: u64,
+    /// The runtime's form of the same.
+    pub schema: Schema,
+}
+
+/// Byte size of a primitive (`Triangle`).
+pub const PRIM_STRIDE: u64 = 40;
+
+fn is_aabb(m: &Module, ty: TypeId) -> bool {
+    let Type::Adt(name) = m.types.get(ty) else {
+        return false;
+    };
+    let Some(def) = m.adt(name) else { return false };
+    let f3 = |t: TypeId| {
+        matches!(m.types.get(t), Type::Vector { elem, lanes: 3 }
+            if matches!(m.types.get(*elem), Type::Float(f) if f.bits() == 32))
+    };
+    def.is_record() && def.shared.len() == 2 && def.shared.iter().all(|f| f3(f.ty))
+}
+
+fn is_triangle(m: &Module, ty: TypeId) -> bool {
+    matches!(m.types.get(ty), Type::Adt(n) if n == "Triangle")
+        && size_align(m, ty) == Some((PRIM_STRIDE, 4))
+}
+
+fn align_up(x: u64, a: u64) -> u64 {
+    x.div_ceil(a) * a
+}
+
+impl LogicalAbi {
+    /// The logical tree of `adt` (the module's declaration of the model's ADT), or why the
+    /// runtime cannot fill it.
+    pub fn derive(m: &Module, model: &Adt) -> Result<LogicalAbi, String> {
+        let name = &model.name;
+        let def: &AdtDef = m
+            .adt(name)
+            .ok_or_else(|| format!("the tree type `{name}` is not declared"))?;
+        let tree_ty = m.types.lookup(&Type::Adt(name.clone()));
+        let is_tree = |t: TypeId| Some(t) == tree_ty;
+        let children_of = |t: TypeId| -> Option<u64> {
+            if is_tree(t) {
+                return Some(1);
+            }
+            match m.types.get(t) {
+                Type::Array { elem, len: Some(n) } if is_tree(*elem) => Some(*n),
+                _ => None,
+            }
+        };
+        let shape = |v: &scion_ir::module::Variant| v.fields.iter().filter_map(|f| children_of(f.ty)).sum::<u64>();
+        let (interior, leaf) = match def.variants.as_slice() {
+            [a, b] if shape(a) > 0 && shape(b) == 0 => (0, 1),
+            [a, b] if shape(b) > 0 && shape(a) == 0 => (1, 0),
+            _ => {
+                return Err(format!(
+                    "the runtime builds trees of two variants, one with children and one with \
+                     primitives; `{name}` has {} variant(s) of another shape",
+                    def.variants.len()
+                ))
+            }
+        };
+        let arity = shape(&def.variants[interior]);
+        let bad = |field: &str, what: String| {
+            Err(format!("`{name}`'s field `{field}`: {what}"))
+        };
+        // Shared fields.
+        let mut at = 4u64;
+        let mut align = 4u64;
+        let mut shared = Vec::new();
+        let mut fields = Vec::new();
+        for f in &def.shared {
+            if !is_aabb(m, f.ty) {
+                return bad(
+                    &f.name,
+                    format!(
+                        "a shared field of type {} (the runtime's builders give each node an \
+                         `AABB` box; other bounds need a builder that computes them)",
+                        m.types.display(f.ty)
+                    ),
+                );
+            }
+            at = align_up(at, 4);
+            shared.push(LogicalField {
+                name: f.name.clone(),
+                ty: f.ty,
+                slot: Slot::Value { offset: at },
+            });
+            fields.push(SchemaField {
+                role: Role::Bounds as u32,
+                variant: SHARED,
+                offset: at as u32,
+                slot: 0,
+                count: 1,
+                width: 0,
+            });
+            at += 24;
+        }
+        // The variants' fields start together, at the largest alignment any of them needs
+        // (so that C's union of the variants' structs puts them where they are here).
+        let ualign = def
+            .variants
+            .iter()
+            .flat_map(|v| v.fields.iter())
+            .map(|f| match m.types.get(f.ty) {
+                Type::Int(t) => u64::from(t.bits() / 8),
+                _ => 4,
+            })
+            .max()
+            .unwrap_or(1);
+        let base = align_up(at, ualign);
+        let mut end = at;
+        let mut variants = Vec::new();
+        let mut next_slot = 0u64;
+        for (k, v) in def.variants.iter().enumerate() {
+            let mut at = base;
+            let mut out = shared.clone();
+            let model_v = model.variant(&v.name);
+            let mut pending: Vec<(usize, String)> = Vec::new();
+            for f in &v.fields {
+                let (size, falign, slot, role) = if let Some(n) = children_of(f.ty) {
+                    let o = align_up(at, 4);
+                    let s = Slot::Children { offset: o, count: n };
+                    let r = SchemaField {
+                        role: Role::Children as u32,
+                        variant: k as u32,
+                        offset: o as u32,
+                        slot: next_slot as u32,
+                        count: n as u32,
+                        width: 0,
+                    };
+                    next_slot += n;
+                    (4 * n, 4, s, Some(r))
+                } else {
+                    match m.types.get(f.ty) {
+                        Type::Array { elem, len: None } => {
+                            if !is_triangle(m, *elem) {
+                                return bad(&f.name, format!(
+                                    "an array of {} (the runtime's primitives are `Triangle`s)",
+                                    m.types.display(*elem)
+                                ));
+                            }
+                            let len = model_v
+                                .and_then(|mv| mv.fields.iter().find(|x| x.name.name == f.name))
+                                .and_then(|x| match &x.ty.kind {
+                                    TypeExprKind::Array { len: ArrayLen::Name(n), .. } => Some(n.name.clone()),
+                                    _ => None,
+                                })
+                                .ok_or_else(|| format!("`{name}`'s field `{}`: its length is not a field", f.name))?;
+                            pending.push((out.len(), len));
+                            let o = align_up(at, 4);
+                            let r = SchemaField {
+                                role: Role::PrimOffset as u32,
+                                variant: k as u32,
+                                offset: o as u32,
+                                slot: 0,
+                                count: 1,
+                                width: 0,
+                            };
+                            (4, 4, Slot::Prims { offset: o, count: usize::MAX }, Some(r))
+                        }
+                        Type::Array { elem, len: Some(n) } if k == interior && is_aabb(m, *elem) => {
+                            if *n != arity {
+                                return bad(&f.name, format!(
+                                    "{n} child boxes for {arity} children"
+                                ));
+                            }
+                            let o = align_up(at, 4);
+                            let r = SchemaField {
+                                role: Role::ChildBounds as u32,
+                                variant: k as u32,
+                                offset: o as u32,
+                                slot: 0,
+                                count: *n as u32,
+                                width: 0,
+                            };
+                            (24 * n, 4, Slot::Value { offset: o }, Some(r))
+                        }
+                        Type::Int(t) if !t.is_signed() && k == leaf => {
+                            let w = u64::from(t.bits() / 8);
+                            let o = align_up(at, w);
+                            // Its role is known once the array it sizes is seen.
+                            (w, w, Slot::Value { offset: o }, None)
+                        }
+                        _ => {
+                            return bad(&f.name, format!(
+                                "a field of type {} in `{}` (the runtime writes node boxes, \
+                                 child boxes, children, primitive counts and primitives)",
+                                m.types.display(f.ty), v.name
+                            ))
+                        }
+                    }
+                };
+                let offset = match &slot {
+                    Slot::Value { offset } | Slot::Children { offset, .. } | Slot::Prims { offset, .. } => *offset,
+                };
+                at = offset + size;
+                align = align.max(falign);
+                out.push(LogicalField {
+                    name: f.name.clone(),
+                    ty: f.ty,
+                    slot,
+                });
+                fields.extend(role);
+            }
+            // Tie each primitive array to its length field.
+            for (idx, len) in pending {
+                let Some(ci) = out.iter().position(|x| x.name == len) else {
+                    return bad(&out[idx].name, format!("its length `{len}` is not a field of `{}`", v.name));
+                };
+                let (Slot::Value { offset }, Type::Int(t)) = (&out[ci].slot, m.types.get(out[ci].ty)) else {
+                    return bad(&len, "the length of a primitive array is an unsigned integer field".into());
+                };
+                fields.push(SchemaField {
+                    role: Role::PrimCount as u32,
+                    variant: k as u32,
+                    offset: *offset as u32,
+                    slot: 0,
+                    count: 1,
+                    width: t.bits() / 8,
+                });
+                if let Slot::Prims { count, .. } = &mut out[idx].slot {
+                    *count = ci;
+                }
+            }
+            for f in &out[shared.len()..] {
+                let written = match f.slot {
+                    Slot::Value { offset } => fields.iter().any(|s| u64::from(s.offset) == offset && s.variant == k as u32),
+                    _ => true,
+                };
+                if !written {
+                    return bad(&f.name, format!("the runtime has nothing to write into this field of `{}` (an integer field of a leaf is the length of its primitive array)", v.name));
+                }
+            }
+            end = end.max(at);
+            variants.push((v.name.clone(), out));
+        }
+        if k_has_no_prims(&fields, leaf) {
+            return Err(format!("`{name}`'s `{}` holds no primitive array", def.variants[leaf].name));
+        }
+        let node_size = align_up(end, align);
+        let schema = Schema {
+            adt: name.clone(),
+            node_size: node_size as u32,
+            node_align: align as u32,
+            interior: interior as u32,
+            leaf: leaf as u32,
+            arity: arity as u32,
+            fields,
+        };
+        schema.validate()?;
+        Ok(LogicalAbi {
+            adt: name.clone(),
+            variants,
+            shared: shared.len(),
+            variant_base: base,
+            interior,
+            leaf,
+            node_size,
+            node_align: align,
+            schema,
+        })
+    }
+}
+
+fn k_has_no_prims(fields: &[SchemaField], leaf: usize) -> bool {
+    !fields
+        .iter()
+        .any(|f| f.role == Role::PrimOffset as u32 && f.variant == leaf as u32)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::layout::fixtures::{program, BVH8_TYPE, PRELUDE};
+    use crate::layout::model::LayoutModel;
+    use crate::syntax::ast::Item;
+
+    /// The `tree` module and the model's ADT of the first layout of `sources`.
+    fn derive(sources: &[&str]) -> Result<LogicalAbi, String> {
+        let p = program(sources);
+        let decl = p
+            .items
+            .iter()
+            .find_map(|i| match i {
+                Item::Layout(d) => Some(d),
+                _ => None,
+            })
+            .expect("a layout");
+        let model = LayoutModel::from_ast(decl, &p);
+        let mut sm = scion_ir::diag::SourceMap::new();
+        let mut text = String::from(PRELUDE);
+        for s in sources {
+            text.push('\n');
+            text.push_str(s);
+        }
+        let f = sm.add("t.scion", text);
+        let (prog, d) = crate::syntax::parse_program(&sm, &[f]);
+        assert!(d.is_empty());
+        // Only the module's type declarations matter here; the layouts need not check.
+        let (typed, _) = crate::sema::check_program(&prog);
+        let m = crate::irgen::generate(&prog, &typed).expect("irgen");
+        LogicalAbi::derive(&m, model.adt.as_ref().expect("an ADT"))
+    }
+
+    #[test]
+    fn prelude_bvh_is_binary_bvh() {
+        let abi = derive(&[crate::layout::fixtures::PBRT]).unwrap();
+        assert_eq!(abi.schema, scion_runtime::bvh::schema::binary_bvh());
+        assert_eq!((abi.node_size, abi.shared, abi.variant_base), (36, 1, 28));
+    }
+
+    #[test]
+    fn eight_wide_children_and_child_boxes() {
+        let layout = r#"
+layout W8(R: u32) {
+  P: u32; primitives: Triangle[P];
+  indirect group nodes { child: u32[8]; children = child; };
+  split R { 0 -> Interior from nodes[R]; _ -> Leaf { nprims = R as u16; data = primitives[0 : nprims]; }; };
+};
+"#;
+        let abi = derive(&[BVH8_TYPE, layout]).unwrap();
+        let s = &abi.schema;
+        assert_eq!((s.arity, s.node_size, s.interior, s.leaf), (8, 228, 0, 1));
+        let roles: Vec<(u32, u32, u32)> = s.fields.iter().map(|f| (f.role, f.offset, f.count)).collect();
+        assert_eq!(
+            roles,
+            [(Role::ChildBounds as u32, 4, 8), (Role::Children as u32, 196, 8), (Role::PrimOffset as u32, 8, 1), (Role::PrimCount as u32, 4, 1)]
+        );
+    }
+
+    #[test]
+    fn bounds_the_runtime_cannot_compute_are_named() {
+        let e = derive(&[crate::layout::fixtures::DOP_SPLIT]).unwrap_err();
+        assert!(e.contains("`DopBVH`'s field `bounds`") && e.contains("DOP14"), "{e}");
+    }
+}

@@ -1,0 +1,602 @@
+//! The logical tree as generated constructors read it, for any tree type: a [`Schema`] says
+//! where each logical field of a node sits (the compiler derives it from the `type`
+//! declaration the layout realizes, `scionc --emit=header` prints it as C), and
+//! [`LogicalBytes::fill`] writes a built tree into nodes of that shape.
+//!
+//! Node form (C ABI, one record per logical node, `node_size` bytes each, 8-aligned storage):
+//! a `u32` kind at offset 0 (the variant's index in the `type` declaration), then the shared
+//! fields, then the variants' own fields overlaid at the same offset, each at its natural
+//! alignment (`scion_ir::data_layout`'s rules). Every field has a [`Role`]: what the runtime
+//! writes into it. Fields of a variant other than the node's are zero.
+//!
+//! Shapes: an interior variant with `arity` child slots (single recursive fields and arrays of
+//! children, in declaration order), a leaf variant with a primitive count and the first
+//! primitive. Arity 2 maps the binary [`LogicalTree`] node for node (same indices); any other
+//! arity collapses it first ([`super::wide`]'s collapse: interior nodes in pre-order, then the
+//! leaves), and an empty child slot refers to one shared empty leaf (no primitives, box
+//! [`Aabb::EMPTY`]) so that the layout's `Leaf` build decides how an empty slot is stored.
+//! Primitives are the tree's triangles, 40 bytes each.
+
+use super::logical::{LogicalTree, NO_NODE};
+use crate::geom::Aabb;
+
+/// What the runtime writes into a logical field.
+#[repr(u32)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Role {
+    /// The node's own box: an `AABB` (`low: f32x3, high: f32x3`, 24 bytes).
+    Bounds = 1,
+    /// The boxes of child slots `slot .. slot + count`, `count` `AABB`s ([`Aabb::EMPTY`] for
+    /// an empty slot).
+    ChildBounds = 2,
+    /// Child slots `slot .. slot + count` as `u32` node indices (`count` 1 for a field of the
+    /// tree type itself, `n` for an array of `n` children).
+    Children = 3,
+    /// A leaf's number of primitives: an unsigned integer of `width` bytes (1, 2, 4 or 8).
+    PrimCount = 4,
+    /// A leaf's first primitive in the primitive array (`u32`).
+    PrimOffset = 5,
+}
+
+impl Role {
+    /// The role of a C-ABI role number.
+    pub fn from_u32(r: u32) -> Option<Role> {
+        Some(match r {
+            1 => Role::Bounds,
+            2 => Role::ChildBounds,
+            3 => Role::Children,
+            4 => Role::PrimCount,
+            5 => Role::PrimOffset,
+            _ => return None,
+        })
+    }
+
+    /// The role's name in the C header (`SCION_ROLE_...`).
+    pub fn c_name(self) -> &'static str {
+        match self {
+            Role::Bounds => "SCION_ROLE_BOUNDS",
+            Role::ChildBounds => "SCION_ROLE_CHILD_BOUNDS",
+            Role::Children => "SCION_ROLE_CHILDREN",
+            Role::PrimCount => "SCION_ROLE_PRIM_COUNT",
+            Role::PrimOffset => "SCION_ROLE_PRIM_OFFSET",
+        }
+    }
+}
+
+/// "Every variant": the `variant` of a shared field.
+pub const SHARED: u32 = u32::MAX;
+
+/// One logical field of a node (C ABI `ScionLogicalField`, 24 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct SchemaField {
+    /// [`Role`] as a number.
+    pub role: u32,
+    /// The variant (its kind) whose field it is, or [`SHARED`].
+    pub variant: u32,
+    /// Byte offset in the node.
+    pub offset: u32,
+    /// First child slot ([`Role::Children`], [`Role::ChildBounds`]); 0 otherwise.
+    pub slot: u32,
+    /// Number of slots ([`Role::Children`], [`Role::ChildBounds`]); 1 otherwise.
+    pub count: u32,
+    /// Byte width of the integer ([`Role::PrimCount`]); 0 otherwise.
+    pub width: u32,
+}
+
+/// Where the logical fields of a tree type sit in its logical nodes.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct Schema {
+    /// The tree type's name (for messages).
+    pub adt: String,
+    /// Bytes per node (a multiple of `node_align`).
+    pub node_size: u32,
+    /// Alignment of a node.
+    pub node_align: u32,
+    /// Kind of the interior variant.
+    pub interior: u32,
+    /// Kind of the leaf variant.
+    pub leaf: u32,
+    /// Child slots of an interior node.
+    pub arity: u32,
+    /// The fields the runtime writes.
+    pub fields: Vec<SchemaField>,
+}
+
+/// The binary tree's shape in schema form: the prelude's
+/// `type BVH(bounds: AABB) = Interior(left: BVH, right: BVH) | Leaf(nprims: u16, data: Triangle[nprims])`,
+/// 36-byte nodes (`kind` @0, `bounds` @4, `left` @28, `right` @32 | `nprims` @28, `data` @32).
+/// The compiler derives the same from the declaration (its test `prelude_bvh_is_binary_bvh`
+/// keeps the two equal); this copy serves the runtime's own tests and tools that hold no
+/// compiled layout.
+pub fn binary_bvh() -> Schema {
+    let f = |role: Role, variant: u32, offset: u32, slot: u32, width: u32| SchemaField {
+        role: role as u32,
+        variant,
+        offset,
+        slot,
+        count: 1,
+        width,
+    };
+    Schema {
+        adt: "BVH".to_string(),
+        node_size: 36,
+        node_align: 4,
+        interior: 0,
+        leaf: 1,
+        arity: 2,
+        fields: vec![
+            f(Role::Bounds, SHARED, 4, 0, 0),
+            f(Role::Children, 0, 28, 0, 0),
+            f(Role::Children, 0, 32, 1, 0),
+            f(Role::PrimOffset, 1, 32, 0, 0),
+            f(Role::PrimCount, 1, 28, 0, 2),
+        ],
+    }
+}
+
+impl Schema {
+    /// Checks that the fields fit the node, do not overlap within a variant, and give every
+    /// slot `0 .. arity` exactly one child reference.
+    pub fn validate(&self) -> Result<(), String> {
+        let name = &self.adt;
+        if self.node_align == 0 || !self.node_align.is_power_of_two() {
+            return Err(format!("`{name}`: node alignment {} is not a power of two", self.node_align));
+        }
+        if self.node_size < 4 || self.node_size % self.node_align != 0 {
+            return Err(format!(
+                "`{name}`: node size {} is not a multiple of its alignment {} holding the kind",
+                self.node_size, self.node_align
+            ));
+        }
+        if self.arity == 0 || self.interior == self.leaf {
+            return Err(format!("`{name}`: no interior variant with children"));
+        }
+        let mut slots = vec![0u32; self.arity as usize];
+        let mut used: Vec<(u32, u32, u32)> = vec![(SHARED, 0, 4)];
+        for (k, f) in self.fields.iter().enumerate() {
+            let role = Role::from_u32(f.role)
+                .ok_or_else(|| format!("`{name}`: field {k} has unknown role {}", f.role))?;
+            let size = field_size(role, f)
+                .ok_or_else(|| format!("`{name}`: field {k} ({role:?}) has width {}", f.width))?;
+            let end = u64::from(f.offset) + u64::from(size);
+            if end > u64::from(self.node_size) {
+                return Err(format!("`{name}`: field {k} ({role:?}) ends past the node"));
+            }
+            let in_interior = f.variant == SHARED || f.variant == self.interior;
+            match role {
+                Role::Children | Role::ChildBounds if !in_interior || f.variant == SHARED => {
+                    return Err(format!("`{name}`: field {k} ({role:?}) is not the interior's"));
+                }
+                Role::PrimCount | Role::PrimOffset if f.variant != self.leaf => {
+                    return Err(format!("`{name}`: field {k} ({role:?}) is not the leaf's"));
+                }
+                _ => {}
+            }
+            if role == Role::Children {
+                for s in f.slot..f.slot.saturating_add(f.count) {
+                    match slots.get_mut(s as usize) {
+                        Some(n) => *n += 1,
+                        None => return Err(format!("`{name}`: child slot {s} past arity {}", self.arity)),
+                    }
+                }
+            }
+            if role == Role::ChildBounds && f.slot.saturating_add(f.count) > self.arity {
+                return Err(format!("`{name}`: child box slots past arity {}", self.arity));
+            }
+            for &(v, o, s) in &used {
+                let same = v == SHARED || f.variant == SHARED || v == f.variant;
+                if same && f.offset < o + s && o < f.offset + size {
+                    return Err(format!("`{name}`: field {k} ({role:?}) overlaps another"));
+                }
+            }
+            used.push((f.variant, f.offset, size));
+        }
+        if let Some(s) = slots.iter().position(|&n| n != 1) {
+            return Err(format!("`{name}`: child slot {s} has {} references", slots[s]));
+        }
+        Ok(())
+    }
+}
+
+impl Schema {
+    /// One line of text (`BVH 36 4 0 1 2 1,4294967295,4,0,1,0;...`): the tree type's name,
+    /// node size and alignment, interior and leaf kinds, arity, then each field's six numbers.
+    pub fn to_text(&self) -> String {
+        let fields: Vec<String> = self
+            .fields
+            .iter()
+            .map(|f| format!("{},{},{},{},{},{}", f.role, f.variant, f.offset, f.slot, f.count, f.width))
+            .collect();
+        format!(
+            "{} {} {} {} {} {} {}",
+            self.adt,
+            self.node_size,
+            self.node_align,
+            self.interior,
+            self.leaf,
+            self.arity,
+            fields.join(";")
+        )
+    }
+
+    /// The schema [`Schema::to_text`] wrote, validated.
+    pub fn from_text(text: &str) -> Result<Schema, String> {
+        let bad = || format!("`{text}` is not a logical-tree schema");
+        let parts: Vec<&str> = text.split_whitespace().collect();
+        if !(6..=7).contains(&parts.len()) {
+            return Err(bad());
+        }
+        let n = |s: &str| s.parse::<u32>().map_err(|_| bad());
+        let mut fields = Vec::new();
+        for f in parts.get(6).map_or("", |s| s).split(';').filter(|f| !f.is_empty()) {
+            let v: Vec<u32> = f.split(',').map(n).collect::<Result<_, _>>()?;
+            let [role, variant, offset, slot, count, width] = v[..] else {
+                return Err(bad());
+            };
+            fields.push(SchemaField { role, variant, offset, slot, count, width });
+        }
+        let s = Schema {
+            adt: parts[0].to_string(),
+            node_size: n(parts[1])?,
+            node_align: n(parts[2])?,
+            interior: n(parts[3])?,
+            leaf: n(parts[4])?,
+            arity: n(parts[5])?,
+            fields,
+        };
+        s.validate()?;
+        Ok(s)
+    }
+}
+
+fn field_size(role: Role, f: &SchemaField) -> Option<u32> {
+    Some(match role {
+        Role::Bounds => 24,
+        Role::ChildBounds => 24 * f.count,
+        Role::Children => 4 * f.count,
+        Role::PrimCount if matches!(f.width, 1 | 2 | 4 | 8) => f.width,
+        Role::PrimCount => return None,
+        Role::PrimOffset => 4,
+    })
+}
+
+/// A tree's logical nodes in a schema's form (the primitives they index are the tree's).
+#[derive(Clone, Debug, Default)]
+pub struct LogicalBytes {
+    /// The nodes' storage: `node_count * node_size` bytes from `start`, 8 bytes of slack so
+    /// that `start` is 8-aligned.
+    storage: Vec<u8>,
+    /// Where the nodes start in `storage`.
+    start: usize,
+    /// Bytes per node.
+    pub node_size: usize,
+    /// Number of nodes.
+    pub node_count: usize,
+    /// The root's index, [`NO_NODE`] for the empty tree.
+    pub root: u32,
+}
+
+/// One node before encoding.
+struct Node {
+    kind: u32,
+    bounds: Aabb,
+    children: Vec<(u32, Aabb)>,
+    prims: (u32, u32),
+}
+
+impl LogicalBytes {
+    /// The nodes as bytes.
+    pub fn nodes(&self) -> &[u8] {
+        &self.storage[self.start..self.start + self.node_count * self.node_size]
+    }
+
+    /// `tree` in `schema`'s form; an error names a schema the runtime cannot fill (see
+    /// [`Schema::validate`]) or a tree too large for `u32` indices.
+    pub fn fill(tree: &LogicalTree, schema: &Schema) -> Result<LogicalBytes, String> {
+        schema.validate()?;
+        let (nodes, root) = if tree.is_empty() {
+            (Vec::new(), NO_NODE)
+        } else if schema.arity == 2 {
+            (binary_nodes(tree, schema), tree.root)
+        } else {
+            wide_nodes(tree, schema)
+        };
+        if nodes.len() >= NO_NODE as usize {
+            return Err(format!("{} logical nodes do not fit u32 indices", nodes.len()));
+        }
+        let size = schema.node_size as usize;
+        let mut storage = vec![0u8; nodes.len() * size + 8];
+        let start = (8 - storage.as_ptr() as usize % 8) % 8;
+        for (i, n) in nodes.iter().enumerate() {
+            let at = start + i * size;
+            encode(&mut storage[at..at + size], n, schema);
+        }
+        Ok(LogicalBytes {
+            storage,
+            start,
+            node_size: size,
+            node_count: nodes.len(),
+            root,
+        })
+    }
+}
+
+fn binary_nodes(tree: &LogicalTree, schema: &Schema) -> Vec<Node> {
+    tree.nodes
+        .iter()
+        .map(|n| {
+            if n.is_leaf() {
+                Node {
+                    kind: schema.leaf,
+                    bounds: n.aabb(),
+                    children: Vec::new(),
+                    prims: (n.prim_offset, n.prim_count),
+                }
+            } else {
+                Node {
+                    kind: schema.interior,
+                    bounds: n.aabb(),
+                    children: n
+                        .child
+                        .iter()
+                        .map(|&c| (c, tree.nodes[c as usize].aabb()))
+                        .collect(),
+                    prims: (0, 0),
+                }
+            }
+        })
+        .collect()
+}
+
+/// Collapsed to `schema.arity` slots: interior nodes in pre-order (the root first), then the
+/// leaves, then the shared empty leaf when a slot is empty.
+fn wide_nodes(tree: &LogicalTree, schema: &Schema) -> (Vec<Node>, u32) {
+    let width = schema.arity as usize;
+    let root = &tree.nodes[tree.root as usize];
+    let leaf = |n: &super::LogicalNode| Node {
+        kind: schema.leaf,
+        bounds: n.aabb(),
+        children: Vec::new(),
+        prims: (n.prim_offset, n.prim_count),
+    };
+    if root.is_leaf() {
+        return (vec![leaf(root)], 0);
+    }
+    // Pass 1: interior nodes in pre-order with their binary children.
+    let mut interior: Vec<(u32, Vec<u32>)> = Vec::new();
+    let mut work = vec![tree.root];
+    while let Some(bin) = work.pop() {
+        let slots = super::wide::open(tree, bin, width);
+        for &c in slots.iter().rev() {
+            if !tree.nodes[c as usize].is_leaf() {
+                work.push(c);
+            }
+        }
+        interior.push((bin, slots));
+    }
+    // Numbering: interior nodes 0.., leaves after them in slot order.
+    let mut index = vec![NO_NODE; tree.nodes.len()];
+    for (i, (bin, _)) in interior.iter().enumerate() {
+        index[*bin as usize] = i as u32;
+    }
+    let mut nodes: Vec<Node> = Vec::with_capacity(interior.len() * 2);
+    let mut leaves: Vec<Node> = Vec::new();
+    let mut next = interior.len() as u32;
+    let mut any_empty = false;
+    for (bin, slots) in &interior {
+        let mut children = Vec::with_capacity(width);
+        for &c in slots {
+            let n = &tree.nodes[c as usize];
+            if n.is_leaf() {
+                index[c as usize] = next;
+                next += 1;
+                leaves.push(leaf(n));
+            }
+            children.push((index[c as usize], n.aabb()));
+        }
+        any_empty |= children.len() < width;
+        nodes.push(Node {
+            kind: schema.interior,
+            bounds: tree.nodes[*bin as usize].aabb(),
+            children,
+            prims: (0, 0),
+        });
+    }
+    nodes.extend(leaves);
+    if any_empty {
+        let empty = nodes.len() as u32;
+        for n in nodes.iter_mut() {
+            if n.kind == schema.interior {
+                n.children.resize(width, (empty, Aabb::EMPTY));
+            }
+        }
+        nodes.push(Node {
+            kind: schema.leaf,
+            bounds: Aabb::EMPTY,
+            children: Vec::new(),
+            prims: (0, 0),
+        });
+    }
+    (nodes, 0)
+}
+
+fn put(bytes: &mut [u8], at: usize, v: &[u8]) {
+    bytes[at..at + v.len()].copy_from_slice(v);
+}
+
+fn put_box(bytes: &mut [u8], at: usize, b: Aabb) {
+    for (k, x) in b.to_array().iter().enumerate() {
+        put(bytes, at + 4 * k, &x.to_le_bytes());
+    }
+}
+
+fn encode(bytes: &mut [u8], n: &Node, schema: &Schema) {
+    put(bytes, 0, &n.kind.to_le_bytes());
+    for f in &schema.fields {
+        if f.variant != SHARED && f.variant != n.kind {
+            continue;
+        }
+        let at = f.offset as usize;
+        match Role::from_u32(f.role) {
+            Some(Role::Bounds) => put_box(bytes, at, n.bounds),
+            Some(Role::ChildBounds) => {
+                for k in 0..f.count as usize {
+                    let b = n.children.get(f.slot as usize + k).map_or(Aabb::EMPTY, |c| c.1);
+                    put_box(bytes, at + 24 * k, b);
+                }
+            }
+            Some(Role::Children) => {
+                for k in 0..f.count as usize {
+                    let c = n.children.get(f.slot as usize + k).map_or(NO_NODE, |c| c.0);
+                    put(bytes, at + 4 * k, &c.to_le_bytes());
+                }
+            }
+            Some(Role::PrimCount) => {
+                let c = u64::from(n.prims.1).to_le_bytes();
+                put(bytes, at, &c[..f.width as usize]);
+            }
+            Some(Role::PrimOffset) => put(bytes, at, &n.prims.0.to_le_bytes()),
+            None => {}
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::{build_sah_binned, SahOptions};
+    use crate::geom::{Triangle, Vec3};
+
+    fn tree(n: usize) -> LogicalTree {
+        let tris: Vec<Triangle> = (0..n)
+            .map(|i| {
+                let x = (i % 17) as f32 * 1.5;
+                let y = (i / 17) as f32 * 0.75;
+                Triangle::new(
+                    Vec3::new(x, y, 0.0),
+                    Vec3::new(x + 1.0, y, 0.25),
+                    Vec3::new(x, y + 1.0, 0.5),
+                    i as u32,
+                )
+            })
+            .collect();
+        build_sah_binned(&tris, &SahOptions::default())
+    }
+
+    fn u32_at(b: &[u8], at: usize) -> u32 {
+        u32::from_le_bytes(b[at..at + 4].try_into().unwrap())
+    }
+
+    #[test]
+    fn binary_schema_is_the_tree_node_for_node() {
+        let t = tree(300);
+        let s = binary_bvh();
+        let lb = LogicalBytes::fill(&t, &s).unwrap();
+        assert_eq!((lb.node_count, lb.root), (t.nodes.len(), t.root));
+        for (i, n) in t.nodes.iter().enumerate() {
+            let b = &lb.nodes()[i * 36..(i + 1) * 36];
+            assert_eq!(u32_at(b, 0), n.kind);
+            let bounds: Vec<f32> = (0..6)
+                .map(|k| f32::from_bits(u32_at(b, 4 + 4 * k)))
+                .collect();
+            assert_eq!(bounds, n.bounds);
+            if n.is_leaf() {
+                assert_eq!(u32::from(u16::from_le_bytes([b[28], b[29]])), n.prim_count);
+                assert_eq!(u32_at(b, 32), n.prim_offset);
+            } else {
+                assert_eq!([u32_at(b, 28), u32_at(b, 32)], n.child);
+            }
+        }
+    }
+
+    /// An eight-wide schema (`Interior(child_bounds: AABB[8], children: BVH8[8]) | Leaf(..)`):
+    /// every primitive is reached once, child boxes are the children's, empty slots share one
+    /// empty leaf.
+    #[test]
+    fn wide_schema_covers_every_primitive_once() {
+        let t = tree(500);
+        let s = Schema {
+            adt: "BVH8".into(),
+            node_size: 228,
+            node_align: 4,
+            interior: 0,
+            leaf: 1,
+            arity: 8,
+            fields: vec![
+                SchemaField { role: Role::ChildBounds as u32, variant: 0, offset: 4, slot: 0, count: 8, width: 0 },
+                SchemaField { role: Role::Children as u32, variant: 0, offset: 196, slot: 0, count: 8, width: 0 },
+                SchemaField { role: Role::PrimCount as u32, variant: 1, offset: 4, slot: 0, count: 1, width: 2 },
+                SchemaField { role: Role::PrimOffset as u32, variant: 1, offset: 8, slot: 0, count: 1, width: 0 },
+            ],
+        };
+        let lb = LogicalBytes::fill(&t, &s).unwrap();
+        let node = |i: u32| &lb.nodes()[i as usize * 228..(i as usize + 1) * 228];
+        let mut covered = vec![0u32; t.primitives.len()];
+        let mut stack = vec![(lb.root, None::<[f32; 6]>)];
+        let mut empties = 0;
+        while let Some((i, parent_box)) = stack.pop() {
+            let b = node(i);
+            if u32_at(b, 0) == 1 {
+                let count = u16::from_le_bytes([b[4], b[5]]) as usize;
+                let off = u32_at(b, 8) as usize;
+                let mut bx = Aabb::EMPTY;
+                for p in &t.primitives[off..off + count] {
+                    covered[p.id as usize] += 1;
+                    bx = bx.union(p.bounds());
+                }
+                if count == 0 {
+                    empties += 1;
+                }
+                if let Some(pb) = parent_box {
+                    assert_eq!(pb, bx.to_array(), "a leaf's slot box is its primitives' box");
+                }
+                continue;
+            }
+            for k in 0..8 {
+                let c = u32_at(b, 196 + 4 * k);
+                let bx: Vec<f32> = (0..6).map(|j| f32::from_bits(u32_at(b, 4 + 24 * k + 4 * j))).collect();
+                stack.push((c, Some(bx.try_into().unwrap())));
+            }
+        }
+        assert!(covered.iter().all(|&c| c == 1));
+        assert!(empties > 0, "500 triangles leave some slot empty");
+        assert_eq!(u32_at(node(lb.node_count as u32 - 1), 0), 1, "the empty leaf is last");
+    }
+
+    #[test]
+    fn bad_schemas_are_refused() {
+        let mut s = binary_bvh();
+        s.fields[2].slot = 0;
+        assert!(s.validate().unwrap_err().contains("slot 0 has 2"));
+        let mut s = binary_bvh();
+        s.fields[4].width = 3;
+        assert!(s.validate().unwrap_err().contains("width 3"));
+        let mut s = binary_bvh();
+        s.fields[0].offset = 0;
+        assert!(s.validate().unwrap_err().contains("overlaps"));
+        let t = tree(10);
+        assert!(LogicalBytes::fill(&t, &Schema { node_size: 3, ..binary_bvh() }).is_err());
+    }
+
+    #[test]
+    fn text_round_trips() {
+        let s = binary_bvh();
+        assert_eq!(Schema::from_text(&s.to_text()).unwrap(), s);
+        assert!(Schema::from_text("BVH 36 4").is_err());
+        assert!(Schema::from_text("BVH 36 4 0 1 2 9,9").is_err());
+    }
+
+    #[test]
+    fn empty_and_single_leaf_trees() {
+        let e = LogicalTree::empty();
+        let lb = LogicalBytes::fill(&e, &binary_bvh()).unwrap();
+        assert_eq!((lb.node_count, lb.root), (0, NO_NODE));
+        let t = tree(1);
+        assert_eq!(t.nodes.len(), 1);
+        let mut s = binary_bvh();
+        s.arity = 2;
+        let lb = LogicalBytes::fill(&t, &s).unwrap();
+        assert_eq!((lb.node_count, lb.root), (1, t.root));
+    }
+}
