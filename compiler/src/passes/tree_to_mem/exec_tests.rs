@@ -203,20 +203,26 @@ fn value(nodes: &[LNode], i: u32, prims: &[Tri]) -> Val {
     }
 }
 
-/// The C-ABI bytes of the logical tree in `it`'s memory; returns the `LogicalTreeView` address.
+/// The C-ABI bytes of the logical tree in `it`'s memory, its nodes in the shape of the
+/// prelude's `BVH` (the runtime's fill); returns the `LogicalTreeView` address.
 fn put_tree(it: &mut Interp<'_>, nodes: &[LNode], root: u32, prims: &[Tri]) -> u64 {
-    let mut nb = Vec::new();
-    for n in nodes {
-        nb.extend(n.kind.to_le_bytes());
-        for x in n.bounds {
-            nb.extend(x.to_le_bytes());
-        }
-        nb.extend(n.child[0].to_le_bytes());
-        nb.extend(n.child[1].to_le_bytes());
-        nb.extend(n.prim_offset.to_le_bytes());
-        nb.extend(n.prim_count.to_le_bytes());
-    }
-    assert_eq!(nb.len(), 44 * nodes.len());
+    use scion_runtime::bvh::schema::{binary_bvh, LogicalBytes};
+    let tree = scion_runtime::bvh::LogicalTree {
+        nodes: nodes
+            .iter()
+            .map(|n| scion_runtime::bvh::LogicalNode {
+                kind: n.kind,
+                bounds: n.bounds,
+                child: n.child,
+                prim_offset: n.prim_offset,
+                prim_count: n.prim_count,
+            })
+            .collect(),
+        root,
+        primitives: Vec::new(),
+    };
+    let filled = LogicalBytes::fill(&tree, &binary_bvh()).expect("the runtime fills `BVH`");
+    let nb = filled.nodes().to_vec();
     let mut pb = Vec::new();
     for t in prims {
         for v in t.p {
