@@ -171,14 +171,17 @@ pub fn compile(
             return out;
         };
         let model = LayoutModel::from_ast(decl, &program);
-        out.logical = model
+        let logical = model
             .adt
             .as_ref()
-            .and_then(|a| crate::layout::logical::LogicalAbi::derive(&module, a).ok())
-            .map(|l| l.schema);
+            .map(|a| crate::layout::logical::LogicalAbi::derive(&module, a));
+        out.logical = logical
+            .as_ref()
+            .and_then(|l| l.as_ref().ok())
+            .map(|l| l.schema.clone());
         let spec = LayoutSpec::new(model);
         if let Some(algorithm) = &popts.entry {
-            match abi::signature(&program, &module, algorithm, &spec) {
+            match abi::signature(&program, &module, algorithm, &spec, logical.as_ref()) {
                 Ok(sig) => entry = Some(sig),
                 Err(d) => {
                     out.diagnostics.push(d);

@@ -61,7 +61,10 @@ const LOGICAL: usize = 36;
 
 #[test]
 fn the_logical_node_is_the_runtimes() {
-    assert_eq!(scion_runtime::bvh::schema::binary_bvh().node_size as usize, LOGICAL);
+    assert_eq!(
+        scion_runtime::bvh::schema::binary_bvh().node_size as usize,
+        LOGICAL
+    );
 }
 
 fn put(buf: &mut [u8], at: usize, bytes: &[u8]) {
@@ -154,7 +157,11 @@ fn build(tris: &mut [Tri], depth: usize, s: &mut Scene) -> Val {
     let right = build(r, depth + 1, s);
     let c_o = (right_index - me) as u32;
     s.nodes[me * 32 + 24..me * 32 + 28].copy_from_slice(&c_o.to_le_bytes());
-    put(&mut s.logical, me * LOGICAL + 28, &(me as u32 + 1).to_le_bytes());
+    put(
+        &mut s.logical,
+        me * LOGICAL + 28,
+        &(me as u32 + 1).to_le_bytes(),
+    );
     put(
         &mut s.logical,
         me * LOGICAL + 32,

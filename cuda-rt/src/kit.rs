@@ -97,8 +97,8 @@ impl PtxKit {
                 format!("`{TAG}boxes {name}`: unknown boxes (known: exact, global-q16)")
             })?,
         };
-        let logical = Schema::from_text(&field("logical")?)
-            .map_err(|e| format!("`{TAG}logical`: {e}"))?;
+        let logical =
+            Schema::from_text(&field("logical")?).map_err(|e| format!("`{TAG}logical`: {e}"))?;
         Ok(PtxKit {
             logical,
             layout: field("layout")?,

@@ -6,10 +6,10 @@
 mod common;
 
 use common::{device_or_skip, stack_limit_lock, PROBE_PTX};
-use scion_runtime::bvh::schema::binary_bvh;
 use scion_cuda::error::STATUS_STACK_OVERFLOW;
 use scion_cuda::trace::{GpuPipeline, RootRef};
 use scion_cuda::{CudaError, DevicePtr, Grid, KernelArg, Module};
+use scion_runtime::bvh::schema::binary_bvh;
 use scion_runtime::bvh::{build_sah_binned, LogicalTree, SahOptions};
 use scion_runtime::geom::{Hit, Ray, Triangle, Vec3};
 
@@ -247,9 +247,16 @@ fn pipeline_rejects_a_module_without_the_kernels() {
     let Some(dev) = device_or_skip("pipeline_rejects_a_module_without_the_kernels") else {
         return;
     };
-    let e = GpuPipeline::new(&dev, PROBE_PTX, "LinearBVH", "closest_hit", vec![], binary_bvh())
-        .err()
-        .unwrap();
+    let e = GpuPipeline::new(
+        &dev,
+        PROBE_PTX,
+        "LinearBVH",
+        "closest_hit",
+        vec![],
+        binary_bvh(),
+    )
+    .err()
+    .unwrap();
     assert!(
         e.to_string()
             .starts_with("the PTX module has no kernel `scion_LinearBVH_sizes_kernel`"),

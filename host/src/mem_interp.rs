@@ -279,7 +279,11 @@ struct Packing {
 
 /// The logical tree's C-ABI bytes in `it`'s memory (its nodes in `schema`'s form, 40-byte
 /// triangles); returns the `LogicalTreeView` address and the root's index.
-fn put_tree(it: &mut Interp<'_>, tree: &LogicalTree, schema: &Schema) -> Result<(u64, u32), String> {
+fn put_tree(
+    it: &mut Interp<'_>,
+    tree: &LogicalTree,
+    schema: &Schema,
+) -> Result<(u64, u32), String> {
     let lb = LogicalBytes::fill(tree, schema)?;
     let mut pb = Vec::with_capacity(40 * tree.primitives.len());
     for t in &tree.primitives {

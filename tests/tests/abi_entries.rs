@@ -47,7 +47,11 @@ fn entries_lo(stem: &str, layout: &str) -> (String, Schema) {
     let (m, entry, schema) =
         compile_library(stem, Emit::Lo, &pipeline, &popts).unwrap_or_else(|e| panic!("{e}"));
     let entry = entry.expect("--entry gives the entries' signature");
-    assert_eq!(Some(&entry.logical), schema.as_ref(), "one logical tree per layout");
+    assert_eq!(
+        Some(&entry.logical),
+        schema.as_ref(),
+        "one logical tree per layout"
+    );
     (scion_ir::print_module(&m), entry.logical)
 }
 

@@ -2,7 +2,7 @@
 //! `ScionLogicalSchema`, both from [`LogicalAbi`], so that a C program fills nodes that
 //! `scion_L_build` reads, or asks the runtime for them (`scion_tree_view(tree, &schema, ..)`).
 
-use crate::layout::logical::{LogicalAbi, Slot};
+use crate::layout::logical::{LogicalAbi, LogicalField, Slot};
 use scion_ir::types::Type;
 use scion_ir::Module;
 use scion_runtime::bvh::schema::{Role, SHARED};
@@ -37,7 +37,10 @@ fn decl(m: &Module, name: &str, ty: scion_ir::TypeId, slot: &Slot) -> (String, u
             ),
             Type::Int(_) => {
                 let (size, _) = scion_ir::data_layout::size_align(m, ty).unwrap_or((4, 4));
-                (format!("{} {name};", super::record::c_type(m.types.get(ty))), size)
+                (
+                    format!("{} {name};", super::record::c_type(m.types.get(ty))),
+                    size,
+                )
             }
             _ => (
                 format!("float {name}[6]; /* box: low x, y, z, high x, y, z */"),
@@ -47,12 +50,28 @@ fn decl(m: &Module, name: &str, ty: scion_ir::TypeId, slot: &Slot) -> (String, u
     }
 }
 
-fn offset(slot: &Slot) -> u64 {
-    match slot {
-        Slot::Value { offset } | Slot::Children { offset, .. } | Slot::Prims { offset, .. } => {
-            *offset
+/// Writes `fields` (starting at byte `at`) with explicit padding, each line indented by
+/// `indent`; records `(prefix + name, offset)` for the offset assertions; returns the end.
+fn emit_fields(
+    s: &mut String,
+    m: &Module,
+    fields: &[LogicalField],
+    mut at: u64,
+    indent: &str,
+    prefix: &str,
+    asserts: &mut Vec<(String, u64)>,
+) -> u64 {
+    for (pad, f) in fields.iter().enumerate() {
+        let o = f.slot.offset();
+        if o > at {
+            let _ = writeln!(s, "{indent}uint8_t _pad{pad}[{}];", o - at);
         }
+        let (d, size) = decl(m, &f.name, f.ty, &f.slot);
+        let _ = writeln!(s, "{indent}{d}");
+        asserts.push((format!("{prefix}{}", f.name), o));
+        at = o + size;
     }
+    at
 }
 
 /// The node struct and the schema constant of `abi`, guarded by the tree type's name so that
@@ -61,7 +80,10 @@ pub fn render(abi: &LogicalAbi, m: &Module) -> String {
     let adt = &abi.adt;
     let st = node_struct(adt);
     let mut s = String::new();
-    let _ = writeln!(s, "#ifndef SCION_LOGICAL_{adt}_DEFINED\n#define SCION_LOGICAL_{adt}_DEFINED");
+    let _ = writeln!(
+        s,
+        "#ifndef SCION_LOGICAL_{adt}_DEFINED\n#define SCION_LOGICAL_{adt}_DEFINED"
+    );
     let kinds: Vec<String> = abi
         .variants
         .iter()
@@ -77,20 +99,8 @@ pub fn render(abi: &LogicalAbi, m: &Module) -> String {
     let _ = writeln!(s, "typedef struct {st} {{");
     let _ = writeln!(s, "    uint32_t kind; /* {} */", kinds.join(", "));
     let mut asserts = vec![(String::from("kind"), 0u64)];
-    let mut at = 4;
-    let mut pad = 0;
     let shared = &abi.variants[0].1[..abi.shared];
-    for f in shared {
-        let o = offset(&f.slot);
-        if o > at {
-            let _ = writeln!(s, "    uint8_t _pad{pad}[{}];", o - at);
-            pad += 1;
-        }
-        let (d, size) = decl(m, &f.name, f.ty, &f.slot);
-        let _ = writeln!(s, "    {d}");
-        asserts.push((f.name.clone(), o));
-        at = o + size;
-    }
+    let at = emit_fields(&mut s, m, shared, 4, "    ", "", &mut asserts);
     let own: Vec<_> = abi
         .variants
         .iter()
@@ -99,24 +109,22 @@ pub fn render(abi: &LogicalAbi, m: &Module) -> String {
     if !own.is_empty() {
         let base = abi.variant_base;
         if base > at {
-            let _ = writeln!(s, "    uint8_t _pad{pad}[{}];", base - at);
+            let _ = writeln!(s, "    uint8_t _pad_u[{}];", base - at);
         }
         let _ = writeln!(s, "    union {{");
         for (vname, fields) in &own {
             let _ = writeln!(s, "        struct {{");
-            let mut at = base;
-            let mut pad = 0;
-            for f in &fields[abi.shared..] {
-                let o = offset(&f.slot);
-                if o > at {
-                    let _ = writeln!(s, "            uint8_t _pad{pad}[{}];", o - at);
-                    pad += 1;
-                }
-                let (d, size) = decl(m, &f.name, f.ty, &f.slot);
-                let _ = writeln!(s, "            {d}");
-                asserts.push((format!("u.{vname}.{}", f.name), o));
-                at = o + size;
-            }
+            let fields = &fields[abi.shared..];
+            let prefix = format!("u.{vname}.");
+            emit_fields(
+                &mut s,
+                m,
+                fields,
+                base,
+                "            ",
+                &prefix,
+                &mut asserts,
+            );
             let _ = writeln!(s, "        }} {vname};");
         }
         let _ = writeln!(s, "    }} u;");

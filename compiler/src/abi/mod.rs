@@ -15,6 +15,7 @@ pub mod header;
 pub mod logical_c;
 pub mod record;
 
+use crate::layout::logical::LogicalAbi;
 use crate::passes::tree_to_mem::LayoutSpec;
 use crate::syntax::ast::{Item, Program};
 use record::Record;
@@ -108,12 +109,14 @@ fn is_c_ident(s: &str) -> bool {
 }
 
 /// Reads and checks the signature of `algorithm` in the `tree` module `m` (fresh from irgen)
-/// against the layout `spec`.
+/// against the layout `spec`, whose logical tree (`layout::logical`, derived by the caller
+/// from its tree type) the header declares.
 pub fn signature(
     program: &Program,
     m: &Module,
     algorithm: &str,
     spec: &LayoutSpec,
+    logical: Option<&Result<LogicalAbi, String>>,
 ) -> Result<EntrySig, Diagnostic> {
     let layout = spec.model.name.name.clone();
     let decls: Vec<_> = program
@@ -265,12 +268,23 @@ pub fn signature(
             align: b.align,
         })
         .collect();
-    let model_adt = spec.model.adt.as_ref().expect("the layout realizes a tree type");
-    let logical = crate::layout::logical::LogicalAbi::derive(m, model_adt).map_err(|e| {
-        Diagnostic::error("E0380", format!("the logical tree of `{}`: {e}", model_adt.name))
+    let logical = match logical {
+        Some(Ok(l)) => l,
+        Some(Err(e)) => {
+            return Err(Diagnostic::error(
+                "E0380",
+                format!("layout `{layout}` cannot be packed: {e}"),
+            )
             .with_primary(spec.model.span, "layout declared here")
-            .with_note("constructor specialization reads the logical tree the runtime builds")
-    })?;
+            .with_note("constructor specialization reads the logical tree the runtime builds"))
+        }
+        None => {
+            return Err(Diagnostic::error(
+                "E0912",
+                format!("`--layout {layout}` has no logical tree"),
+            ))
+        }
+    };
     Ok(EntrySig {
         algorithm: algorithm.to_string(),
         layout,
@@ -278,8 +292,8 @@ pub fn signature(
         query,
         result,
         buffers,
-        logical_c: logical_c::render(&logical, m),
-        logical: logical.schema,
+        logical_c: logical_c::render(logical, m),
+        logical: logical.schema.clone(),
     })
 }
 

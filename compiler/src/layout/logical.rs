@@ -47,6 +47,34 @@ pub enum Slot {
     },
 }
 
+impl Slot {
+    /// The byte offset in the node where the field starts.
+    pub fn offset(&self) -> u64 {
+        match self {
+            Slot::Value { offset } | Slot::Children { offset, .. } | Slot::Prims { offset, .. } => {
+                *offset
+            }
+        }
+    }
+}
+
+/// The name a primitive array's length refers to (`nprims` in `Triangle[nprims]`), from the
+/// declaration of `variant`'s field `field`.
+fn length_name(model: &Adt, variant: &str, field: &str) -> Option<String> {
+    let f = model
+        .variant(variant)?
+        .fields
+        .iter()
+        .find(|x| x.name.name == field)?;
+    match &f.ty.kind {
+        TypeExprKind::Array {
+            len: ArrayLen::Name(n),
+            ..
+        } => Some(n.name.clone()),
+        _ => None,
+    }
+}
+
 /// One logical field of a variant.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct LogicalField {
@@ -101,6 +129,16 @@ fn is_triangle(m: &Module, ty: TypeId) -> bool {
         && size_align(m, ty) == Some((PRIM_STRIDE, 4))
 }
 
+/// A type as the source writes it (`DOP14`, not `!tree.adt<"DOP14">`).
+fn source_type(m: &Module, ty: TypeId) -> String {
+    match m.types.get(ty) {
+        Type::Adt(n) => n.clone(),
+        Type::Array { elem, len: Some(n) } => format!("{}[{n}]", source_type(m, *elem)),
+        Type::Array { elem, len: None } => format!("{}[]", source_type(m, *elem)),
+        _ => m.types.display(ty).to_string(),
+    }
+}
+
 fn align_up(x: u64, a: u64) -> u64 {
     x.div_ceil(a) * a
 }
@@ -124,7 +162,12 @@ impl LogicalAbi {
                 _ => None,
             }
         };
-        let shape = |v: &scion_ir::module::Variant| v.fields.iter().filter_map(|f| children_of(f.ty)).sum::<u64>();
+        let shape = |v: &scion_ir::module::Variant| {
+            v.fields
+                .iter()
+                .filter_map(|f| children_of(f.ty))
+                .sum::<u64>()
+        };
         let (interior, leaf) = match def.variants.as_slice() {
             [a, b] if shape(a) > 0 && shape(b) == 0 => (0, 1),
             [a, b] if shape(b) > 0 && shape(a) == 0 => (1, 0),
@@ -137,9 +180,7 @@ impl LogicalAbi {
             }
         };
         let arity = shape(&def.variants[interior]);
-        let bad = |field: &str, what: String| {
-            Err(format!("`{name}`'s field `{field}`: {what}"))
-        };
+        let bad = |field: &str, what: String| Err(format!("`{name}`'s field `{field}`: {what}"));
         // Shared fields.
         let mut at = 4u64;
         let mut align = 4u64;
@@ -152,7 +193,7 @@ impl LogicalAbi {
                     format!(
                         "a shared field of type {} (the runtime's builders give each node an \
                          `AABB` box; other bounds need a builder that computes them)",
-                        m.types.display(f.ty)
+                        source_type(m, f.ty)
                     ),
                 );
             }
@@ -162,14 +203,7 @@ impl LogicalAbi {
                 ty: f.ty,
                 slot: Slot::Value { offset: at },
             });
-            fields.push(SchemaField {
-                role: Role::Bounds as u32,
-                variant: SHARED,
-                offset: at as u32,
-                slot: 0,
-                count: 1,
-                width: 0,
-            });
+            fields.push(SchemaField::new(Role::Bounds, SHARED, at as u32, 0, 1, 0));
             at += 24;
         }
         // The variants' fields start together, at the largest alignment any of them needs
@@ -191,65 +225,70 @@ impl LogicalAbi {
         for (k, v) in def.variants.iter().enumerate() {
             let mut at = base;
             let mut out = shared.clone();
-            let model_v = model.variant(&v.name);
             let mut pending: Vec<(usize, String)> = Vec::new();
             for f in &v.fields {
                 let (size, falign, slot, role) = if let Some(n) = children_of(f.ty) {
                     let o = align_up(at, 4);
-                    let s = Slot::Children { offset: o, count: n };
-                    let r = SchemaField {
-                        role: Role::Children as u32,
-                        variant: k as u32,
-                        offset: o as u32,
-                        slot: next_slot as u32,
-                        count: n as u32,
-                        width: 0,
+                    let s = Slot::Children {
+                        offset: o,
+                        count: n,
                     };
+                    let r = SchemaField::new(
+                        Role::Children,
+                        k as u32,
+                        o as u32,
+                        next_slot as u32,
+                        n as u32,
+                        0,
+                    );
                     next_slot += n;
                     (4 * n, 4, s, Some(r))
                 } else {
                     match m.types.get(f.ty) {
                         Type::Array { elem, len: None } => {
                             if !is_triangle(m, *elem) {
-                                return bad(&f.name, format!(
-                                    "an array of {} (the runtime's primitives are `Triangle`s)",
-                                    m.types.display(*elem)
-                                ));
+                                return bad(
+                                    &f.name,
+                                    format!(
+                                        "an array of {} (the runtime's primitives are `Triangle`s)",
+                                        source_type(m, *elem)
+                                    ),
+                                );
                             }
-                            let len = model_v
-                                .and_then(|mv| mv.fields.iter().find(|x| x.name.name == f.name))
-                                .and_then(|x| match &x.ty.kind {
-                                    TypeExprKind::Array { len: ArrayLen::Name(n), .. } => Some(n.name.clone()),
-                                    _ => None,
-                                })
-                                .ok_or_else(|| format!("`{name}`'s field `{}`: its length is not a field", f.name))?;
+                            let Some(len) = length_name(model, &v.name, &f.name) else {
+                                return bad(&f.name, "its length is not a field".into());
+                            };
                             pending.push((out.len(), len));
                             let o = align_up(at, 4);
-                            let r = SchemaField {
-                                role: Role::PrimOffset as u32,
-                                variant: k as u32,
-                                offset: o as u32,
-                                slot: 0,
-                                count: 1,
-                                width: 0,
-                            };
-                            (4, 4, Slot::Prims { offset: o, count: usize::MAX }, Some(r))
+                            let r = SchemaField::new(Role::PrimOffset, k as u32, o as u32, 0, 1, 0);
+                            (
+                                4,
+                                4,
+                                Slot::Prims {
+                                    offset: o,
+                                    count: usize::MAX,
+                                },
+                                Some(r),
+                            )
                         }
-                        Type::Array { elem, len: Some(n) } if k == interior && is_aabb(m, *elem) => {
+                        Type::Array { elem, len: Some(n) }
+                            if k == interior && is_aabb(m, *elem) =>
+                        {
                             if *n != arity {
-                                return bad(&f.name, format!(
-                                    "{n} child boxes for {arity} children"
-                                ));
+                                return bad(
+                                    &f.name,
+                                    format!("{n} child boxes for {arity} children"),
+                                );
                             }
                             let o = align_up(at, 4);
-                            let r = SchemaField {
-                                role: Role::ChildBounds as u32,
-                                variant: k as u32,
-                                offset: o as u32,
-                                slot: 0,
-                                count: *n as u32,
-                                width: 0,
-                            };
+                            let r = SchemaField::new(
+                                Role::ChildBounds,
+                                k as u32,
+                                o as u32,
+                                0,
+                                *n as u32,
+                                0,
+                            );
                             (24 * n, 4, Slot::Value { offset: o }, Some(r))
                         }
                         Type::Int(t) if !t.is_signed() && k == leaf => {
@@ -259,18 +298,19 @@ impl LogicalAbi {
                             (w, w, Slot::Value { offset: o }, None)
                         }
                         _ => {
-                            return bad(&f.name, format!(
-                                "a field of type {} in `{}` (the runtime writes node boxes, \
+                            return bad(
+                                &f.name,
+                                format!(
+                                    "a field of type {} in `{}` (the runtime writes node boxes, \
                                  child boxes, children, primitive counts and primitives)",
-                                m.types.display(f.ty), v.name
-                            ))
+                                    source_type(m, f.ty),
+                                    v.name
+                                ),
+                            )
                         }
                     }
                 };
-                let offset = match &slot {
-                    Slot::Value { offset } | Slot::Children { offset, .. } | Slot::Prims { offset, .. } => *offset,
-                };
-                at = offset + size;
+                at = slot.offset() + size;
                 align = align.max(falign);
                 out.push(LogicalField {
                     name: f.name.clone(),
@@ -282,26 +322,36 @@ impl LogicalAbi {
             // Tie each primitive array to its length field.
             for (idx, len) in pending {
                 let Some(ci) = out.iter().position(|x| x.name == len) else {
-                    return bad(&out[idx].name, format!("its length `{len}` is not a field of `{}`", v.name));
+                    return bad(
+                        &out[idx].name,
+                        format!("its length `{len}` is not a field of `{}`", v.name),
+                    );
                 };
-                let (Slot::Value { offset }, Type::Int(t)) = (&out[ci].slot, m.types.get(out[ci].ty)) else {
-                    return bad(&len, "the length of a primitive array is an unsigned integer field".into());
+                let (Slot::Value { offset }, Type::Int(t)) =
+                    (&out[ci].slot, m.types.get(out[ci].ty))
+                else {
+                    return bad(
+                        &len,
+                        "the length of a primitive array is an unsigned integer field".into(),
+                    );
                 };
-                fields.push(SchemaField {
-                    role: Role::PrimCount as u32,
-                    variant: k as u32,
-                    offset: *offset as u32,
-                    slot: 0,
-                    count: 1,
-                    width: t.bits() / 8,
-                });
+                fields.push(SchemaField::new(
+                    Role::PrimCount,
+                    k as u32,
+                    *offset as u32,
+                    0,
+                    1,
+                    t.bits() / 8,
+                ));
                 if let Slot::Prims { count, .. } = &mut out[idx].slot {
                     *count = ci;
                 }
             }
             for f in &out[shared.len()..] {
                 let written = match f.slot {
-                    Slot::Value { offset } => fields.iter().any(|s| u64::from(s.offset) == offset && s.variant == k as u32),
+                    Slot::Value { offset } => fields
+                        .iter()
+                        .any(|s| u64::from(s.offset) == offset && s.variant == k as u32),
                     _ => true,
                 };
                 if !written {
@@ -311,8 +361,14 @@ impl LogicalAbi {
             end = end.max(at);
             variants.push((v.name.clone(), out));
         }
-        if k_has_no_prims(&fields, leaf) {
-            return Err(format!("`{name}`'s `{}` holds no primitive array", def.variants[leaf].name));
+        let leaf_prims = fields
+            .iter()
+            .any(|f| f.role == Role::PrimOffset as u32 && f.variant == leaf as u32);
+        if !leaf_prims {
+            return Err(format!(
+                "`{name}`'s `{}` holds no primitive array",
+                def.variants[leaf].name
+            ));
         }
         let node_size = align_up(end, align);
         let schema = Schema {
@@ -339,23 +395,17 @@ impl LogicalAbi {
     }
 }
 
-fn k_has_no_prims(fields: &[SchemaField], leaf: usize) -> bool {
-    !fields
-        .iter()
-        .any(|f| f.role == Role::PrimOffset as u32 && f.variant == leaf as u32)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::layout::fixtures::{program, BVH8_TYPE, PRELUDE};
+    use crate::layout::fixtures::{program, BVH8_TYPE};
     use crate::layout::model::LayoutModel;
     use crate::syntax::ast::Item;
 
-    /// The `tree` module and the model's ADT of the first layout of `sources`.
+    /// The logical tree of the first layout of `sources` (after the prelude).
     fn derive(sources: &[&str]) -> Result<LogicalAbi, String> {
-        let p = program(sources);
-        let decl = p
+        let prog = program(sources);
+        let decl = prog
             .items
             .iter()
             .find_map(|i| match i {
@@ -363,16 +413,7 @@ mod tests {
                 _ => None,
             })
             .expect("a layout");
-        let model = LayoutModel::from_ast(decl, &p);
-        let mut sm = scion_ir::diag::SourceMap::new();
-        let mut text = String::from(PRELUDE);
-        for s in sources {
-            text.push('\n');
-            text.push_str(s);
-        }
-        let f = sm.add("t.scion", text);
-        let (prog, d) = crate::syntax::parse_program(&sm, &[f]);
-        assert!(d.is_empty());
+        let model = LayoutModel::from_ast(decl, &prog);
         // Only the module's type declarations matter here; the layouts need not check.
         let (typed, _) = crate::sema::check_program(&prog);
         let m = crate::irgen::generate(&prog, &typed).expect("irgen");
@@ -398,16 +439,28 @@ layout W8(R: u32) {
         let abi = derive(&[BVH8_TYPE, layout]).unwrap();
         let s = &abi.schema;
         assert_eq!((s.arity, s.node_size, s.interior, s.leaf), (8, 228, 0, 1));
-        let roles: Vec<(u32, u32, u32)> = s.fields.iter().map(|f| (f.role, f.offset, f.count)).collect();
+        let roles: Vec<(u32, u32, u32)> = s
+            .fields
+            .iter()
+            .map(|f| (f.role, f.offset, f.count))
+            .collect();
         assert_eq!(
             roles,
-            [(Role::ChildBounds as u32, 4, 8), (Role::Children as u32, 196, 8), (Role::PrimOffset as u32, 8, 1), (Role::PrimCount as u32, 4, 1)]
+            [
+                (Role::ChildBounds as u32, 4, 8),
+                (Role::Children as u32, 196, 8),
+                (Role::PrimOffset as u32, 8, 1),
+                (Role::PrimCount as u32, 4, 1)
+            ]
         );
     }
 
     #[test]
     fn bounds_the_runtime_cannot_compute_are_named() {
         let e = derive(&[crate::layout::fixtures::DOP_SPLIT]).unwrap_err();
-        assert!(e.contains("`DopBVH`'s field `bounds`") && e.contains("DOP14"), "{e}");
+        assert!(
+            e.contains("`DopBVH`'s field `bounds`") && e.contains("DOP14"),
+            "{e}"
+        );
     }
 }

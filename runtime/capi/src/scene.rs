@@ -3,10 +3,10 @@
 use crate::ffi::{bad_arg, guard, report, Status, SCION_RT_ERR_EMPTY, SCION_RT_ERR_SCENE};
 use rt::bvh::schema::{LogicalBytes, Schema, SchemaField};
 use rt::bvh::{build_sah_binned, LogicalTree, SahOptions};
-use std::sync::Mutex;
 use rt::geom::Triangle;
 use rt::scene::{load_obj, Scene};
 use std::ffi::{c_char, CStr};
+use std::sync::Mutex;
 
 /// A loaded scene (opaque to C).
 pub struct ScionScene {
@@ -211,7 +211,10 @@ pub unsafe extern "C" fn scion_tree_view(
             arity: c.arity,
             fields,
         };
-        let mut filled = t.filled.lock().map_err(|_| bad_arg("scion_tree_view: a view of this tree panicked"))?;
+        let mut filled = t
+            .filled
+            .lock()
+            .map_err(|_| bad_arg("scion_tree_view: a view of this tree panicked"))?;
         let at = match filled.iter().position(|(s, _)| *s == schema) {
             Some(at) => at,
             None => {

@@ -88,7 +88,10 @@ fn the_c_path_matches_the_rust_path() {
     let nodes = unsafe { std::slice::from_raw_parts(view.nodes, expect.nodes().len()) };
     assert_eq!(nodes, expect.nodes());
     // A schema the runtime cannot fill is refused with a message.
-    let bad = ScionLogicalSchema { node_size: 3, ..schema };
+    let bad = ScionLogicalSchema {
+        node_size: 3,
+        ..schema
+    };
     // SAFETY: as above.
     let s = unsafe { scion_tree_view(tree, &bad, &mut view, err.as_mut_ptr(), err.len()) };
     assert_ne!(s, SCION_RT_OK);

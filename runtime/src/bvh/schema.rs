@@ -84,6 +84,20 @@ pub struct SchemaField {
     pub width: u32,
 }
 
+impl SchemaField {
+    /// A field of `role` (`variant` [`SHARED`] for a shared field).
+    pub fn new(role: Role, variant: u32, offset: u32, slot: u32, count: u32, width: u32) -> Self {
+        SchemaField {
+            role: role as u32,
+            variant,
+            offset,
+            slot,
+            count,
+            width,
+        }
+    }
+}
+
 /// Where the logical fields of a tree type sit in its logical nodes.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct Schema {
@@ -110,13 +124,8 @@ pub struct Schema {
 /// keeps the two equal); this copy serves the runtime's own tests and tools that hold no
 /// compiled layout.
 pub fn binary_bvh() -> Schema {
-    let f = |role: Role, variant: u32, offset: u32, slot: u32, width: u32| SchemaField {
-        role: role as u32,
-        variant,
-        offset,
-        slot,
-        count: 1,
-        width,
+    let f = |role, variant, offset, slot, width| {
+        SchemaField::new(role, variant, offset, slot, 1, width)
     };
     Schema {
         adt: "BVH".to_string(),
@@ -141,7 +150,10 @@ impl Schema {
     pub fn validate(&self) -> Result<(), String> {
         let name = &self.adt;
         if self.node_align == 0 || !self.node_align.is_power_of_two() {
-            return Err(format!("`{name}`: node alignment {} is not a power of two", self.node_align));
+            return Err(format!(
+                "`{name}`: node alignment {} is not a power of two",
+                self.node_align
+            ));
         }
         if self.node_size < 4 || self.node_size % self.node_align != 0 {
             return Err(format!(
@@ -166,7 +178,9 @@ impl Schema {
             let in_interior = f.variant == SHARED || f.variant == self.interior;
             match role {
                 Role::Children | Role::ChildBounds if !in_interior || f.variant == SHARED => {
-                    return Err(format!("`{name}`: field {k} ({role:?}) is not the interior's"));
+                    return Err(format!(
+                        "`{name}`: field {k} ({role:?}) is not the interior's"
+                    ));
                 }
                 Role::PrimCount | Role::PrimOffset if f.variant != self.leaf => {
                     return Err(format!("`{name}`: field {k} ({role:?}) is not the leaf's"));
@@ -177,12 +191,20 @@ impl Schema {
                 for s in f.slot..f.slot.saturating_add(f.count) {
                     match slots.get_mut(s as usize) {
                         Some(n) => *n += 1,
-                        None => return Err(format!("`{name}`: child slot {s} past arity {}", self.arity)),
+                        None => {
+                            return Err(format!(
+                                "`{name}`: child slot {s} past arity {}",
+                                self.arity
+                            ))
+                        }
                     }
                 }
             }
             if role == Role::ChildBounds && f.slot.saturating_add(f.count) > self.arity {
-                return Err(format!("`{name}`: child box slots past arity {}", self.arity));
+                return Err(format!(
+                    "`{name}`: child box slots past arity {}",
+                    self.arity
+                ));
             }
             for &(v, o, s) in &used {
                 let same = v == SHARED || f.variant == SHARED || v == f.variant;
@@ -193,7 +215,10 @@ impl Schema {
             used.push((f.variant, f.offset, size));
         }
         if let Some(s) = slots.iter().position(|&n| n != 1) {
-            return Err(format!("`{name}`: child slot {s} has {} references", slots[s]));
+            return Err(format!(
+                "`{name}`: child slot {s} has {} references",
+                slots[s]
+            ));
         }
         Ok(())
     }
@@ -206,7 +231,12 @@ impl Schema {
         let fields: Vec<String> = self
             .fields
             .iter()
-            .map(|f| format!("{},{},{},{},{},{}", f.role, f.variant, f.offset, f.slot, f.count, f.width))
+            .map(|f| {
+                format!(
+                    "{},{},{},{},{},{}",
+                    f.role, f.variant, f.offset, f.slot, f.count, f.width
+                )
+            })
             .collect();
         format!(
             "{} {} {} {} {} {} {}",
@@ -229,12 +259,24 @@ impl Schema {
         }
         let n = |s: &str| s.parse::<u32>().map_err(|_| bad());
         let mut fields = Vec::new();
-        for f in parts.get(6).map_or("", |s| s).split(';').filter(|f| !f.is_empty()) {
+        for f in parts
+            .get(6)
+            .map_or("", |s| s)
+            .split(';')
+            .filter(|f| !f.is_empty())
+        {
             let v: Vec<u32> = f.split(',').map(n).collect::<Result<_, _>>()?;
             let [role, variant, offset, slot, count, width] = v[..] else {
                 return Err(bad());
             };
-            fields.push(SchemaField { role, variant, offset, slot, count, width });
+            fields.push(SchemaField {
+                role,
+                variant,
+                offset,
+                slot,
+                count,
+                width,
+            });
         }
         let s = Schema {
             adt: parts[0].to_string(),
@@ -303,7 +345,10 @@ impl LogicalBytes {
             wide_nodes(tree, schema)
         };
         if nodes.len() >= NO_NODE as usize {
-            return Err(format!("{} logical nodes do not fit u32 indices", nodes.len()));
+            return Err(format!(
+                "{} logical nodes do not fit u32 indices",
+                nodes.len()
+            ));
         }
         let size = schema.node_size as usize;
         let mut storage = vec![0u8; nodes.len() * size + 8];
@@ -442,7 +487,10 @@ fn encode(bytes: &mut [u8], n: &Node, schema: &Schema) {
             Some(Role::Bounds) => put_box(bytes, at, n.bounds),
             Some(Role::ChildBounds) => {
                 for k in 0..f.count as usize {
-                    let b = n.children.get(f.slot as usize + k).map_or(Aabb::EMPTY, |c| c.1);
+                    let b = n
+                        .children
+                        .get(f.slot as usize + k)
+                        .map_or(Aabb::EMPTY, |c| c.1);
                     put_box(bytes, at + 24 * k, b);
                 }
             }
@@ -524,10 +572,10 @@ mod tests {
             leaf: 1,
             arity: 8,
             fields: vec![
-                SchemaField { role: Role::ChildBounds as u32, variant: 0, offset: 4, slot: 0, count: 8, width: 0 },
-                SchemaField { role: Role::Children as u32, variant: 0, offset: 196, slot: 0, count: 8, width: 0 },
-                SchemaField { role: Role::PrimCount as u32, variant: 1, offset: 4, slot: 0, count: 1, width: 2 },
-                SchemaField { role: Role::PrimOffset as u32, variant: 1, offset: 8, slot: 0, count: 1, width: 0 },
+                SchemaField::new(Role::ChildBounds, 0, 4, 0, 8, 0),
+                SchemaField::new(Role::Children, 0, 196, 0, 8, 0),
+                SchemaField::new(Role::PrimCount, 1, 4, 0, 1, 2),
+                SchemaField::new(Role::PrimOffset, 1, 8, 0, 1, 0),
             ],
         };
         let lb = LogicalBytes::fill(&t, &s).unwrap();
@@ -549,19 +597,29 @@ mod tests {
                     empties += 1;
                 }
                 if let Some(pb) = parent_box {
-                    assert_eq!(pb, bx.to_array(), "a leaf's slot box is its primitives' box");
+                    assert_eq!(
+                        pb,
+                        bx.to_array(),
+                        "a leaf's slot box is its primitives' box"
+                    );
                 }
                 continue;
             }
             for k in 0..8 {
                 let c = u32_at(b, 196 + 4 * k);
-                let bx: Vec<f32> = (0..6).map(|j| f32::from_bits(u32_at(b, 4 + 24 * k + 4 * j))).collect();
+                let bx: Vec<f32> = (0..6)
+                    .map(|j| f32::from_bits(u32_at(b, 4 + 24 * k + 4 * j)))
+                    .collect();
                 stack.push((c, Some(bx.try_into().unwrap())));
             }
         }
         assert!(covered.iter().all(|&c| c == 1));
         assert!(empties > 0, "500 triangles leave some slot empty");
-        assert_eq!(u32_at(node(lb.node_count as u32 - 1), 0), 1, "the empty leaf is last");
+        assert_eq!(
+            u32_at(node(lb.node_count as u32 - 1), 0),
+            1,
+            "the empty leaf is last"
+        );
     }
 
     #[test]
@@ -576,7 +634,14 @@ mod tests {
         s.fields[0].offset = 0;
         assert!(s.validate().unwrap_err().contains("overlaps"));
         let t = tree(10);
-        assert!(LogicalBytes::fill(&t, &Schema { node_size: 3, ..binary_bvh() }).is_err());
+        assert!(LogicalBytes::fill(
+            &t,
+            &Schema {
+                node_size: 3,
+                ..binary_bvh()
+            }
+        )
+        .is_err());
     }
 
     #[test]

@@ -11,7 +11,9 @@
 
 #![allow(dead_code)]
 
-use scion_host::contract::{BufferSpec, LayoutCode, LogicalInput, STATUS_OK, STATUS_STACK_OVERFLOW};
+use scion_host::contract::{
+    BufferSpec, LayoutCode, LogicalInput, STATUS_OK, STATUS_STACK_OVERFLOW,
+};
 use scion_runtime::bvh::NO_NODE;
 use scion_runtime::geom::{Aabb, Ray, Triangle, Vec3};
 use scion_runtime::reference::prelude::{distmin_of, hit_distance, slab_ray};

@@ -23,8 +23,8 @@
 //! ADT of another shape is reported (E0380).
 
 use super::reader::Reader;
-use crate::layout::logical::{LogicalAbi, LogicalField, Slot, PRIM_STRIDE};
 use super::{spec_of, unsupported, LayoutSpec};
+use crate::layout::logical::{LogicalAbi, LogicalField, Slot, PRIM_STRIDE};
 use crate::layout::model::GroupKind;
 use crate::layout::plan::BufferKind;
 use scion_ir::attr::Attr;
@@ -184,21 +184,22 @@ fn generate(m: &mut Module, spec: &LayoutSpec, ours: &[FuncId]) -> Result<(), Di
         let fl_params = bd.m.funcs[fl].params.clone();
         let prims = load(&mut bd, tree, None, view::PRIMS, 0, ptr);
         let failed = std::cell::RefCell::new(None);
-        let arm = |bd: &mut Builder<'_>, name: &str, params: &[TypeId], logical: &[LogicalField]| {
-            match logical_fields(bd, params, logical, nodes, prims, i, stride) {
-                Ok(vals) => {
-                    let all: Vec<ValueId> = pass.iter().copied().chain(vals).collect();
-                    let c = bd.call(name, &all, &[ref_ty]);
-                    let r = bd.result(c, 0);
-                    bd.yield_(&[r]);
+        let arm =
+            |bd: &mut Builder<'_>, name: &str, params: &[TypeId], logical: &[LogicalField]| {
+                match logical_fields(bd, params, logical, nodes, prims, i, stride) {
+                    Ok(vals) => {
+                        let all: Vec<ValueId> = pass.iter().copied().chain(vals).collect();
+                        let c = bd.call(name, &all, &[ref_ty]);
+                        let r = bd.result(c, 0);
+                        bd.yield_(&[r]);
+                    }
+                    Err(e) => {
+                        *failed.borrow_mut() = Some(e);
+                        let r = bd.const_int(u32t, 0);
+                        bd.yield_(&[r]);
+                    }
                 }
-                Err(e) => {
-                    *failed.borrow_mut() = Some(e);
-                    let r = bd.const_int(u32t, 0);
-                    bd.yield_(&[r]);
-                }
-            }
-        };
+            };
         let if_op = bd.if_(
             is_interior,
             &[ref_ty],
@@ -295,13 +296,21 @@ pub(super) fn logical_fields(
             Slot::Prims { offset, count } => {
                 let start = load(bd, nodes, Some(i), *offset, stride, u32t);
                 let (Some(cf), Type::View(_)) = (fields.get(*count), bd.m.types.get(p)) else {
-                    return Err(format!("the primitives `{}` as {}", f.name, bd.m.types.display(p)));
+                    return Err(format!(
+                        "the primitives `{}` as {}",
+                        f.name,
+                        bd.m.types.display(p)
+                    ));
                 };
                 let Slot::Value { offset: co } = cf.slot else {
                     return Err(format!("the length of `{}`", f.name));
                 };
                 let len = load(bd, nodes, Some(i), co, stride, cf.ty);
-                let len = if cf.ty == u32t { len } else { bd.cast(len, u32t) };
+                let len = if cf.ty == u32t {
+                    len
+                } else {
+                    bd.cast(len, u32t)
+                };
                 let op = bd.insert(
                     OpSpec::new(mem::Op::View)
                         .operands(&[prims, start, len])

@@ -4,9 +4,9 @@
 //! contract and `docs/design/specialization.md` §3.1 for the C ABI.
 
 use super::constructor::{load, logical_fields, store, view};
-use crate::layout::logical::LogicalField;
 use super::reader::Reader;
 use super::{unsupported, LayoutSpec};
+use crate::layout::logical::LogicalField;
 use crate::layout::plan::Count;
 use scion_ir::diag::Diagnostic;
 use scion_ir::rewrite::erase_op;
