@@ -452,15 +452,15 @@ fn bit_slice_stores_report_values_that_do_not_fit() {
     assert_eq!(status_with("this[31:32] = nprims as u32;"), 1);
 }
 
-#[test]
-fn soa_layout_packs_and_traverses_like_the_tree_level() {
-    // `pbrt-soaos`: `low` and the split in one array, `high` and `nprims` in another (`---`).
+/// Packs the scene into `layout` (declared in `src`, `nbuf` buffers) and checks closest hit
+/// over the packed buffers against the tree level.
+fn packs_and_traverses_like_the_tree_level(src: &str, layout: &str, nbuf: usize) {
     let (nodes, root, prims) = scene();
     let want = reference(&nodes, root, prims.as_slice());
-    let m = module(crate::layout::fixtures::PBRT_SOAOS, Some("PbrtSoAoS"));
+    let m = module(src, Some(layout));
     let mut it = Interp::new(&m);
     let tree = put_tree(&mut it, &nodes, root, &prims);
-    let (b, _) = pack(&mut it, "PbrtSoAoS", 4, tree);
+    let (b, _) = pack(&mut it, layout, nbuf, tree);
     let got: Vec<(u32, u32)> = rays()
         .into_iter()
         .map(|ray| {
@@ -478,6 +478,20 @@ fn soa_layout_packs_and_traverses_like_the_tree_level() {
         })
         .collect();
     assert_eq!(got, want);
+}
+
+#[test]
+fn soa_layout_packs_and_traverses_like_the_tree_level() {
+    // `pbrt-soaos`: `low` and the split in one array, `high` and `nprims` in another (`---`).
+    packs_and_traverses_like_the_tree_level(crate::layout::fixtures::PBRT_SOAOS, "PbrtSoAoS", 4);
+}
+
+#[test]
+fn user_functions_in_layout_expressions() {
+    // `bounds = box_of(lo, hi)` and `left = shifted(I, 1)`: calls of the program's functions,
+    // in the destructor's reads and in the packer's placement of the left child.
+    let src = include_str!("../../../../lit-tests/Inputs/user_functions_layout.scion");
+    packs_and_traverses_like_the_tree_level(src, "FnBVH", 3);
 }
 
 #[test]

@@ -17,7 +17,7 @@ use scion_ir::attr::Attr;
 use scion_ir::diag::Diagnostic;
 use scion_ir::tree::{CmpPred, Intrinsic, Op};
 use scion_ir::types::Type;
-use scion_ir::{mem, Builder, InsertPoint, Module, OpSpec, TypeId, ValueId};
+use scion_ir::{mem, Builder, FuncId, InsertPoint, Module, OpSpec, TypeId, ValueId};
 
 type R<T> = Result<T, Diagnostic>;
 
@@ -639,8 +639,9 @@ impl<'a> Reader<'a> {
         }
     }
 
-    /// A call in a layout expression: a record constructor, a vector constructor (`f32x3(..)`)
-    /// or a builtin whose result has its first argument's type (`fma`, `min`, `fadd_rd`, ...).
+    /// A call in a layout expression: a user function (`decode16(q, lo, s)`, called as is),
+    /// a record constructor, a vector constructor (`f32x3(..)`) or a builtin whose result has
+    /// its first argument's type (`fma`, `min`, `fadd_rd`, ...).
     fn call(
         &mut self,
         m: &mut Module,
@@ -649,6 +650,9 @@ impl<'a> Reader<'a> {
         callee: &str,
         args: &[Expr],
     ) -> R<ValueId> {
+        if let Some(v) = self.user_call(m, variant, e, callee, args)? {
+            return Ok(v);
+        }
         let mut vals: Vec<ValueId> = Vec::new();
         for a in args {
             let want = vals.first().map(|&v| m.values[v].ty);
@@ -685,6 +689,67 @@ impl<'a> Reader<'a> {
                 format!("a call of `{callee}` in a layout expression"),
             )),
         }
+    }
+
+    /// A call of a user function of the program (its overloads are `callee`, `callee.1`, ...,
+    /// sema's unique names): the one whose parameter types the arguments have, with integer
+    /// literals taking the parameter's type. `None` when no function has that name.
+    fn user_call(
+        &mut self,
+        m: &mut Module,
+        variant: &str,
+        e: &Expr,
+        callee: &str,
+        args: &[Expr],
+    ) -> R<Option<ValueId>> {
+        let is_overload = |name: &str| {
+            name == callee
+                || name.strip_prefix(callee).is_some_and(|rest| {
+                    rest.strip_prefix('.')
+                        .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
+                })
+        };
+        let candidates: Vec<FuncId> = m
+            .func_order
+            .iter()
+            .copied()
+            .filter(|&f| is_overload(&m.funcs[f].name) && m.funcs[f].params.len() == args.len())
+            .collect();
+        if candidates.is_empty() {
+            return Ok(None);
+        }
+        // Literals take the parameter type when every candidate agrees on it.
+        let mut vals = Vec::new();
+        for (k, a) in args.iter().enumerate() {
+            let t0 = m.funcs[candidates[0]].params[k];
+            let want = candidates
+                .iter()
+                .all(|&f| m.funcs[f].params[k] == t0)
+                .then_some(t0);
+            vals.push(self.expr(m, variant, a, want)?);
+        }
+        let tys: Vec<TypeId> = vals.iter().map(|&v| m.values[v].ty).collect();
+        let Some(&f) = candidates.iter().find(|&&f| m.funcs[f].params == tys) else {
+            let shown: Vec<String> = tys.iter().map(|&t| m.types.display(t).to_string()).collect();
+            return Err(unsupported(
+                Some(e.span),
+                format!(
+                    "a call of `{callee}` with arguments ({}) that no overload takes",
+                    shown.join(", ")
+                ),
+            ));
+        };
+        let name = m.funcs[f].name.clone();
+        let results = m.funcs[f].results.clone();
+        let [result] = results[..] else {
+            return Err(unsupported(
+                Some(e.span),
+                format!("a call of `{callee}`, which returns no single value"),
+            ));
+        };
+        let mut bd = self.builder(m, false);
+        let op = bd.call(&name, &vals, &[result]);
+        Ok(Some(bd.result(op, 0)))
     }
 
     /// `mem.view` of `array[lo : hi]`; when `hi` is written `lo + n` the length is `n` itself.
