@@ -2,7 +2,8 @@
 //! `tree` function per variant, `@L.build.<Variant>`, and one for `build root`, `@L.build.root`.
 //!
 //! A variant's function takes the variant's logical fields (shared first; a recursive field as
-//! the logical child's index `u32`, an array field as a slice) and returns `this`, the layout's
+//! the logical child's index `u32`, an array of `n` children as `u32[n]`, an array field as a
+//! slice) and returns `this`, the layout's
 //! reference. Its body uses the build ops of the tree dialect: `tree.this`, `tree.build_store
 //! {field}` (`build x = e`, and `build x` copying logical field `x`), `tree.build_child {field}`
 //! (`build x` of a recursive field, in statement or expression position) and `tree.append
@@ -61,6 +62,13 @@ pub(super) fn generate_builds(
             |m: &mut Module, tys: &mut TypeMap, t: &Ty| -> Result<TypeId, InternalError> {
                 match t {
                     Ty::Adt(a) if Some(*a) == adt => Ok(u32t),
+                    // An array of children: the children's logical indices.
+                    Ty::Array(e, n) if matches!(&**e, Ty::Adt(a) if Some(*a) == adt) => {
+                        Ok(m.ty(scion_ir::types::Type::Array {
+                            elem: u32t,
+                            len: Some(*n),
+                        }))
+                    }
                     _ => tys.lower(m, typed, t),
                 }
             };

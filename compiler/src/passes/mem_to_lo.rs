@@ -377,7 +377,7 @@ impl FnLower<'_> {
                     })
                     .collect()
             }
-            T::Tuple | T::Vector => ins.concat(),
+            T::Tuple | T::Array | T::Vector => ins.concat(),
             T::Ctor => {
                 if o.attr("variant").is_some() {
                     return self.err("a variant constructor needs a layout");

@@ -313,6 +313,7 @@ impl Interp<'_> {
                 vec![lanewise1(a, &f).map_err(|e| bad(&e))?]
             }
             Op::Tuple => vec![Val::Tuple(args)],
+            Op::Array => vec![Val::Array(std::rc::Rc::new(args))],
             Op::Extract => {
                 let i = index_attr(o.int_attr("index"));
                 match &args[..] {

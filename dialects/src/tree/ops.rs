@@ -47,6 +47,8 @@ pub enum Op {
     Bitcast,
     /// `tree.tuple` `(A, B, ...) -> tuple<A, B, ...>`.
     Tuple,
+    /// `tree.array` `(T, T, ...) -> array<N x T>` with N operands (N at least 1).
+    Array,
     /// `tree.extract {index}` `(tuple<...>) -> T_index`.
     Extract,
     /// `tree.insert {index}` `(tuple<...>, T_index) -> tuple<...>`.
@@ -121,7 +123,7 @@ pub enum Op {
 
 impl Op {
     /// Every op, in declaration order.
-    pub const ALL: [Op; 45] = [
+    pub const ALL: [Op; 46] = [
         Op::Const,
         Op::Add,
         Op::Sub,
@@ -141,6 +143,7 @@ impl Op {
         Op::Cast,
         Op::Bitcast,
         Op::Tuple,
+        Op::Array,
         Op::Extract,
         Op::Insert,
         Op::Vector,
@@ -191,6 +194,7 @@ impl Op {
             Op::Cast => "cast",
             Op::Bitcast => "bitcast",
             Op::Tuple => "tuple",
+            Op::Array => "array",
             Op::Extract => "extract",
             Op::Insert => "insert",
             Op::Vector => "vector",

@@ -172,6 +172,19 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
                 )
             })
         }
+        Op::Array => {
+            counts(&ot, &rt, ot.len(), 1)?;
+            let ok = !ot.is_empty()
+                && ot.iter().all(|&x| x == ot[0])
+                && matches!(t.get(rt[0]), Type::Array { elem, len: Some(n) }
+                    if *elem == ot[0] && *n as usize == ot.len());
+            require(ok, || {
+                format!(
+                    "result must be the array of its (equally typed, at least one) operands, not {}",
+                    show(rt[0])
+                )
+            })
+        }
         Op::Extract => {
             counts(&ot, &rt, 1, 1)?;
             let elems = tuple_elems(m, ot[0])?;
@@ -418,8 +431,20 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
         }
         Op::BuildChild => {
             counts(&ot, &rt, 1, 1)?;
-            require(t.as_int(ot[0]).is_some(), || {
-                format!("child index of type {}", show(ot[0]))
+            // One child's logical index, or an array of them (an array of children builds
+            // into the array of their references).
+            let ok = match (t.get(ot[0]), t.get(rt[0])) {
+                (Type::Array { elem, len: Some(n) }, Type::Array { len: Some(k), .. }) => {
+                    t.as_int(*elem).is_some() && n == k
+                }
+                _ => t.as_int(ot[0]).is_some(),
+            };
+            require(ok, || {
+                format!(
+                    "child index of type {} building {}",
+                    show(ot[0]),
+                    show(rt[0])
+                )
             })?;
             field_attr(o)
         }

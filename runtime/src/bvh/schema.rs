@@ -13,8 +13,9 @@
 //! children, in declaration order), a leaf variant with a primitive count and the first
 //! primitive. Arity 2 maps the binary [`LogicalTree`] node for node (same indices); any other
 //! arity collapses it first ([`super::wide`]'s collapse: interior nodes in pre-order, then the
-//! leaves), and an empty child slot refers to one shared empty leaf (no primitives, box
-//! [`Aabb::EMPTY`]) so that the layout's `Leaf` build decides how an empty slot is stored.
+//! leaves), and an empty child slot refers to an empty leaf of its own (no primitives, box
+//! [`Aabb::EMPTY`]) so that the layout's `Leaf` build decides how an empty slot is stored and
+//! the node count bounds what a layout places.
 //! Primitives are the tree's triangles, 40 bytes each.
 
 use super::logical::{LogicalTree, NO_NODE};
@@ -395,7 +396,7 @@ fn binary_nodes(tree: &LogicalTree, schema: &Schema) -> Vec<Node> {
 }
 
 /// Collapsed to `schema.arity` slots: interior nodes in pre-order (the root first), then the
-/// leaves, then the shared empty leaf when a slot is empty.
+/// leaves, then one empty leaf per empty slot.
 fn wide_nodes(tree: &LogicalTree, schema: &Schema) -> (Vec<Node>, u32) {
     let width = schema.arity as usize;
     let root = &tree.nodes[tree.root as usize];
@@ -428,7 +429,6 @@ fn wide_nodes(tree: &LogicalTree, schema: &Schema) -> (Vec<Node>, u32) {
     let mut nodes: Vec<Node> = Vec::with_capacity(interior.len() * 2);
     let mut leaves: Vec<Node> = Vec::new();
     let mut next = interior.len() as u32;
-    let mut any_empty = false;
     for (bin, slots) in &interior {
         let mut children = Vec::with_capacity(width);
         for &c in slots {
@@ -440,7 +440,6 @@ fn wide_nodes(tree: &LogicalTree, schema: &Schema) -> (Vec<Node>, u32) {
             }
             children.push((index[c as usize], n.aabb()));
         }
-        any_empty |= children.len() < width;
         nodes.push(Node {
             kind: schema.interior,
             bounds: tree.nodes[*bin as usize].aabb(),
@@ -449,20 +448,21 @@ fn wide_nodes(tree: &LogicalTree, schema: &Schema) -> (Vec<Node>, u32) {
         });
     }
     nodes.extend(leaves);
-    if any_empty {
-        let empty = nodes.len() as u32;
-        for n in nodes.iter_mut() {
-            if n.kind == schema.interior {
-                n.children.resize(width, (empty, Aabb::EMPTY));
-            }
+    // Each empty slot gets its own empty leaf, so the logical tree stays a tree and a layout
+    // that places a record per leaf has room for every one (`node_count` bounds placements).
+    let mut empties = 0;
+    for i in 0..interior.len() {
+        while nodes[i].children.len() < width {
+            nodes[i].children.push((next + empties, Aabb::EMPTY));
+            empties += 1;
         }
-        nodes.push(Node {
-            kind: schema.leaf,
-            bounds: Aabb::EMPTY,
-            children: Vec::new(),
-            prims: (0, 0),
-        });
     }
+    nodes.extend((0..empties).map(|_| Node {
+        kind: schema.leaf,
+        bounds: Aabb::EMPTY,
+        children: Vec::new(),
+        prims: (0, 0),
+    }));
     (nodes, 0)
 }
 
@@ -559,8 +559,8 @@ mod tests {
     }
 
     /// An eight-wide schema (`Interior(child_bounds: AABB[8], children: BVH8[8]) | Leaf(..)`):
-    /// every primitive is reached once, child boxes are the children's, empty slots share one
-    /// empty leaf.
+    /// every primitive is reached once, child boxes are the children's, every node (empty
+    /// leaves included) is reached exactly once.
     #[test]
     fn wide_schema_covers_every_primitive_once() {
         let t = tree(500);
@@ -583,7 +583,9 @@ mod tests {
         let mut covered = vec![0u32; t.primitives.len()];
         let mut stack = vec![(lb.root, None::<[f32; 6]>)];
         let mut empties = 0;
+        let mut seen = vec![0u32; lb.node_count];
         while let Some((i, parent_box)) = stack.pop() {
+            seen[i as usize] += 1;
             let b = node(i);
             if u32_at(b, 0) == 1 {
                 let count = u16::from_le_bytes([b[4], b[5]]) as usize;

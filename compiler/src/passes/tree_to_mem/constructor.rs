@@ -6,6 +6,8 @@
 //!   %counter: !tree.ref<u32>, %cursor: !tree.ref<u32>, %status: !tree.ref<i32>)`; `tree.this`
 //!   becomes the node's placement index (the counter, taken on entry for `order=pre`, after the
 //!   last child is built for `order=post`), or its address `mem.addr` for pointer references;
+//!   `tree.build_child` of an array of children calls `@L.node` for each slot in order and
+//!   gives the array of their references (`tree.array`);
 //!   `tree.build_store` a `mem.store` at the field's resolved path; `tree.build_child` a call of
 //!   `@L.node`; `tree.append` a copy loop into the global array at the running cursor;
 //! * `@L.node(%tree, %B, %i: u32, %counter, %cursor, %status) -> (R)`: reads logical node `%i`
@@ -524,12 +526,32 @@ fn rewrite_build(
                 let idx = m.ops[op].operands[0];
                 let mut bd = Builder::new(m);
                 bd.set_insertion_point(InsertPoint::Before(op));
-                let c = bd.call(
-                    node_name,
-                    &[cx.tree, cx.b, idx, cx.counter, cx.cursor, cx.status],
-                    &[ref_ty],
-                );
-                let r = bd.result(c, 0);
+                let node = |bd: &mut Builder<'_>, i: ValueId| {
+                    let c = bd.call(
+                        node_name,
+                        &[cx.tree, cx.b, i, cx.counter, cx.cursor, cx.status],
+                        &[ref_ty],
+                    );
+                    bd.result(c, 0)
+                };
+                // An array of children: each built in slot order, their references an array.
+                let r = match bd.m.types.get(bd.value_type(idx)).clone() {
+                    Type::Array { elem, len: Some(n) } => {
+                        let refs: Vec<ValueId> = (0..n)
+                            .map(|k| {
+                                let kv = bd.const_int(elem, k as i128);
+                                let i = bd.build1(Op::Index, &[idx, kv], elem);
+                                node(&mut bd, i)
+                            })
+                            .collect();
+                        let t = bd.m.ty(Type::Array {
+                            elem: ref_ty,
+                            len: Some(n),
+                        });
+                        bd.build1(Op::Array, &refs, t)
+                    }
+                    _ => node(&mut bd, idx),
+                };
                 let old = m.ops[op].results[0];
                 replace_all_uses(m, old, r);
                 erase_op(m, op);

@@ -11,6 +11,8 @@
 //!   each at most once per destruction), `mem.view` for slices of global arrays; recursive fields
 //!   are references;
 //! * `tree.field` of a shared field and `tree.is` on a tree value are read the same way;
+//! * an array of children (`children: BVH8[8]`) is read as the array of the children's
+//!   references, so `foreach c in children` and `children[k]` give references;
 //! * calls to specialized functions pass `%B` along.
 //!
 //! Tree values used any other way (built with `tree.ctor`, returned, stored in a cell, put in a
@@ -209,6 +211,7 @@ fn specialize_func(
     // Outer matches first (pre-order), so an inner match's operand is already aliased.
     for op in matches {
         destruct(m, spec, op, b, tree_ty, ref_ty)?;
+        retype_children(m, f, tree_ty);
     }
     // Whatever still carries a tree value is a use this pass does not know.
     for op in func_ops(m, f, Order::Pre) {
@@ -232,6 +235,41 @@ fn specialize_func(
         }
     }
     Ok(())
+}
+
+/// An array of children read from the layout is an array of references: the element a
+/// `tree.foreach` binds and a `tree.index` reads from it are references too.
+fn retype_children(m: &mut Module, f: FuncId, tree_ty: TypeId) {
+    for op in func_ops(m, f, Order::Pre) {
+        let o = &m.ops[op];
+        let Some(&arr) = o.operands.first() else {
+            continue;
+        };
+        let arr = scion_ir::rewrite::resolve_value(m, arr);
+        let Type::Array { elem, .. } = *m.types.get(m.values[arr].ty) else {
+            continue;
+        };
+        if elem == tree_ty {
+            continue;
+        }
+        match o.kind {
+            OpKind::Tree(Op::Foreach) => {
+                let block = m.regions[o.regions[0]].blocks[0];
+                if let Some(&a) = m.blocks[block].args.first() {
+                    if m.values[a].ty == tree_ty {
+                        m.values[a].ty = elem;
+                    }
+                }
+            }
+            OpKind::Tree(Op::Index) => {
+                let r = o.results[0];
+                if m.values[r].ty == tree_ty {
+                    m.values[r].ty = elem;
+                }
+            }
+            _ => {}
+        }
+    }
 }
 
 /// The reference components of a (possibly aliased) reference value, for a reader inserting

@@ -10,6 +10,7 @@ use scion_ir::diag::{FileId, SourceMap};
 use scion_ir::interp::{AdtVal, Interp, Val};
 use scion_ir::types::IntTy;
 use scion_ir::Module;
+use scion_runtime::bvh::schema::{binary_bvh, LogicalBytes, Schema};
 use std::rc::Rc;
 
 const CLOSEST_HIT: &str = include_str!("../../../../library/algorithms/closest_hit.scion");
@@ -18,6 +19,11 @@ const PTR: &str = include_str!("../../../../library/layouts/ptr.scion");
 
 /// The module of `emit` for closest-hit over `layout_src`, read back from its text form.
 fn module(layout_src: &str, layout: Option<&str>) -> Module {
+    module_and_schema(layout_src, layout).0
+}
+
+/// [`module`] and the schema of the logical tree the layout's constructor reads.
+fn module_and_schema(layout_src: &str, layout: Option<&str>) -> (Module, Option<Schema>) {
     let mut map = SourceMap::new();
     let prelude = map.add("prelude.scion", PRELUDE.to_string());
     let a = map.add("closest_hit.scion", CLOSEST_HIT.to_string());
@@ -50,7 +56,8 @@ fn module(layout_src: &str, layout: Option<&str>) -> Module {
         r.diagnostics.render(&map)
     );
     let text = r.output.expect("output");
-    scion_ir::parse_module(&text, FileId(0)).unwrap_or_else(|e| panic!("{e:?}\n{text}"))
+    let m = scion_ir::parse_module(&text, FileId(0)).unwrap_or_else(|e| panic!("{e:?}\n{text}"));
+    (m, r.logical)
 }
 
 #[derive(Clone)]
@@ -206,7 +213,17 @@ fn value(nodes: &[LNode], i: u32, prims: &[Tri]) -> Val {
 /// The C-ABI bytes of the logical tree in `it`'s memory, its nodes in the shape of the
 /// prelude's `BVH` (the runtime's fill); returns the `LogicalTreeView` address.
 fn put_tree(it: &mut Interp<'_>, nodes: &[LNode], root: u32, prims: &[Tri]) -> u64 {
-    use scion_runtime::bvh::schema::{binary_bvh, LogicalBytes};
+    put_tree_as(it, nodes, root, prims, &binary_bvh())
+}
+
+/// [`put_tree`] with the nodes in `schema`'s shape.
+fn put_tree_as(
+    it: &mut Interp<'_>,
+    nodes: &[LNode],
+    root: u32,
+    prims: &[Tri],
+    schema: &Schema,
+) -> u64 {
     let tree = scion_runtime::bvh::LogicalTree {
         nodes: nodes
             .iter()
@@ -221,7 +238,7 @@ fn put_tree(it: &mut Interp<'_>, nodes: &[LNode], root: u32, prims: &[Tri]) -> u
         root,
         primitives: Vec::new(),
     };
-    let filled = LogicalBytes::fill(&tree, &binary_bvh()).expect("the runtime fills `BVH`");
+    let filled = LogicalBytes::fill(&tree, schema).expect("the runtime fills the schema");
     let nb = filled.nodes().to_vec();
     let mut pb = Vec::new();
     for t in prims {
@@ -236,8 +253,8 @@ fn put_tree(it: &mut Interp<'_>, nodes: &[LNode], root: u32, prims: &[Tri]) -> u
     let pa = it.alloc_bytes(&pb, 4);
     let mut h = Vec::new();
     h.extend(na.to_le_bytes());
-    h.extend((nodes.len() as u32).to_le_bytes());
-    h.extend(root.to_le_bytes());
+    h.extend((filled.node_count as u32).to_le_bytes());
+    h.extend(filled.root.to_le_bytes());
     h.extend(pa.to_le_bytes());
     h.extend((prims.len() as u32).to_le_bytes());
     h.extend(0u32.to_le_bytes());
@@ -301,6 +318,24 @@ fn rays() -> Vec<Val> {
     out
 }
 
+/// Rays from outside the scene at each triangle's centroid (each hits something).
+fn rays_at(prims: &[Tri]) -> Vec<Val> {
+    prims
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let c = [0, 1, 2].map(|k| (t.p[0][k] + t.p[1][k] + t.p[2][k]) / 3.0);
+            let o = [-2.0 + i as f32 * 0.1, 6.0, -3.0 + i as f32 * 0.05];
+            let d = [c[0] - o[0], c[1] - o[1], c[2] - o[2]];
+            adt(
+                "Ray",
+                None,
+                vec![vec3(o), vec3(d), Val::F32(0.0), Val::F32(f32::INFINITY)],
+            )
+        })
+        .collect()
+}
+
 fn best_of(it: &mut Interp<'_>, name: &str, args: Vec<Val>, cell: Val) -> (u32, u32) {
     let mut all = args;
     all.push(cell.clone());
@@ -316,11 +351,16 @@ fn best_of(it: &mut Interp<'_>, name: &str, args: Vec<Val>, cell: Val) -> (u32, 
 
 /// Closest hit of every ray on the tree level (ADT values).
 fn reference(nodes: &[LNode], root: u32, prims: &[Tri]) -> Vec<(u32, u32)> {
+    reference_for(nodes, root, prims, &rays())
+}
+
+/// Closest hits of `rays` at the tree level (the binary tree as an algebraic value).
+fn reference_for(nodes: &[LNode], root: u32, prims: &[Tri], rays: &[Val]) -> Vec<(u32, u32)> {
     let m = module(PBRT, None);
     let mut it = Interp::new(&m);
     let bvh = value(nodes, root, prims);
-    rays()
-        .into_iter()
+    rays.iter()
+        .cloned()
         .map(|ray| {
             let cell = it.alloc(Val::Tuple(vec![
                 Val::F32(f32::INFINITY),
@@ -492,6 +532,41 @@ fn user_functions_in_layout_expressions() {
     // in the destructor's reads and in the packer's placement of the left child.
     let src = include_str!("../../../../lit-tests/Inputs/user_functions_layout.scion");
     packs_and_traverses_like_the_tree_level(src, "FnBVH", 3);
+}
+
+#[test]
+fn arrays_of_children_pack_and_traverse_like_the_binary_tree() {
+    // `Interior(children: BVH4[4])`: the runtime collapses the binary tree to four slots (empty
+    // slots are empty leaves with empty boxes), `build children` builds the four and gives their
+    // references, and `foreach c in ch` visits them; the closest hits are the binary tree's.
+    let (nodes, root, prims) = scene();
+    let all_rays: Vec<Val> = rays().into_iter().chain(rays_at(&prims)).collect();
+    let want = reference_for(&nodes, root, prims.as_slice(), &all_rays);
+    assert!(want.iter().filter(|h| h.1 != u32::MAX).count() >= prims.len());
+    let src = include_str!("../../../../lit-tests/Inputs/wide4_layout.scion");
+    let (m, schema) = module_and_schema(src, Some("Wide4"));
+    let schema = schema.expect("the runtime fills `BVH4`");
+    assert_eq!(schema.arity, 4);
+    let mut it = Interp::new(&m);
+    let tree = put_tree_as(&mut it, &nodes, root, &prims, &schema);
+    let (b, _) = pack(&mut it, "Wide4", 3, tree);
+    let got: Vec<(u32, u32)> = all_rays
+        .into_iter()
+        .map(|ray| {
+            let cell = it.alloc(Val::Tuple(vec![
+                Val::F32(f32::INFINITY),
+                Val::Int(0xFFFF_FFFF, IntTy::U32),
+            ]));
+            let bv = Val::Int(b as i128, IntTy::U64);
+            best_of(
+                &mut it,
+                "closest_hit4",
+                vec![bv, ray, Val::Int(0, IntTy::U32)],
+                cell,
+            )
+        })
+        .collect();
+    assert_eq!(got, want);
 }
 
 #[test]

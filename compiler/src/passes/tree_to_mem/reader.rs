@@ -730,7 +730,10 @@ impl<'a> Reader<'a> {
         }
         let tys: Vec<TypeId> = vals.iter().map(|&v| m.values[v].ty).collect();
         let Some(&f) = candidates.iter().find(|&&f| m.funcs[f].params == tys) else {
-            let shown: Vec<String> = tys.iter().map(|&t| m.types.display(t).to_string()).collect();
+            let shown: Vec<String> = tys
+                .iter()
+                .map(|&t| m.types.display(t).to_string())
+                .collect();
             return Err(unsupported(
                 Some(e.span),
                 format!(
