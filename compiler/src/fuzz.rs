@@ -295,8 +295,20 @@ pub fn library_seeds(library: &std::path::Path) -> std::io::Result<Vec<String>> 
         seeds.push(format!("{prelude}\n{text}"));
         seeds.push(text);
     }
+    for text in LAYOUT_SEEDS {
+        seeds.push(format!("{prelude}\n{text}"));
+    }
     Ok(seeds)
 }
+
+/// Layouts with constructs the library's layouts do not use yet: arrays of children
+/// (`BVH4[4]`, `build children` into an array, `foreach c, k in ch`), user functions in layout
+/// expressions, and a tree type the runtime cannot fill (DOP-14 bounds).
+pub const LAYOUT_SEEDS: [&str; 3] = [
+    include_str!("../../lit-tests/Inputs/wide4_layout.scion"),
+    include_str!("../../lit-tests/Inputs/user_functions_layout.scion"),
+    include_str!("../../lit-tests/Inputs/dop14_split.scion"),
+];
 
 /// A seed with the traversal language's constructs that the library does not use yet
 /// (`let mut`, `if` expressions, the lane and bit builtins), so that mutation reaches them.

@@ -289,6 +289,11 @@ impl Gen {
             },
             6 => StmtKind::Foreach {
                 var: self.ident(NAMES),
+                index: if self.count(2) == 0 {
+                    None
+                } else {
+                    Some(self.ident(NAMES))
+                },
                 iter: self.expr(2),
                 body: Box::new(self.block(d)),
             },

@@ -111,9 +111,19 @@ impl FuncCx<'_> {
                     Type::Array { elem, .. } => *elem,
                     _ => return Err(self.bug("foreach over a non-array value")),
                 };
+                let index = self.typed.foreach_index.get(&s.id).copied();
+                let u32t = b.m.types.u32();
+                let arg_tys: &[TypeId] = if index.is_some() {
+                    &[elem, u32t]
+                } else {
+                    &[elem]
+                };
                 let mut err = None;
-                let region = b.region(&[elem], |b, args| {
+                let region = b.region(arg_tys, |b, args| {
                     self.locals.insert(binding, args[0]);
+                    if let Some(k) = index {
+                        self.locals.insert(k, args[1]);
+                    }
                     match self.stmt(b, body) {
                         Ok(Flow::Next) => {
                             b.yield_(&[]);

@@ -371,9 +371,17 @@ impl<'a, 'm> VariantCheck<'a, 'm> {
                 }
                 return out;
             }
-            StmtKind::Foreach { var, iter, body } => {
+            StmtKind::Foreach {
+                var,
+                index,
+                iter,
+                body,
+            } => {
                 self.expr(iter, &mut st);
                 self.locals.insert(var.name.clone());
+                if let Some(k) = index {
+                    self.locals.insert(k.name.clone());
+                }
                 let after = self.stmt(body, Some(st.clone()));
                 let mut repeated = after.clone().unwrap_or_default();
                 for (k, v) in repeated.iter_mut() {

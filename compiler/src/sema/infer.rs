@@ -13,7 +13,7 @@ use super::ops::Obligation;
 use super::typed::{
     BindingId, BindingInfo, BindingKind, FuncId, MemberId, ParamInfo, TypedProgram,
 };
-use super::types::{AdtTable, Ty};
+use super::types::{AdtTable, Prim, Ty};
 use super::unify::{VarKind, VarState};
 use crate::syntax::ast::{
     Expr, ExprKind, Ident, MatchArm, NodeId, PatternKind, Program, Stmt, StmtKind,
@@ -342,7 +342,12 @@ impl<'a> Checker<'a> {
                     None => Tail::NoValue,
                 }
             }
-            StmtKind::Foreach { var, iter, body } => {
+            StmtKind::Foreach {
+                var,
+                index,
+                iter,
+                body,
+            } => {
                 let it = self.infer_expr(iter);
                 let elem = self.fresh(VarKind::General);
                 self.solve_or_defer(Obligation::Elem {
@@ -353,6 +358,10 @@ impl<'a> Checker<'a> {
                 self.push_scope();
                 let b = self.new_binding(var, elem, BindingKind::Foreach);
                 self.out.binders.insert(s.id, b);
+                if let Some(k) = index {
+                    let kb = self.new_binding(k, Ty::Prim(Prim::U32), BindingKind::Foreach);
+                    self.out.foreach_index.insert(s.id, kb);
+                }
                 self.check_stmt(body, false);
                 self.pop_scope();
                 Tail::NoValue

@@ -309,6 +309,8 @@ pub struct TypedProgram {
     /// Binding introduced by a `let` or `foreach` statement (keyed by the statement's id) or by
     /// a binding pattern (keyed by the pattern's id).
     pub binders: FxHashMap<NodeId, BindingId>,
+    /// `foreach x, k in e`: the binding of `k`, by the statement's id.
+    pub foreach_index: FxHashMap<NodeId, BindingId>,
     /// Variant matched by a variant pattern.
     pub pattern_variants: FxHashMap<NodeId, (AdtId, u32)>,
     /// Operands of arithmetic and comparisons that are implicitly widened (an unsigned or signed

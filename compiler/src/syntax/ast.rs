@@ -251,6 +251,8 @@ pub enum StmtKind {
     Foreach {
         /// Loop variable.
         var: Ident,
+        /// `foreach x, k in e`: the element's index (a `u32`).
+        index: Option<Ident>,
         /// The iterated array, slice or set.
         iter: Expr,
         /// Body.

@@ -318,9 +318,18 @@ impl Printer {
                 branches,
                 otherwise,
             } => self.if_chain(branches, otherwise.as_deref()),
-            StmtKind::Foreach { var, iter, body } => {
+            StmtKind::Foreach {
+                var,
+                index,
+                iter,
+                body,
+            } => {
                 self.w("foreach ");
                 self.w(&var.name);
+                if let Some(k) = index {
+                    self.w(", ");
+                    self.w(&k.name);
+                }
                 self.w(" in ");
                 self.expr(iter, 0, false);
                 self.w(" ");

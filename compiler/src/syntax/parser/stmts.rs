@@ -70,6 +70,11 @@ impl Parser<'_> {
             TokenKind::Keyword(Keyword::Foreach) => {
                 self.bump();
                 let var = self.ident("the loop variable")?;
+                let index = if self.eat(&TokenKind::Comma) {
+                    Some(self.ident("the index variable")?)
+                } else {
+                    None
+                };
                 self.expect_kw(Keyword::In)?;
                 let iter = self.expr_free()?;
                 let body = self.block_stmt()?;
@@ -77,6 +82,7 @@ impl Parser<'_> {
                 Ok(self.mk_stmt(
                     StmtKind::Foreach {
                         var,
+                        index,
                         iter,
                         body: Box::new(body),
                     },
