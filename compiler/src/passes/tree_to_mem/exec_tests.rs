@@ -570,6 +570,59 @@ fn arrays_of_children_pack_and_traverse_like_the_binary_tree() {
 }
 
 #[test]
+fn eight_wide_nodes_with_child_boxes_pack_and_traverse_like_the_binary_tree() {
+    // `Interior(child_bounds: AABB[8], children: BVH8[8])`: no box per node, the children's
+    // boxes in the parent (the runtime's ChildBounds, empty slots `Aabb::EMPTY`); interior
+    // records in an indirect group, leaves and empty slots as tagged references (the `Leaf`
+    // build returns SENTINEL for an empty one); `foreach c, k in ch` tests `cb[k]` first.
+    let (nodes, root, prims) = scene();
+    let all_rays: Vec<Val> = rays().into_iter().chain(rays_at(&prims)).collect();
+    let want = reference_for(&nodes, root, prims.as_slice(), &all_rays);
+    let src = include_str!("../../../../lit-tests/Inputs/bvh8_aos_layout.scion");
+    let (m, schema) = module_and_schema(src, Some("Bvh8Aos"));
+    let schema = schema.expect("the runtime fills `BVH8`");
+    assert_eq!(schema.arity, 8);
+    let mut it = Interp::new(&m);
+    let tree = put_tree_as(&mut it, &nodes, root, &prims, &schema);
+    let (b, _) = pack(&mut it, "Bvh8Aos", 3, tree);
+    // The root's reference: `@L.node` of the root again, with fresh counters (it places
+    // every node where the build did).
+    let ptr = |a: u64| Val::Int(a as i128, IntTy::U64);
+    let cells: Vec<Val> = (0..2).map(|_| it.alloc(Val::Int(0, IntTy::U32))).collect();
+    let status = it.alloc(Val::Int(0, IntTy::I32));
+    let root_ref = it
+        .call(
+            "Bvh8Aos.node",
+            vec![
+                ptr(tree),
+                ptr(b),
+                Val::Int(0, IntTy::U32),
+                cells[0].clone(),
+                cells[1].clone(),
+                status,
+            ],
+        )
+        .expect("node runs")
+        .remove(0);
+    let got: Vec<(u32, u32)> = all_rays
+        .into_iter()
+        .map(|ray| {
+            let cell = it.alloc(Val::Tuple(vec![
+                Val::F32(f32::INFINITY),
+                Val::Int(0xFFFF_FFFF, IntTy::U32),
+            ]));
+            best_of(
+                &mut it,
+                "closest_hit8",
+                vec![ptr(b), ray, root_ref.clone()],
+                cell,
+            )
+        })
+        .collect();
+    assert_eq!(got, want);
+}
+
+#[test]
 fn an_empty_tree_packs_to_zero_counts() {
     let m = module(PBRT, Some("LinearBVH"));
     let mut it = Interp::new(&m);

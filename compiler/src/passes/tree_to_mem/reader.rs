@@ -192,7 +192,9 @@ impl<'a> Reader<'a> {
                         .with_note(format!("in derived field `{name}` of variant `{variant}`")));
                 }
                 let _ = member;
-                self.expr(m, variant, value, None)
+                // A literal takes the logical field's type (`nprims = 0` is a `u16`).
+                let want = self.logical_scalar(m, variant, name);
+                self.expr(m, variant, value, want)
             }
             FieldPath::Alternatives(cases) => {
                 // The variant is realized by several arms that place the field differently:
@@ -447,14 +449,31 @@ impl<'a> Reader<'a> {
             .resolver
             .resolve(variant, name)
             .map_err(|e| resolve_error(self.spec, &e))?;
-        if let FieldPath::Derived { value, .. } = &path {
-            if let ExprKind::Slice { base, .. } = &value.kind {
-                if let ExprKind::Name(id) = &base.kind {
-                    if let Some((kind, elem)) = self.global_array(m, variant, &id.name) {
-                        let (b, stride) = self.buffer(m, &kind)?;
-                        return Ok((b, stride, elem));
+        // The global array the field slices; when several arms place the field (an empty
+        // leaf's `primitives[0 : 0]` and the others), they must all slice the same one.
+        let mut arrays: Vec<&str> = Vec::new();
+        let paths: Vec<&FieldPath> = match &path {
+            FieldPath::Alternatives(cases) => cases.iter().map(|(_, p)| p).collect(),
+            p => vec![p],
+        };
+        for p in paths {
+            if let FieldPath::Derived { value, .. } = p {
+                if let ExprKind::Slice { base, .. } = &value.kind {
+                    if let ExprKind::Name(id) = &base.kind {
+                        arrays.push(&id.name);
+                        continue;
                     }
                 }
+            }
+            arrays.clear();
+            break;
+        }
+        arrays.dedup();
+        if let [array] = arrays[..] {
+            let array = array.to_string();
+            if let Some((kind, elem)) = self.global_array(m, variant, &array) {
+                let (b, stride) = self.buffer(m, &kind)?;
+                return Ok((b, stride, elem));
             }
         }
         Err(unsupported(
@@ -486,6 +505,19 @@ impl<'a> Reader<'a> {
         };
         let elem = ir_type(m, &self.spec.model.global_arrays[n].elem)?;
         Some((BufferKind::GlobalArray { member }, elem))
+    }
+
+    /// The type of logical field `name` of `variant` when it is a number (what a literal
+    /// defining it becomes).
+    fn logical_scalar(&self, m: &mut Module, variant: &str, name: &str) -> Option<TypeId> {
+        let adt = self.spec.model.adt.as_ref()?;
+        let f = adt
+            .variant(variant)?
+            .fields
+            .iter()
+            .find(|f| f.name.name == name && !f.recursive)?;
+        let t = ir_type(m, &f.ty)?;
+        matches!(m.types.get(t), Type::Int(_) | Type::Float(_)).then_some(t)
     }
 
     /// Lowers a layout expression (a derived field, a group index, a discriminant, a key).
