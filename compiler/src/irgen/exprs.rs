@@ -211,14 +211,19 @@ impl FuncCx<'_> {
                 b.set_span(Some(e.span));
                 Ok(b.build1(Op::Slice, &[v, l, h], t))
             }
-            ExprKind::Tuple(items) => {
+            ExprKind::Tuple(items) | ExprKind::Array(items) => {
                 let mut vals = Vec::with_capacity(items.len());
                 for it in items {
                     vals.push(self.expr(b, it)?);
                 }
                 let t = self.expr_ty(b, e)?;
                 b.set_span(Some(e.span));
-                Ok(b.build1(Op::Tuple, &vals, t))
+                let op = if matches!(e.kind, ExprKind::Array(_)) {
+                    Op::Array
+                } else {
+                    Op::Tuple
+                };
+                Ok(b.build1(op, &vals, t))
             }
             ExprKind::Unary { op, operand } => {
                 let v = self.expr(b, operand)?;

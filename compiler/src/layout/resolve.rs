@@ -381,7 +381,7 @@ fn walk_names(e: &Expr, out: &mut Vec<Ident>, depth: u32) {
         | ExprKind::Bool(_)
         | ExprKind::This
         | ExprKind::Build(_) => {}
-        ExprKind::Call { args, .. } | ExprKind::Tuple(args) => {
+        ExprKind::Call { args, .. } | ExprKind::Tuple(args) | ExprKind::Array(args) => {
             args.iter().for_each(|a| walk_names(a, out, d))
         }
         ExprKind::Field { base, .. } => walk_names(base, out, d),

@@ -634,7 +634,7 @@ impl<'a, 'm> VariantCheck<'a, 'm> {
                 self.expr(lo, st);
                 self.expr(hi, st);
             }
-            ExprKind::Tuple(xs) => xs.iter().for_each(|x| self.expr(x, st)),
+            ExprKind::Tuple(xs) | ExprKind::Array(xs) => xs.iter().for_each(|x| self.expr(x, st)),
             ExprKind::Unary { operand, .. } => self.expr(operand, st),
             ExprKind::Binary { lhs, rhs, .. } => {
                 self.expr(lhs, st);

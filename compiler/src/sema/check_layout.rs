@@ -661,7 +661,7 @@ fn collect_slices<'e>(e: &'e Expr, scope: ScopeId, out: &mut Vec<(ScopeId, &'e E
                 collect_slices(x, scope, out, d);
             }
         }
-        ExprKind::Call { args, .. } | ExprKind::Tuple(args) => {
+        ExprKind::Call { args, .. } | ExprKind::Tuple(args) | ExprKind::Array(args) => {
             args.iter().for_each(|a| collect_slices(a, scope, out, d))
         }
         ExprKind::Field { base, .. } => collect_slices(base, scope, out, d),

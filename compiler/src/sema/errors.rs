@@ -174,6 +174,8 @@ pub enum SemaError {
     },
     /// E0240
     IfWithoutValue { span: Span },
+    /// E0241
+    EmptyArray { span: Span },
     /// E0353
     DiscriminantNotInt { ty: String, span: Span },
     /// E0354
@@ -288,6 +290,7 @@ impl SemaError {
             IndexRange { .. } => "E0238",
             BitRange { .. } => "E0239",
             IfWithoutValue { .. } => "E0240",
+            EmptyArray { .. } => "E0241",
             DiscriminantNotInt { .. } => "E0353",
             GroupSizeNotInt { .. } => "E0354",
             GroupByNotIndex { .. } => "E0355",
@@ -415,6 +418,9 @@ impl SemaError {
             IfWithoutValue { span } => e("a branch of an `if` expression ends without a value".to_string())
                 .with_primary(*span, "no value here")
                 .with_note("an `if` used as a value needs a value at the end of every branch (or a `return`)"),
+            EmptyArray { span } => e("an array literal needs at least one element".to_string())
+                .with_primary(*span, "empty array")
+                .with_note("its element type and length come from its elements"),
             DiscriminantNotInt { ty, span } => e(format!("split discriminant has type `{ty}`, not an integer"))
                 .with_primary(*span, "expected an integer"),
             GroupSizeNotInt { ty, span } => e(format!("group size has type `{ty}`, not an integer"))

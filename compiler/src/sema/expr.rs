@@ -88,6 +88,22 @@ impl Checker<'_> {
                 result
             }
             ExprKind::Tuple(items) => Ty::Tuple(items.iter().map(|i| self.infer_expr(i)).collect()),
+            ExprKind::Array(items) => {
+                let tys: Vec<Ty> = items.iter().map(|i| self.infer_expr(i)).collect();
+                let Some(first) = tys.first().cloned() else {
+                    self.error(SemaError::EmptyArray { span: e.span });
+                    return Ty::Error;
+                };
+                for (t, i) in tys.iter().zip(items).skip(1) {
+                    self.expect(
+                        t,
+                        &first,
+                        i.span,
+                        "an array element (all have the first's type)",
+                    );
+                }
+                Ty::Array(Box::new(first), items.len() as u64)
+            }
             ExprKind::Unary { op, operand } => {
                 let t = self.infer_expr(operand);
                 let result = self.fresh(VarKind::General);

@@ -368,6 +368,8 @@ pub enum ExprKind {
     },
     /// `(a, b, ...)` with at least two components; `()` is the unit value.
     Tuple(Vec<Expr>),
+    /// `[a, b, ...]`: an array of at least one element, all of one type.
+    Array(Vec<Expr>),
     /// A prefix operator.
     Unary {
         /// Which.

@@ -61,6 +61,7 @@ fn expr_prec(e: &Expr) -> u8 {
         | ExprKind::Float(_)
         | ExprKind::Bool(_)
         | ExprKind::Tuple(_)
+        | ExprKind::Array(_)
         | ExprKind::This
         | ExprKind::Parent(_)
         | ExprKind::Build(_)
@@ -460,6 +461,11 @@ impl Printer {
                 self.w("(");
                 self.sep_list(elems, |p, a| p.expr(a, 0, false));
                 self.w(")");
+            }
+            ExprKind::Array(elems) => {
+                self.w("[");
+                self.sep_list(elems, |p, a| p.expr(a, 0, false));
+                self.w("]");
             }
             ExprKind::Unary { op, operand } => {
                 self.w(match op {

@@ -666,6 +666,13 @@ fn take_this(
     if ref_ty == u32t {
         return Ok(c);
     }
+    // Another integer reference (`R: u64` of the eight-wide L64 links): the placement index
+    // converted.
+    if m.types.as_int(ref_ty).is_some() {
+        let mut bd = Builder::new(m);
+        bd.set_insertion_point(at);
+        return Ok(bd.cast(c, ref_ty));
+    }
     if matches!(m.types.get(ref_ty), Type::Ptr) {
         let model = &spec.model;
         let Some(g) = model
@@ -695,6 +702,6 @@ fn take_this(
     }
     Err(unsupported(
         Some(spec.model.span),
-        "a reference type other than `u32` or `ptr` in a build",
+        "a reference type other than an integer or `ptr` in a build",
     ))
 }

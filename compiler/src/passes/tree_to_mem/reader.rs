@@ -663,6 +663,22 @@ impl<'a> Reader<'a> {
                 }
                 Ok(self.builder(m, false).tuple(&vals))
             }
+            ExprKind::Array(items) => {
+                let mut vals: Vec<ValueId> = Vec::new();
+                for it in items {
+                    let want = vals.first().map(|&v| m.values[v].ty);
+                    vals.push(self.expr(m, variant, it, want)?);
+                }
+                let Some(&first) = vals.first() else {
+                    return Err(unsupported(Some(e.span), "an empty array"));
+                };
+                let elem = m.values[first].ty;
+                let t = m.ty(Type::Array {
+                    elem,
+                    len: Some(vals.len() as u64),
+                });
+                Ok(self.builder(m, false).build1(Op::Array, &vals, t))
+            }
             ExprKind::Parent(id) => Err(unsupported(
                 Some(id.span),
                 "`parent.` values are not supported by destructor specialization",

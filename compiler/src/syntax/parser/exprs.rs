@@ -66,6 +66,7 @@ impl Parser<'_> {
             | TokenKind::Int(_)
             | TokenKind::Float(_)
             | TokenKind::LParen
+            | TokenKind::LBracket
             | TokenKind::Minus
             | TokenKind::Bang
             | TokenKind::Tilde => true,
@@ -312,6 +313,12 @@ impl Parser<'_> {
             TokenKind::LParen => {
                 self.bump();
                 return self.paren_or_tuple(start);
+            }
+            TokenKind::LBracket => {
+                self.bump();
+                let elems = self.comma_list(TokenKind::RBracket, |p| p.expr())?;
+                let span = start.to(self.prev_span());
+                return Ok(self.mk_expr(ExprKind::Array(elems), span));
             }
             TokenKind::Keyword(Keyword::If) => {
                 let (branches, otherwise) = self.with_no_bar(false, |p| p.if_parts())?;
