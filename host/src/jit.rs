@@ -21,7 +21,7 @@
 #![allow(unsafe_code)]
 
 use crate::contract::{BufferSpec, LayoutCode, LogicalInput, LogicalTreeView, STATUS_OK};
-use crate::mem_interp::compile_library;
+use crate::mem_interp::{compile_program, Program};
 use scion_compiler::abi::{EntrySig, EntryTarget};
 use scion_compiler::driver::cli::Emit;
 use scion_compiler::driver::pipelines::for_level_with;
@@ -49,11 +49,16 @@ type SizesFn = unsafe extern "C" fn(*const LogicalTreeView, *mut u64);
 type BuildFn = unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) -> i32;
 /// `@scion_L_root(%tree, %B) -> R` with `R` a `u32`.
 type RootIdxFn = unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) -> u32;
+/// The same with `R` a `u64` (the eight-wide L64 links).
+type RootIdx64Fn = unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) -> u64;
 /// The same with `R` a `ptr`.
 type RootPtrFn = unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) -> *const u8;
 /// `@scion_closest_hit_L(%B, %queries, %results, %begin, %end, %root) -> i32`, root `u32`.
 type BatchIdxFn =
     unsafe extern "C" fn(*const *const u8, *const Ray, *mut [u32; 2], u64, u64, u32) -> i32;
+/// The same with a `u64` root.
+type BatchIdx64Fn =
+    unsafe extern "C" fn(*const *const u8, *const Ray, *mut [u32; 2], u64, u64, u64) -> i32;
 /// The same with a `ptr` root.
 type BatchPtrFn =
     unsafe extern "C" fn(*const *const u8, *const Ray, *mut [u32; 2], u64, u64, *const u8) -> i32;
@@ -65,6 +70,7 @@ const _: () = assert!(std::mem::size_of::<Ray>() == 32);
 #[derive(Clone, Copy, Debug)]
 enum Root {
     Index(u32),
+    Index64(u64),
     /// An address inside one of the packed buffers (never dereferenced here).
     Pointer(usize),
 }
@@ -73,6 +79,7 @@ enum Root {
 #[derive(Clone, Copy)]
 enum Refs {
     Index(RootIdxFn, BatchIdxFn),
+    Index64(RootIdx64Fn, BatchIdx64Fn),
     Pointer(RootPtrFn, BatchPtrFn),
 }
 
@@ -166,19 +173,24 @@ pub struct LibraryLo {
 /// `scionc --layout L --entry closest_hit --emit=lo` does (the one front-end path of the CPU
 /// JITs and of the GPU's PTX). Errors are rendered diagnostics.
 pub fn library_lo(stem: &str, layout: &str, o: &LoOptions) -> Result<LibraryLo, String> {
+    program_lo(&Program::library(stem, layout)?, o)
+}
+
+/// [`library_lo`] for any program: its layout and algorithm as `--layout` and `--entry`.
+pub fn program_lo(program: &Program, o: &LoOptions) -> Result<LibraryLo, String> {
     let mut pipeline = vec![
         "destructor-specialize".to_string(),
         "constructor-specialize".to_string(),
     ];
     pipeline.extend(for_level_with(o.opt_level, o.dsl_opt));
     let popts = PassOptions {
-        layout: Some(layout.to_string()),
+        layout: Some(program.layout.clone()),
         stack_size: o.stack_size,
-        entry: Some(ALGORITHM.to_string()),
+        entry: Some(program.algorithm.clone()),
         entry_target: o.target,
         ..PassOptions::default()
     };
-    let (module, entry, _) = compile_library(stem, Emit::Lo, &pipeline, &popts)?;
+    let (module, entry, _) = compile_program(program, Emit::Lo, &pipeline, &popts)?;
     let entry = entry.ok_or("no entry signature")?;
     Ok(LibraryLo { module, entry })
 }
@@ -227,13 +239,26 @@ impl JitClosestHit {
         dsl_opt: bool,
         codegen: Codegen,
     ) -> Result<JitClosestHit, String> {
+        let program = Program::library(stem, layout)?;
+        JitClosestHit::compile_program(&program, stack_size, opt_level, dsl_opt, codegen)
+    }
+
+    /// As [`JitClosestHit::compile_full`] for any program whose algorithm is a closest hit
+    /// (`(ray: Ray, tree, best: mut (f32, u32))`) over its layout.
+    pub fn compile_program(
+        program: &Program,
+        stack_size: Option<u32>,
+        opt_level: u8,
+        dsl_opt: bool,
+        codegen: Codegen,
+    ) -> Result<JitClosestHit, String> {
         let start = Instant::now();
+        let layout = program.layout.as_str();
         let LibraryLo {
             module: m,
             entry: sig,
-        } = library_lo(
-            stem,
-            layout,
+        } = program_lo(
+            program,
             &LoOptions {
                 stack_size,
                 opt_level,
@@ -241,7 +266,7 @@ impl JitClosestHit {
                 target: EntryTarget::Host,
             },
         )?;
-        let pointer_refs = check_entries(&m, &sig)?;
+        let ref_ty = check_entries(&m, &sig)?;
         let jit = Code::compile(&m, codegen)?;
         let get = |name: &str| {
             jit.function_ptr(name)
@@ -259,16 +284,19 @@ impl JitClosestHit {
             (
                 std::mem::transmute::<*const u8, SizesFn>(sizes),
                 std::mem::transmute::<*const u8, BuildFn>(build),
-                if pointer_refs {
-                    Refs::Pointer(
+                match ref_ty {
+                    Type::Ptr => Refs::Pointer(
                         std::mem::transmute::<*const u8, RootPtrFn>(root),
                         std::mem::transmute::<*const u8, BatchPtrFn>(batch),
-                    )
-                } else {
-                    Refs::Index(
+                    ),
+                    Type::Int(IntTy::U64) => Refs::Index64(
+                        std::mem::transmute::<*const u8, RootIdx64Fn>(root),
+                        std::mem::transmute::<*const u8, BatchIdx64Fn>(batch),
+                    ),
+                    _ => Refs::Index(
                         std::mem::transmute::<*const u8, RootIdxFn>(root),
                         std::mem::transmute::<*const u8, BatchIdxFn>(batch),
-                    )
+                    ),
                 },
             )
         };
@@ -298,9 +326,9 @@ impl JitClosestHit {
 
 /// Checks what the host's calls rely on: the query record is a `Ray` (eight `f32`s, 32 bytes),
 /// the result record the `(f32, u32)` hit record (8 bytes), and the four exported functions of
-/// `sig` have the `lo` signatures of backends.md §1. Returns whether the reference type `R` is
-/// `ptr` (else `u32`).
-fn check_entries(m: &Module, sig: &EntrySig) -> Result<bool, String> {
+/// `sig` have the `lo` signatures of backends.md §1. Returns the reference type `R`: `ptr`,
+/// `u32` or `u64`.
+fn check_entries(m: &Module, sig: &EntrySig) -> Result<Type, String> {
     let f32t = Type::Float(FloatTy::F32);
     let (u32t, u64t, i32t) = (
         Type::Int(IntTy::U32),
@@ -335,7 +363,7 @@ fn check_entries(m: &Module, sig: &EntrySig) -> Result<bool, String> {
     };
     let (_, root_results) = signature(&sig.layout_fn("root"))?;
     let r = match root_results.as_slice() {
-        [t @ (Type::Ptr | Type::Int(IntTy::U32))] => t.clone(),
+        [t @ (Type::Ptr | Type::Int(IntTy::U32 | IntTy::U64))] => t.clone(),
         other => {
             return Err(format!(
                 "`@{}` returns {other:?}, not one `u32` or `ptr` reference",
@@ -372,7 +400,7 @@ fn check_entries(m: &Module, sig: &EntrySig) -> Result<bool, String> {
             ));
         }
     }
-    Ok(r == Type::Ptr)
+    Ok(r)
 }
 
 impl LayoutCode for JitClosestHit {
@@ -419,6 +447,7 @@ impl LayoutCode for JitClosestHit {
         let root = unsafe {
             match self.refs {
                 Refs::Index(root, _) => Root::Index(root(&view, table.as_ptr())),
+                Refs::Index64(root, _) => Root::Index64(root(&view, table.as_ptr())),
                 Refs::Pointer(root, _) => Root::Pointer(root(&view, table.as_ptr()) as usize),
             }
         };
@@ -454,6 +483,9 @@ impl LayoutCode for JitClosestHit {
         let status = unsafe {
             match (self.refs, root) {
                 (Refs::Index(_, batch), Root::Index(root)) => {
+                    batch(table.as_ptr(), q, r, 0, end, root)
+                }
+                (Refs::Index64(_, batch), Root::Index64(root)) => {
                     batch(table.as_ptr(), q, r, 0, end, root)
                 }
                 (Refs::Pointer(_, batch), Root::Pointer(root)) => {

@@ -73,24 +73,62 @@ pub struct MemClosestHit {
     schema: Schema,
 }
 
+/// What the host compiles: Scion files after the prelude (name, text), one of their layouts and
+/// the algorithm whose entry points it calls (a closest hit: `(ray, tree, best: mut (f32, u32))`).
+#[derive(Clone, Debug)]
+pub struct Program {
+    /// The files, in order.
+    pub files: Vec<(String, String)>,
+    /// The layout's name (`--layout`).
+    pub layout: String,
+    /// The algorithm's name (`--entry`).
+    pub algorithm: String,
+}
+
+impl Program {
+    /// `closest_hit.scion` and the library layout in file `stem` named `layout`.
+    pub fn library(stem: &str, layout: &str) -> Result<Program, String> {
+        let text = layout_source(stem).ok_or_else(|| format!("no library layout `{stem}`"))?;
+        Ok(Program {
+            files: vec![
+                (CLOSEST_HIT_NAME.to_string(), CLOSEST_HIT.to_string()),
+                (format!("library/layouts/{stem}.scion"), text.to_string()),
+            ],
+            layout: layout.to_string(),
+            algorithm: crate::jit::ALGORITHM.to_string(),
+        })
+    }
+}
+
 /// Compiles `closest_hit.scion` with the prelude and the library layout in file `stem` through
-/// the front end (`frontend::compile`, as scionc does) to `emit` with `pipeline` and `popts`,
-/// and parses the printed module back. Output: the module, with `popts.entry` the entries' C
-/// signature, and with `popts.layout` the schema of the logical tree its constructor reads;
-/// errors are rendered diagnostics.
+/// the front end; see [`compile_program`].
 pub fn compile_library(
     stem: &str,
     emit: Emit,
     pipeline: &[String],
     popts: &PassOptions,
 ) -> Result<(Module, Option<EntrySig>, Option<Schema>), String> {
-    let text = layout_source(stem).ok_or_else(|| format!("no library layout `{stem}`"))?;
+    let layout = popts.layout.clone().unwrap_or_default();
+    compile_program(&Program::library(stem, &layout)?, emit, pipeline, popts)
+}
+
+/// Compiles `program`'s files with the prelude through the front end (`frontend::compile`, as
+/// scionc does) to `emit` with `pipeline` and `popts`, and parses the printed module back.
+/// Output: the module, with `popts.entry` the entries' C signature, and with `popts.layout` the
+/// schema of the logical tree its constructor reads; errors are rendered diagnostics.
+pub fn compile_program(
+    program: &Program,
+    emit: Emit,
+    pipeline: &[String],
+    popts: &PassOptions,
+) -> Result<(Module, Option<EntrySig>, Option<Schema>), String> {
     let mut sources = SourceMap::new();
     let prelude = [sources.add(PRELUDE_NAME, PRELUDE)];
-    let inputs = [
-        sources.add(CLOSEST_HIT_NAME, CLOSEST_HIT),
-        sources.add(format!("library/layouts/{stem}.scion"), text),
-    ];
+    let inputs: Vec<_> = program
+        .files
+        .iter()
+        .map(|(name, text)| sources.add(name.clone(), text.clone()))
+        .collect();
     let fe = Frontend {
         sources: &sources,
         prelude: &prelude,

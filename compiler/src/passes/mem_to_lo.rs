@@ -447,6 +447,13 @@ impl FnLower<'_> {
                     self.e1(cur, L::Cast, &[n], ty)
                 }]
             }
+            T::Intrinsic if o.str_attr("name") == Some(Intrinsic::Sort.name()) => {
+                let n = match src.types.get(src.values[o.operands[0]].ty) {
+                    Type::Array { len: Some(n), .. } => *n as usize,
+                    _ => return self.err("`sort` of something other than a fixed array"),
+                };
+                intrinsics::sort(self, cur, &ins[0], n)?
+            }
             T::Intrinsic => {
                 let intrinsic = Intrinsic::of(o).map_err(|e| (e, self.span))?;
                 let ty = res_ty.unwrap_or_default_ty(self)?;

@@ -36,6 +36,8 @@ enum Want {
     Collection,
     /// Sets.
     Set,
+    /// Fixed arrays of numbers or of tuples of numbers (`sort`).
+    Sortable,
 }
 
 impl Want {
@@ -52,6 +54,7 @@ impl Want {
             Want::NumericVector => "a numeric vector",
             Want::Collection => "an array, slice or set",
             Want::Set => "a set",
+            Want::Sortable => "a fixed array of numbers or of tuples of numbers",
         }
     }
 }
@@ -89,6 +92,16 @@ impl Checker<'_> {
             Want::NumericVector => matches!(s, Ty::Vector(p, _) if p.is_numeric()),
             Want::Collection => matches!(s, Ty::Array(..) | Ty::Slice(_) | Ty::Set(_)),
             Want::Set => matches!(s, Ty::Set(_)),
+            Want::Sortable => match s {
+                Ty::Array(e, _) => {
+                    let number = |t: &Ty| matches!(self.class(t), Class::Int | Class::Float);
+                    match self.shallow(&e) {
+                        Ty::Tuple(cs) => !cs.is_empty() && cs.iter().all(number),
+                        e => number(&e),
+                    }
+                }
+                _ => false,
+            },
         })
     }
 
@@ -126,6 +139,7 @@ impl Checker<'_> {
                 QuantLo | QuantHi | SgCodeUp | SgCodeDown => (Want::F32Vec, 3, &[3]),
                 WithAxis => (Want::Vector, 1, &[1]),
                 Len => (Want::Collection, 1, &[]),
+                Sort => (Want::Sortable, all, &[]),
                 // Sets are grown with `insert`, which `Builtin::traversal` offers instead.
                 SetInsert => (Want::Set, 1, &[]),
             },

@@ -74,6 +74,30 @@ fn dot(a: &Val, b: &Val) -> R {
     Ok(acc)
 }
 
+/// `a < b` for `sort`: numbers by `<`, tuples component by component.
+fn less(a: &Val, b: &Val) -> Result<bool, String> {
+    use crate::tree::scalar::compare;
+    use crate::tree::CmpPred;
+    let parts = |v: &Val| -> Vec<Val> {
+        match v {
+            Val::Tuple(cs) => cs.clone(),
+            other => vec![other.clone()],
+        }
+    };
+    for (x, y) in parts(a).iter().zip(&parts(b)) {
+        let (Some(x), Some(y)) = (x.scalar(), y.scalar()) else {
+            return Err("`sort` compares numbers".into());
+        };
+        if compare(CmpPred::Lt, x, y) == Some(true) {
+            return Ok(true);
+        }
+        if compare(CmpPred::Eq, x, y) != Some(true) {
+            return Ok(false);
+        }
+    }
+    Ok(false)
+}
+
 fn fold_lanes(v: &Val, f: &dyn Fn(&Val, &Val) -> R) -> R {
     let l = lanes(v)?;
     let mut acc = l.first().ok_or("empty vector")?.clone();
@@ -284,6 +308,18 @@ pub fn eval(m: &Module, intrinsic: Intrinsic, args: &[Val], result: TypeId) -> R
         I::Hmin => fold_lanes(one()?, &|a, b| min_max(a, b, false)),
         I::Hmax => fold_lanes(one()?, &|a, b| min_max(a, b, true)),
         I::Hsum => fold_lanes(one()?, &add),
+        I::Sort => {
+            let Val::Array(a) = one()? else {
+                return Err("`sort` takes an array".into());
+            };
+            let mut items = (**a).clone();
+            for (i, j) in crate::tree::sort::network(items.len()) {
+                if less(&items[j], &items[i])? {
+                    items.swap(i, j);
+                }
+            }
+            Ok(Val::Array(Rc::new(items)))
+        }
         I::Len => match (one()?, scalar_type(m, result)) {
             (Val::Array(a) | Val::Set(a), Type::Int(t)) => {
                 Ok(Val::Int(t.wrap(a.len() as i128), *t))

@@ -101,6 +101,9 @@ intrinsics! {
     Hsum = "hsum",
     /// `len(a)`: the element count of an array, view or set, as the result's integer type.
     Len = "len",
+    /// `sort(a)`: the elements of a fixed array in ascending order; elements are numbers or
+    /// tuples of numbers, compared by `<` component by component (lexicographically).
+    Sort = "sort",
     /// `set_insert(s, x)`: the set `s` with `x` added.
     SetInsert = "set_insert",
     /// `frame_origin(lo)`: the quantization frame's origin below `lo` (`f32` vectors; layout
@@ -207,6 +210,18 @@ impl Intrinsic {
             Hmin | Hmax | Hsum => {
                 args.len() == 1 && t.lanes(args[0]).is_some() && t.scalar_of(args[0]) == result
             }
+            Sort => {
+                let scalar = |ty: TypeId| is_numeric(ty) && t.lanes(ty).is_none();
+                args.len() == 1
+                    && args[0] == result
+                    && match t.get(result) {
+                        Type::Array { elem, len: Some(_) } => match t.get(*elem) {
+                            Type::Tuple(cs) => !cs.is_empty() && cs.iter().all(|&c| scalar(c)),
+                            _ => scalar(*elem),
+                        },
+                        _ => false,
+                    }
+            }
             Len => {
                 args.len() == 1
                     && matches!(
@@ -259,7 +274,7 @@ impl Intrinsic {
         use Intrinsic::*;
         match self {
             Abs | Sqrt | Rsqrt | Floor | Ceil | Trunc | Popcount | Clz | Ctz | IsNan | Length
-            | Normalize | Hmin | Hmax | Hsum | Len | FrameOrigin => 1,
+            | Normalize | Hmin | Hmax | Hsum | Len | Sort | FrameOrigin => 1,
             Min | Max | FaddRd | FaddRu | FsubRd | FsubRu | FmulRd | FmulRu | Dot | Cross
             | SetInsert => 2,
             Fma | WithAxis | FrameStep | SgBins => 3,

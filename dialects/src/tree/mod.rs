@@ -17,6 +17,7 @@ pub mod ops;
 pub mod quant;
 pub mod scalar;
 pub mod snapped;
+pub mod sort;
 pub mod verify;
 
 pub use intrinsic::Intrinsic;

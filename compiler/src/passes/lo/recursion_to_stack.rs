@@ -24,8 +24,12 @@
 //! overflowed (a push to a full stack returns at once; `mut` results hold what was computed so
 //! far). A caller of a function with a status gets a status too, appended as its last result:
 //! after the call it returns the status (other results zero) when it is not 0. Such functions
-//! carry the attribute `status`. Recursion of any other shape is a user error (E0971) naming
-//! the call.
+//! carry the attribute `status`.
+//!
+//! **Calls elsewhere.** Recursive calls that are not in that tail shape (under conditions, one
+//! per child of an unrolled loop) are deferred ([`super::deferred_calls`]): each becomes a push
+//! and the visit's entries are reversed when it ends, which is the recursion exactly when
+//! nothing after a call observes it; otherwise E0971 names the call and what follows it.
 
 use rustc_hash::{FxHashMap, FxHashSet};
 use scion_ir::attr::Attr;
@@ -102,7 +106,11 @@ pub fn run(m: &mut Module, stack_size: u32) -> Result<bool, Diagnostic> {
         if calls.is_empty() {
             continue;
         }
-        rewrite(m, f, &calls, stack_size)?;
+        if tail_shape(m, &calls).is_ok() {
+            rewrite(m, f, &calls, stack_size)?;
+        } else {
+            super::deferred_calls::rewrite(m, f, &calls, stack_size)?;
+        }
         with_status.push(f);
     }
     let changed = !with_status.is_empty();
@@ -118,7 +126,7 @@ fn body_ops(m: &Module, f: FuncId) -> Vec<OpId> {
         .collect()
 }
 
-fn not_tail(m: &Module, op: OpId, why: &str) -> Diagnostic {
+pub(super) fn not_tail(m: &Module, op: OpId, why: &str) -> Diagnostic {
     let name = callee_of(m, op).unwrap_or("?").to_string();
     let mut d = Diagnostic::error(
         "E0971",
@@ -128,8 +136,9 @@ fn not_tail(m: &Module, op: OpId, why: &str) -> Diagnostic {
         d = d.with_primary(s, "this call");
     }
     d.with_note(
-        "a recursive traversal may end an arm with recursive calls in sequence, passing its \
-         other parameters through unchanged",
+        "a recursive traversal may end an arm with recursive calls in sequence, or make them \
+         anywhere when nothing after them reads or writes what they write; other parameters \
+         pass through unchanged",
     )
 }
 
@@ -156,7 +165,7 @@ fn exits_quietly(m: &Module, mut b: BlockId) -> bool {
 /// Whether `v` points into the function's own frame: a `lo.stack_slot` (a `tree.var` cell) or
 /// an offset from one. After the rewrite one frame serves every call, so such a pointer would
 /// alias between the calls it is passed to.
-fn in_frame(m: &Module, mut v: ValueId) -> bool {
+pub(super) fn in_frame(m: &Module, mut v: ValueId) -> bool {
     for _ in 0..64 {
         let ValueDef::Result(op, _) = m.values[v].def else {
             return false;
@@ -170,14 +179,9 @@ fn in_frame(m: &Module, mut v: ValueId) -> bool {
     false
 }
 
-fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), Diagnostic> {
-    if !m.funcs[f].results.is_empty() {
-        return Err(not_tail(m, calls[0], "the function returns values"));
-    }
-    let region = m.funcs[f].body;
-    let entry = m.regions[region].blocks[0];
-    let params: Vec<ValueId> = m.blocks[entry].args.to_vec();
-    // Group the calls by block and check each block's shape.
+/// The recursive calls grouped by block when every block that makes them ends with them (and
+/// then exits quietly): the tail-call shape [`rewrite`] turns into jumps and pushes.
+fn tail_shape(m: &Module, calls: &[OpId]) -> Result<FxHashMap<BlockId, Vec<OpId>>, Diagnostic> {
     let mut by_block: FxHashMap<BlockId, Vec<OpId>> = FxHashMap::default();
     for &c in calls {
         let b = m.ops[c]
@@ -185,7 +189,6 @@ fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), D
             .ok_or_else(|| not_tail(m, c, "detached call"))?;
         by_block.entry(b).or_default().push(c);
     }
-    let mut changed: FxHashSet<usize> = FxHashSet::default();
     for (&b, cs) in &by_block {
         let ops = &m.blocks[b].ops;
         let n = cs.len();
@@ -205,6 +208,45 @@ fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), D
         if !quiet {
             return Err(not_tail(m, cs[0], "the function does more after the call"));
         }
+    }
+    Ok(by_block)
+}
+
+/// E0962 when `size` entries of `entry_bytes` do not fit [`MAX_STACK_BYTES`].
+pub(super) fn check_stack_bytes(
+    m: &Module,
+    f: FuncId,
+    entry_bytes: u64,
+    size: u32,
+) -> Result<(), Diagnostic> {
+    if entry_bytes * u64::from(size) <= MAX_STACK_BYTES {
+        return Ok(());
+    }
+    let name = m.funcs[f].name.clone();
+    Err(Diagnostic::error(
+        "E0962",
+        format!(
+            "recursion-to-stack:stack-size={size}: the stack of `@{name}` would take {} bytes \
+             of the thread's stack ({entry_bytes} per entry), more than {MAX_STACK_BYTES}",
+            entry_bytes * u64::from(size)
+        ),
+    )
+    .with_note(format!(
+        "at most {} entries here; a traversal needs about as many as the tree is deep",
+        MAX_STACK_BYTES / entry_bytes
+    )))
+}
+
+fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), Diagnostic> {
+    if !m.funcs[f].results.is_empty() {
+        return Err(not_tail(m, calls[0], "the function returns values"));
+    }
+    let region = m.funcs[f].body;
+    let entry = m.regions[region].blocks[0];
+    let params: Vec<ValueId> = m.blocks[entry].args.to_vec();
+    let by_block = tail_shape(m, calls)?;
+    let mut changed: FxHashSet<usize> = FxHashSet::default();
+    for cs in by_block.values() {
         for &c in cs {
             for (i, &a) in m.ops[c].operands.iter().enumerate() {
                 if a != params[i] {
@@ -224,21 +266,7 @@ fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), D
     let mut changed: Vec<usize> = changed.into_iter().collect();
     changed.sort_unstable();
     let entry_bytes = 8 * changed.len().max(1) as u64;
-    if entry_bytes * u64::from(size) > MAX_STACK_BYTES {
-        let name = m.funcs[f].name.clone();
-        return Err(Diagnostic::error(
-            "E0962",
-            format!(
-                "recursion-to-stack:stack-size={size}: the stack of `@{name}` would take {} bytes \
-                 of the thread's stack ({entry_bytes} per entry), more than {MAX_STACK_BYTES}",
-                entry_bytes * u64::from(size)
-            ),
-        )
-        .with_note(format!(
-            "at most {} entries here; a traversal needs about as many as the tree is deep",
-            MAX_STACK_BYTES / entry_bytes
-        )));
-    }
+    check_stack_bytes(m, f, entry_bytes, size)?;
     let i32t = m.types.i32();
     let u32t = m.types.u32();
     let u64t = m.types.int(IntTy::U64);

@@ -181,6 +181,7 @@ pub(super) fn lower(
                 None,
             ));
         }
+        I::Sort => return Err(("`sort` is lowered with its array's length".into(), None)),
         I::SetInsert => {
             return Err((
                 "sets (`insert`) have no machine form yet; the interpreters run them".into(),
@@ -188,6 +189,47 @@ pub(super) fn lower(
             ))
         }
     })
+}
+
+/// `sort` of `n` elements whose leaves are `leaves` (each element the same number of leaves):
+/// the network of `scion_ir::tree::sort`, each comparator a lexicographic `<` and one
+/// `lo.select` per leaf in each direction.
+pub(super) fn sort(
+    cx: &mut FnLower<'_>,
+    cur: BlockId,
+    leaves: &[ValueId],
+    n: usize,
+) -> R<Vec<ValueId>> {
+    if n == 0 || leaves.len() % n != 0 {
+        return Err(("`sort` of a malformed array".into(), None));
+    }
+    let w = leaves.len() / n;
+    let mut el: Vec<Vec<ValueId>> = leaves.chunks(w).map(<[ValueId]>::to_vec).collect();
+    for (i, j) in scion_ir::tree::sort::network(n) {
+        // swap = el[j] < el[i], component by component from the last: lt_k = b_k < a_k ||
+        // (b_k == a_k && lt_{k+1}).
+        let (a, b) = (el[i].clone(), el[j].clone());
+        let mut swap: Option<ValueId> = None;
+        for k in (0..w).rev() {
+            let lt = cx.cmp(cur, CmpPred::Lt, b[k], a[k]);
+            swap = Some(match swap {
+                None => lt,
+                Some(rest) => {
+                    let eq = cx.cmp(cur, CmpPred::Eq, b[k], a[k]);
+                    let i1 = cx.ty_of(eq);
+                    let both = cx.e1(cur, L::And, &[eq, rest], i1);
+                    cx.e1(cur, L::Or, &[lt, both], i1)
+                }
+            });
+        }
+        let swap = swap.expect("at least one leaf");
+        for k in 0..w {
+            let ty = cx.ty_of(a[k]);
+            el[i][k] = cx.e1(cur, L::Select, &[swap, b[k], a[k]], ty);
+            el[j][k] = cx.e1(cur, L::Select, &[swap, a[k], b[k]], ty);
+        }
+    }
+    Ok(el.concat())
 }
 
 fn float_const(cx: &mut FnLower<'_>, cur: BlockId, ty: TypeId, v: f64) -> ValueId {

@@ -1,0 +1,342 @@
+//! `recursion-to-stack` for recursive calls anywhere in the body (under conditions, in an
+//! unrolled loop over eight children), when running them later changes nothing the body sees.
+//!
+//! The body of a visit runs to its end with each recursive call replaced by a push of its
+//! arguments; when the visit ends, the entries it pushed are reversed in place, so the loop pops
+//! them in call order: the calls run in the recursion's order, each subtree before the next
+//! call's, only after the visit instead of in the middle of it. That is the recursion exactly
+//! when nothing after a call in the body observes the call: after a recursive call the body may
+//! only compute, branch, read memory the recursive calls never write (the layout's buffers,
+//! read through a parameter nothing stores through), use its own frame, call functions that
+//! take no pointers, and make more recursive calls. Whatever else follows a call is E0971,
+//! naming what.
+//!
+//! The stack pointer lives in a frame cell (promoted to a register by LLVM); a full stack
+//! returns status 1 as in the tail-call scheme of [`super::recursion_to_stack`].
+
+use super::recursion_to_stack::{check_stack_bytes, in_frame, not_tail};
+use rustc_hash::FxHashSet;
+use scion_ir::attr::Attr;
+use scion_ir::diag::Diagnostic;
+use scion_ir::entity::{BlockId, FuncId, OpId, ValueId};
+use scion_ir::lo::Op as L;
+use scion_ir::module::ValueDef;
+use scion_ir::op::OpKind;
+use scion_ir::tree::CmpPred;
+use scion_ir::types::{IntTy, Type};
+use scion_ir::{Builder, InsertPoint, Module};
+
+/// Where a pointer comes from.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Root {
+    /// Parameter `i` (or memory reached through it).
+    Param(usize),
+    /// The function's own frame.
+    Frame,
+    /// Anything else (a block argument of a loop, a call's result).
+    Unknown,
+}
+
+fn root(m: &Module, params: &[ValueId], mut v: ValueId) -> Root {
+    for _ in 0..64 {
+        if let Some(i) = params.iter().position(|&p| p == v) {
+            return Root::Param(i);
+        }
+        let ValueDef::Result(op, _) = m.values[v].def else {
+            return Root::Unknown;
+        };
+        match m.ops[op].kind {
+            OpKind::Lo(L::StackSlot) => return Root::Frame,
+            OpKind::Lo(L::PtrAdd | L::Load) => v = m.ops[op].operands[0],
+            _ => return Root::Unknown,
+        }
+    }
+    Root::Unknown
+}
+
+fn is_ptr(m: &Module, v: ValueId) -> bool {
+    matches!(m.types.get(m.values[v].ty), Type::Ptr)
+}
+
+/// Why running the calls of `f` after the rest of the visit could change what the body
+/// computes: the first op after a call that might observe it, and what it does.
+fn check(m: &Module, f: FuncId, calls: &[OpId], params: &[ValueId]) -> Result<(), (OpId, String)> {
+    let name = m.funcs[f].name.as_str();
+    let region = m.funcs[f].body;
+    let blocks = m.regions[region].blocks.clone();
+    let is_self = |op: OpId| {
+        m.ops[op].kind == OpKind::Lo(L::Call)
+            && m.ops[op].attr("callee").and_then(Attr::as_sym) == Some(name)
+    };
+    // Parameters written through: stores, pointers passed to other functions, or to the
+    // recursion at another position.
+    let mut written: FxHashSet<usize> = FxHashSet::default();
+    for &b in &blocks {
+        for &op in &m.blocks[b].ops {
+            let o = &m.ops[op];
+            match o.kind {
+                OpKind::Lo(L::Store) => {
+                    if let Root::Param(i) = root(m, params, o.operands[0]) {
+                        written.insert(i);
+                    }
+                }
+                OpKind::Lo(L::Call) => {
+                    for (k, &a) in o.operands.iter().enumerate() {
+                        if !is_ptr(m, a) {
+                            continue;
+                        }
+                        if let Root::Param(i) = root(m, params, a) {
+                            if !is_self(op) || k != i {
+                                written.insert(i);
+                            }
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+    // Everything that runs after a recursive call: the rest of its block, and every block
+    // reachable from there.
+    let mut after: Vec<OpId> = Vec::new();
+    let mut seen: FxHashSet<BlockId> = FxHashSet::default();
+    let mut work: Vec<BlockId> = Vec::new();
+    for &c in calls {
+        let b = m.ops[c].parent.expect("placed");
+        let ops = &m.blocks[b].ops;
+        let at = ops.iter().position(|&o| o == c).expect("listed");
+        after.extend(&ops[at + 1..]);
+        if let Some(&t) = ops.last() {
+            work.extend(m.ops[t].successors.iter().map(|s| s.block));
+        }
+    }
+    while let Some(b) = work.pop() {
+        if !seen.insert(b) {
+            continue;
+        }
+        after.extend(&m.blocks[b].ops);
+        if let Some(&t) = m.blocks[b].ops.last() {
+            work.extend(m.ops[t].successors.iter().map(|s| s.block));
+        }
+    }
+    for op in after {
+        let o = &m.ops[op];
+        let fail = |why: &str| Err((op, why.to_string()));
+        match o.kind {
+            _ if is_self(op) => {}
+            OpKind::Lo(L::Br | L::CondBr) => {}
+            OpKind::Lo(L::Return) if o.operands.is_empty() => {}
+            OpKind::Lo(L::Load) => match root(m, params, o.operands[0]) {
+                Root::Frame => {}
+                Root::Param(i) if !written.contains(&i) => {}
+                _ => {
+                    return fail(
+                        "it reads memory the recursive call may write (read the mutable \
+                         state before the children, or test it when a child is visited)",
+                    )
+                }
+            },
+            OpKind::Lo(L::Store) => {
+                if root(m, params, o.operands[0]) != Root::Frame {
+                    return fail("it writes memory after the recursive call");
+                }
+            }
+            OpKind::Lo(L::Call) => {
+                if o.operands.iter().any(|&a| is_ptr(m, a)) {
+                    return fail("it calls a function with a pointer after the recursive call");
+                }
+            }
+            k if k.is_pure() => {}
+            _ => return fail("it does something after the recursive call that may observe it"),
+        }
+    }
+    Ok(())
+}
+
+/// Rewrites `f`, whose recursive calls are `calls`, into a loop over a stack of `size`
+/// entries with deferred calls (see the module docs).
+pub(super) fn rewrite(
+    m: &mut Module,
+    f: FuncId,
+    calls: &[OpId],
+    size: u32,
+) -> Result<(), Diagnostic> {
+    if !m.funcs[f].results.is_empty() {
+        return Err(not_tail(m, calls[0], "the function returns values"));
+    }
+    let region = m.funcs[f].body;
+    let entry = m.regions[region].blocks[0];
+    let params: Vec<ValueId> = m.blocks[entry].args.to_vec();
+    check(m, f, calls, &params).map_err(|(op, why)| {
+        let mut d = not_tail(m, calls[0], &why);
+        if let Some(s) = m.span(op) {
+            d = d.with_secondary(s, "this follows the call");
+        }
+        d
+    })?;
+    let mut changed: Vec<usize> = Vec::new();
+    for &c in calls {
+        for (i, &a) in m.ops[c].operands.iter().enumerate() {
+            if a != params[i] {
+                if in_frame(m, a) {
+                    return Err(not_tail(
+                        m,
+                        c,
+                        "it passes a cell of the caller's frame (a `let mut` local), which one \
+                         explicit stack for all calls cannot keep per call",
+                    ));
+                }
+                if !changed.contains(&i) {
+                    changed.push(i);
+                }
+            }
+        }
+    }
+    changed.sort_unstable();
+    let entry_bytes = 8 * changed.len().max(1) as u64;
+    check_stack_bytes(m, f, entry_bytes, size)?;
+    let i32t = m.types.i32();
+    let u32t = m.types.u32();
+    let u64t = m.types.int(IntTy::U64);
+    let ptrt = m.ty(Type::Ptr);
+    let param_tys = m.funcs[f].params.clone();
+    let body_blocks: Vec<BlockId> = m.regions[region].blocks.clone();
+
+    // New entry: the stack and its pointer cell, then the old body on the arguments.
+    let new_entry = m.add_block(region, &param_tys);
+    let blocks = &mut m.regions[region].blocks;
+    blocks.retain(|&x| x != new_entry);
+    blocks.insert(0, new_entry);
+    let new_params: Vec<ValueId> = m.blocks[new_entry].args.to_vec();
+    for (i, &p) in params.iter().enumerate() {
+        if !changed.contains(&i) {
+            scion_ir::rewrite::replace_all_uses(m, p, new_params[i]);
+        }
+    }
+    let kept: Vec<ValueId> = changed.iter().map(|&i| params[i]).collect();
+    for (k, &v) in kept.iter().enumerate() {
+        m.values[v].def = ValueDef::BlockArg(entry, k as u32);
+    }
+    m.blocks[entry].args = kept.into_iter().collect();
+    let head = m.add_block(region, &[]);
+    let done = m.add_block(region, &[]);
+    let pop = m.add_block(region, &[]);
+    let overflow = m.add_block(region, &[]);
+    let rev = m.add_block(region, &[u32t, u32t]);
+    let swap = m.add_block(region, &[]);
+    let (stack, spc);
+    {
+        let mut b = Builder::at_end(m, new_entry);
+        stack = b.lo_stack_slot(entry_bytes * u64::from(size), 8);
+        spc = b.lo_stack_slot(4, 4);
+        let zero = b.lo_int(u32t, 0);
+        b.lo_store(spc, 0, zero);
+        let args: Vec<ValueId> = changed.iter().map(|&i| new_params[i]).collect();
+        b.lo_br(entry, &args);
+    }
+    let slot = |b: &mut Builder<'_>, sp: ValueId| {
+        let sp64 = b.lo1(L::Cast, &[sp], u64t);
+        let width = b.lo_int(u64t, entry_bytes as i128);
+        let off = b.lo1(L::Mul, &[sp64, width], u64t);
+        b.lo1(L::PtrAdd, &[stack, off], ptrt)
+    };
+    // The stack pointer when the visit starts: the visit's entries are the ones above it.
+    let first = m.blocks[entry].ops[0];
+    let sp0 = {
+        let mut b = Builder::new(m);
+        b.set_insertion_point(InsertPoint::Before(first));
+        b.lo_load(spc, 0, u32t)
+    };
+    // The loop head: pop the next entry into the body, or return when the stack is empty.
+    {
+        let mut b = Builder::at_end(m, head);
+        let sp = b.lo_load(spc, 0, u32t);
+        let zero = b.lo_int(u32t, 0);
+        let empty = b.lo_cmp(CmpPred::Eq, sp, zero);
+        b.lo_cond_br(empty, (done, &[]), (pop, &[]));
+        b.set_insertion_point_to_end(done);
+        let ok = b.lo_int(i32t, 0);
+        b.lo_ret(&[ok]);
+        b.set_insertion_point_to_end(overflow);
+        let one = b.lo_int(i32t, 1);
+        b.lo_ret(&[one]);
+        b.set_insertion_point_to_end(pop);
+        let one = b.lo_int(u32t, 1);
+        let sp1 = b.lo1(L::Sub, &[sp, one], u32t);
+        b.lo_store(spc, 0, sp1);
+        let at = slot(&mut b, sp1);
+        let args: Vec<ValueId> = changed
+            .iter()
+            .enumerate()
+            .map(|(k, &i)| b.lo_load(at, 8 * k as i64, param_tys[i]))
+            .collect();
+        b.lo_br(entry, &args);
+    }
+    // The end of a visit: reverse its entries [i, j) in place, then back to the head.
+    {
+        let (i, j) = (m.blocks[rev].args[0], m.blocks[rev].args[1]);
+        let mut b = Builder::at_end(m, rev);
+        let one = b.lo_int(u32t, 1);
+        let i1 = b.lo1(L::Add, &[i, one], u32t);
+        let more = b.lo_cmp(CmpPred::Lt, i1, j);
+        b.lo_cond_br(more, (swap, &[]), (head, &[]));
+        b.set_insertion_point_to_end(swap);
+        let j1 = b.lo1(L::Sub, &[j, one], u32t);
+        let (lo, hi) = (slot(&mut b, i), slot(&mut b, j1));
+        for (k, &p) in changed.iter().enumerate() {
+            let off = 8 * k as i64;
+            let a = b.lo_load(lo, off, param_tys[p]);
+            let c = b.lo_load(hi, off, param_tys[p]);
+            b.lo_store(lo, off, c);
+            b.lo_store(hi, off, a);
+        }
+        b.lo_br(rev, &[i1, j1]);
+    }
+    // Returns of the body end the visit.
+    for &bb in &body_blocks {
+        let Some(&term) = m.blocks[bb].ops.last() else {
+            continue;
+        };
+        if m.ops[term].kind == OpKind::Lo(L::Return) {
+            scion_ir::rewrite::erase_op(m, term);
+            let mut b = Builder::at_end(m, bb);
+            let sp = b.lo_load(spc, 0, u32t);
+            b.lo_br(rev, &[sp0, sp]);
+        }
+    }
+    // Each recursive call pushes its arguments and the body goes on.
+    for &c in calls {
+        let bb = m.ops[c].parent.expect("placed");
+        let pos = m.blocks[bb]
+            .ops
+            .iter()
+            .position(|&o| o == c)
+            .expect("listed");
+        let rest: Vec<OpId> = m.blocks[bb].ops.split_off(pos + 1);
+        let cont = m.add_block(region, &[]);
+        for &o in &rest {
+            m.ops[o].parent = Some(cont);
+        }
+        m.blocks[cont].ops = rest;
+        let args = m.ops[c].operands.to_vec();
+        scion_ir::rewrite::erase_op(m, c);
+        let push = m.add_block(region, &[]);
+        let mut b = Builder::at_end(m, bb);
+        let sp = b.lo_load(spc, 0, u32t);
+        let cap = b.lo_int(u32t, i128::from(size));
+        let full = b.lo_cmp(CmpPred::Ge, sp, cap);
+        b.lo_cond_br(full, (overflow, &[]), (push, &[]));
+        b.set_insertion_point_to_end(push);
+        let at = slot(&mut b, sp);
+        for (k, &i) in changed.iter().enumerate() {
+            b.lo_store(at, 8 * k as i64, args[i]);
+        }
+        let one = b.lo_int(u32t, 1);
+        let sp1 = b.lo1(L::Add, &[sp, one], u32t);
+        b.lo_store(spc, 0, sp1);
+        b.lo_br(cont, &[]);
+    }
+    m.funcs[f].results = vec![i32t];
+    m.funcs[f].attrs.set("status", Attr::Unit);
+    Ok(())
+}
