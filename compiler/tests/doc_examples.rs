@@ -1,5 +1,6 @@
-//! The `scion` code blocks of docs/language.md and README.md compile (to the tree dialect)
-//! without diagnostics, so the documentation cannot drift from the compiler.
+//! The `scion` code blocks of docs/language.md, README.md and the how-tos compile (to the tree
+//! dialect) without diagnostics, so the documentation cannot drift from the compiler; the
+//! blocks of docs/howto-add-a-layout.md are also pieces of the file the tests trace.
 //!
 //! A block whose first line is `// no-prelude` compiles without the prelude; one whose first
 //! line is `// continued` is appended to the block before it.
@@ -77,4 +78,19 @@ fn language_reference_examples_compile() {
 #[test]
 fn readme_examples_compile() {
     assert!(check_file("README.md") >= 1);
+}
+
+#[test]
+fn howto_add_a_layout_examples_compile_and_are_the_traced_file() {
+    assert!(check_file("docs/howto-add-a-layout.md") >= 5);
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+    let md = std::fs::read_to_string(root.join("docs/howto-add-a-layout.md")).unwrap();
+    let file = std::fs::read_to_string(root.join("lit-tests/Inputs/bvh8_layout.scion")).unwrap();
+    for (line, block) in blocks(&md) {
+        let piece = block.strip_prefix("// continued\n").unwrap_or(&block);
+        assert!(
+            file.contains(piece),
+            "docs/howto-add-a-layout.md:{line}: the block is not in lit-tests/Inputs/bvh8_layout.scion"
+        );
+    }
 }

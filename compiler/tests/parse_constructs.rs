@@ -59,6 +59,7 @@ fn sexpr(e: &Expr) -> String {
             format!("(slice {} {} {})", sexpr(base), sexpr(lo), sexpr(hi))
         }
         ExprKind::Tuple(xs) => format!("(tuple{})", list(xs)),
+        ExprKind::Array(xs) => format!("(array{})", list(xs)),
         ExprKind::Unary { op, operand } => format!("({op:?} {})", sexpr(operand)),
         ExprKind::Binary { op, lhs, rhs } => {
             format!("({} {} {})", op.as_str(), sexpr(lhs), sexpr(rhs))
@@ -163,6 +164,7 @@ fn unit_grouping_and_tuples() {
     check_expr("((a))", expect!["a"]);
     check_expr("()", expect!["(tuple)"]);
     check_expr("(a, (b, c))", expect!["(tuple a (tuple b c))"]);
+    check_expr("[a, (b, c)][1]", expect!["(index (array a (tuple b c)) 1)"]);
 }
 
 #[test]

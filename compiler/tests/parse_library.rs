@@ -107,7 +107,7 @@ fn expression_spans_cover_their_expressions() {
     fn sub_exprs<'a>(e: &'a Expr, out: &mut Vec<&'a Expr>) {
         out.push(e);
         match &e.kind {
-            ExprKind::Call { args: xs, .. } | ExprKind::Tuple(xs) => {
+            ExprKind::Call { args: xs, .. } | ExprKind::Tuple(xs) | ExprKind::Array(xs) => {
                 xs.iter().for_each(|x| sub_exprs(x, out))
             }
             ExprKind::Field { base: x, .. }

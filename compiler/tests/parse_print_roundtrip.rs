@@ -116,7 +116,7 @@ impl Gen {
         let choice = if depth == 0 {
             self.below(8)
         } else {
-            self.below(18)
+            self.below(19)
         };
         let kind = match choice {
             0 => ExprKind::Name(self.ident(NAMES)),
@@ -171,6 +171,11 @@ impl Gen {
                     .collect(),
                 otherwise: Box::new(self.block(0)),
             },
+            17 => ExprKind::Array(
+                (0..1 + self.count(3))
+                    .map(|_| self.expr(depth - 1))
+                    .collect(),
+            ),
             _ => ExprKind::Binary {
                 op: self.pick(BINOPS),
                 lhs: Box::new(self.expr(depth - 1)),

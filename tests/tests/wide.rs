@@ -64,10 +64,12 @@ fn program(file: &str, layout: &str, algorithm: &str) -> Program {
 fn wide_layouts_match_the_wide_reference() {
     let driver = BatchDriver::new(2).unwrap();
     let mut scenes = gen::hard_cases();
+    // Real scenes when present (as the differential rows: the repository's `scenes/` or
+    // `SCION_SCENES`).
     for name in ["teapot", "pine"] {
         match real_scene(name) {
             Ok(s) => scenes.push(s),
-            Err(e) => panic!("real scene {name}: {e}"),
+            Err(e) => eprintln!("wide: no real scene {name}: {e}"),
         }
     }
     for (file, layout, algorithm, node_bytes, width) in PROGRAMS {

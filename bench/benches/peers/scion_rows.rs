@@ -8,7 +8,7 @@ use scion_bench::pbrt_kernel::PbrtKernel;
 use scion_bench::{Contender, Workload};
 use scion_host::contract::{LayoutCode, Packed};
 use scion_host::jit::{Codegen, JitClosestHit};
-use scion_host::mem_interp::LIBRARY_LAYOUTS;
+use scion_host::mem_interp::{Program, LIBRARY_LAYOUTS};
 use scion_runtime::batch::BatchDriver;
 use std::time::Instant;
 
@@ -24,6 +24,21 @@ fn library_layout(layout: &str) -> Result<(&'static str, &'static str), String> 
         .find(|l| l.0 == stem)
         .map(|l| (l.0, l.1))
         .ok_or_else(|| format!("unknown library layout `{layout}`"))
+}
+
+/// What `--layouts` names: a library layout (`pbrt`, `pbrt-q16`, ...), or a closest hit in a
+/// file as `PATH.scion:LAYOUT:ENTRY` (`lit-tests/Inputs/bvh8_layout.scion:Bvh8:closest_hit8`).
+fn program_of(layout: &str) -> Result<Program, String> {
+    if let [path, name, entry] = layout.split(':').collect::<Vec<_>>()[..] {
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{path}: {e}"))?;
+        return Ok(Program {
+            files: vec![(path.to_string(), text)],
+            layout: name.to_string(),
+            algorithm: entry.to_string(),
+        });
+    }
+    let (stem, lname) = library_layout(layout)?;
+    Program::library(stem, lname)
 }
 
 /// A layout's generated code as a contender: packed once (the pack time is its setup), then
@@ -54,7 +69,7 @@ pub fn generated<'a>(
     w: &'a Workload,
     driver: &'a BatchDriver,
 ) -> Result<Vec<Contender<'a>>, String> {
-    let (stem, lname) = library_layout(layout)?;
+    let program = program_of(layout)?;
     let mut out = Vec::new();
     for (codegen, label) in [
         (Codegen::Cranelift, "cranelift"),
@@ -62,7 +77,7 @@ pub fn generated<'a>(
     ] {
         progress(&format!("compiling and packing {layout} ({label})"));
         let t = Instant::now();
-        let code = JitClosestHit::compile_with(stem, lname, None, 3, codegen)?;
+        let code = JitClosestHit::compile_program(&program, None, 3, true, codegen)?;
         progress(&format!("  compiled in {:.3} s", t.elapsed().as_secs_f64()));
         out.push(layout_contender(
             format!("{label} {layout}"),
