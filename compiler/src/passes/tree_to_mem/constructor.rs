@@ -166,6 +166,14 @@ fn generate(m: &mut Module, spec: &LayoutSpec, ours: &[FuncId]) -> Result<(), Di
     let node_params = [ptr, ptr, u32t, ru32, ru32, ri32];
     let (node_fn, node_entry) = m.add_func(&node_name, &node_params, &[ref_ty]);
     m.func_spans.insert(node_fn, spec.model.span);
+    // The variants whose builds place a node (take the next index of the shared counter):
+    // every placement index stays below their count.
+    let placing: Vec<String> = ours
+        .iter()
+        .filter(|&&f| places(m, f))
+        .map(|&f| attr(m, f, "variant"))
+        .filter(|v| v != "root")
+        .collect();
     for &f in ours {
         let variant = attr(m, f, "variant");
         rewrite_build(m, spec, f, &variant, &extra, &node_name, ref_ty, post)?;
@@ -214,7 +222,7 @@ fn generate(m: &mut Module, spec: &LayoutSpec, ours: &[FuncId]) -> Result<(), Di
         let r = bd.result(if_op, 0);
         bd.ret(&[r]);
     }
-    super::entries::sizes_fn(m, spec, &lname)?;
+    super::entries::sizes_fn(m, spec, &lname, &logical, &placing)?;
     super::entries::build_fn(
         m, spec, &lname, &node_name, root_fn, ref_ty, &shared, stride,
     )?;
@@ -325,6 +333,16 @@ pub(super) fn logical_fields(
         out.push(v);
     }
     Ok(out)
+}
+
+/// Whether build function `f` places its node: it uses `this` or reads or writes its record.
+fn places(m: &Module, f: FuncId) -> bool {
+    func_ops(m, f, Order::Pre).iter().any(|&o| {
+        matches!(
+            m.ops[o].kind,
+            OpKind::Tree(Op::This | Op::BuildStore | Op::BuildStoreBits | Op::BuildLoad)
+        )
+    })
 }
 
 /// Rewrites one build function in place (see the module docs).
@@ -443,7 +461,10 @@ fn rewrite_build(
             }
         }
     }
-    let this = if is_root {
+    // A node is placed (takes the next index of the counter) when its build uses `this` or
+    // stores into its record; a variant realized by its reference alone (an eight-wide leaf)
+    // places nothing, so indirect groups hold exactly the records placed.
+    let this = if is_root || !places(m, f) {
         None
     } else {
         Some(take_this(m, spec, cx, at, ref_ty)?)

@@ -6,7 +6,7 @@
 use super::constructor::{load, logical_fields, store, view};
 use super::reader::Reader;
 use super::{unsupported, LayoutSpec};
-use crate::layout::logical::LogicalField;
+use crate::layout::logical::{LogicalAbi, LogicalField};
 use crate::layout::plan::Count;
 use scion_ir::diag::Diagnostic;
 use scion_ir::rewrite::erase_op;
@@ -14,8 +14,17 @@ use scion_ir::tree::{CmpPred, Op};
 use scion_ir::types::{IntTy, Type};
 use scion_ir::{Builder, FuncId, InsertPoint, Module, TypeId, ValueId};
 
-/// `@L.sizes(%tree, %sizes)`.
-pub(super) fn sizes_fn(m: &mut Module, spec: &LayoutSpec, lname: &str) -> Result<(), Diagnostic> {
+/// `@L.sizes(%tree, %sizes)`. An indirect group holds a record per node whose build places one
+/// (`placing`: the variants whose builds take a placement index, which numbers the records):
+/// their count is taken from the logical nodes' kinds (`logical` gives each variant's kind and
+/// the node stride).
+pub(super) fn sizes_fn(
+    m: &mut Module,
+    spec: &LayoutSpec,
+    lname: &str,
+    logical: &LogicalAbi,
+    placing: &[String],
+) -> Result<(), Diagnostic> {
     let ptr = m.ty(Type::Ptr);
     let u32t = m.types.u32();
     let u64t = m.types.int(IntTy::U64);
@@ -35,7 +44,18 @@ pub(super) fn sizes_fn(m: &mut Module, spec: &LayoutSpec, lname: &str) -> Result
                 let s = bd.binary(Op::Add, nc, k);
                 bd.binary(Op::Div, s, d)
             }
-            Count::VariantNodes { .. } => nc,
+            Count::VariantNodes { variants } => {
+                // The variants reaching the group and every variant that takes an index: a
+                // record's index never passes the count.
+                let kinds: Vec<usize> = logical
+                    .variants
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, (n, _))| variants.contains(n) || placing.contains(n))
+                    .map(|(k, _)| k)
+                    .collect();
+                count_kinds(&mut bd, args[0], nc, &kinds, logical.node_size)
+            }
             Count::LogicalLength { .. } => pc,
             Count::Global(g) => {
                 return Err(unsupported(
@@ -54,6 +74,57 @@ pub(super) fn sizes_fn(m: &mut Module, spec: &LayoutSpec, lname: &str) -> Result
     }
     bd.ret(&[]);
     Ok(())
+}
+
+/// The number of logical nodes whose kind is one of `kinds`: a loop over the nodes' kind words
+/// (a view of `nc` `u32`s, `stride` bytes apart).
+fn count_kinds(
+    bd: &mut Builder<'_>,
+    tree: ValueId,
+    nc: ValueId,
+    kinds: &[usize],
+    stride: u64,
+) -> ValueId {
+    let u32t = bd.m.types.u32();
+    let ptr = bd.m.ty(Type::Ptr);
+    let nodes = load(bd, tree, None, view::NODES, 0, ptr);
+    let zero = bd.const_int(u32t, 0);
+    let cell = bd.var(zero);
+    let vt = bd.m.ty(Type::View(u32t));
+    let op = bd.insert(
+        scion_ir::OpSpec::new(scion_ir::mem::Op::View)
+            .operands(&[nodes, zero, nc])
+            .results(&[vt])
+            .attr("stride", scion_ir::attr::Attr::Int(stride as i128)),
+    );
+    let kinds_view = bd.result(op, 0);
+    let body = bd.region(&[u32t], |bd, a| {
+        let mut hit: Option<ValueId> = None;
+        for &k in kinds {
+            let kv = bd.const_int(u32t, k as i128);
+            let is = bd.cmp(CmpPred::Eq, a[0], kv);
+            hit = Some(match hit {
+                None => is,
+                Some(h) => bd.binary(Op::Or, h, is),
+            });
+        }
+        let one = bd.const_int(u32t, 1);
+        let zero = bd.const_int(u32t, 0);
+        let add = match hit {
+            Some(h) => bd.select(h, one, zero),
+            None => zero,
+        };
+        let old = bd.load(cell).expect("a cell");
+        let new = bd.binary(Op::Add, old, add);
+        bd.store(cell, new);
+        bd.yield_(&[]);
+    });
+    bd.insert(
+        scion_ir::OpSpec::new(Op::Foreach)
+            .operands(&[kinds_view])
+            .region(body),
+    );
+    bd.load(cell).expect("a cell")
 }
 
 /// `@L.build(%tree, %B) -> (i32)`.
