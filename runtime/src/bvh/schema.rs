@@ -451,9 +451,9 @@ fn wide_nodes(tree: &LogicalTree, schema: &Schema) -> (Vec<Node>, u32) {
     // Each empty slot gets its own empty leaf, so the logical tree stays a tree and a layout
     // that places a record per leaf has room for every one (`node_count` bounds placements).
     let mut empties = 0;
-    for i in 0..interior.len() {
-        while nodes[i].children.len() < width {
-            nodes[i].children.push((next + empties, Aabb::EMPTY));
+    for node in nodes.iter_mut().take(interior.len()) {
+        while node.children.len() < width {
+            node.children.push((next + empties, Aabb::EMPTY));
             empties += 1;
         }
     }

@@ -14,7 +14,7 @@
 //! The stack pointer lives in a frame cell (promoted to a register by LLVM); a full stack
 //! returns status 1 as in the tail-call scheme of [`super::recursion_to_stack`].
 
-use super::recursion_to_stack::{check_stack_bytes, in_frame, not_tail};
+use super::recursion_to_stack::{check_stack_bytes, entry_addr, in_frame, not_tail};
 use rustc_hash::FxHashSet;
 use scion_ir::attr::Attr;
 use scion_ir::diag::Diagnostic;
@@ -23,7 +23,7 @@ use scion_ir::lo::Op as L;
 use scion_ir::module::ValueDef;
 use scion_ir::op::OpKind;
 use scion_ir::tree::CmpPred;
-use scion_ir::types::{IntTy, Type};
+use scion_ir::types::Type;
 use scion_ir::{Builder, InsertPoint, Module};
 
 /// Where a pointer comes from.
@@ -197,8 +197,6 @@ pub(super) fn rewrite(
     check_stack_bytes(m, f, entry_bytes, size)?;
     let i32t = m.types.i32();
     let u32t = m.types.u32();
-    let u64t = m.types.int(IntTy::U64);
-    let ptrt = m.ty(Type::Ptr);
     let param_tys = m.funcs[f].params.clone();
     let body_blocks: Vec<BlockId> = m.regions[region].blocks.clone();
 
@@ -234,12 +232,7 @@ pub(super) fn rewrite(
         let args: Vec<ValueId> = changed.iter().map(|&i| new_params[i]).collect();
         b.lo_br(entry, &args);
     }
-    let slot = |b: &mut Builder<'_>, sp: ValueId| {
-        let sp64 = b.lo1(L::Cast, &[sp], u64t);
-        let width = b.lo_int(u64t, entry_bytes as i128);
-        let off = b.lo1(L::Mul, &[sp64, width], u64t);
-        b.lo1(L::PtrAdd, &[stack, off], ptrt)
-    };
+    let slot = |b: &mut Builder<'_>, sp: ValueId| entry_addr(b, stack, sp, entry_bytes);
     // The stack pointer when the visit starts: the visit's entries are the ones above it.
     let first = m.blocks[entry].ops[0];
     let sp0 = {

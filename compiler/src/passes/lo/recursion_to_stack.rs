@@ -269,8 +269,6 @@ fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), D
     check_stack_bytes(m, f, entry_bytes, size)?;
     let i32t = m.types.i32();
     let u32t = m.types.u32();
-    let u64t = m.types.int(IntTy::U64);
-    let ptrt = m.ty(Type::Ptr);
     let param_tys = m.funcs[f].params.clone();
 
     // New entry: the stack, then the old body on the original arguments with an empty stack.
@@ -322,10 +320,7 @@ fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), D
         b.set_insertion_point_to_end(pop);
         let one = b.lo_int(u32t, 1);
         let sp1 = b.lo1(L::Sub, &[sp_head, one], u32t);
-        let sp64 = b.lo1(L::Cast, &[sp1], u64t);
-        let width = b.lo_int(u64t, entry_bytes as i128);
-        let off = b.lo1(L::Mul, &[sp64, width], u64t);
-        let at = b.lo1(L::PtrAdd, &[stack, off], ptrt);
+        let at = entry_addr(&mut b, stack, sp1, entry_bytes);
         let mut args = Vec::with_capacity(changed.len() + 1);
         for (k, &i) in changed.iter().enumerate() {
             args.push(b.lo_load(at, 8 * k as i64, param_tys[i]));
@@ -367,10 +362,7 @@ fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), D
             let full = b.lo_cmp(CmpPred::Ge, sp, cap);
             b.lo_cond_br(full, (overflow, &[]), (next, &[]));
             b.set_insertion_point_to_end(next);
-            let sp64 = b.lo1(L::Cast, &[sp], u64t);
-            let width = b.lo_int(u64t, entry_bytes as i128);
-            let off = b.lo1(L::Mul, &[sp64, width], u64t);
-            let at = b.lo1(L::PtrAdd, &[stack, off], ptrt);
+            let at = entry_addr(&mut b, stack, sp, entry_bytes);
             for (k, &i) in changed.iter().enumerate() {
                 b.lo_store(at, 8 * k as i64, args[i]);
             }
@@ -386,6 +378,21 @@ fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), D
     m.funcs[f].attrs.set("status", Attr::Unit);
     drop_unreachable(m, f);
     Ok(())
+}
+
+/// The address of stack entry `sp` (a `u32`) of `entry_bytes` bytes.
+pub(super) fn entry_addr(
+    b: &mut Builder<'_>,
+    stack: ValueId,
+    sp: ValueId,
+    entry_bytes: u64,
+) -> ValueId {
+    let u64t = b.m.types.int(IntTy::U64);
+    let ptrt = b.m.ty(Type::Ptr);
+    let sp64 = b.lo1(L::Cast, &[sp], u64t);
+    let width = b.lo_int(u64t, entry_bytes as i128);
+    let off = b.lo1(L::Mul, &[sp64, width], u64t);
+    b.lo1(L::PtrAdd, &[stack, off], ptrt)
 }
 
 /// Removes blocks no path from the entry reaches (the quiet exits after rewritten calls).

@@ -336,6 +336,26 @@ fn rays_at(prims: &[Tri]) -> Vec<Val> {
         .collect()
 }
 
+/// `entry(B, ray, root, best)` for each ray, `best` starting at `(inf, u32::MAX)`.
+fn closest_hits(
+    it: &mut Interp<'_>,
+    entry: &str,
+    b: u64,
+    root: Val,
+    rays: Vec<Val>,
+) -> Vec<(u32, u32)> {
+    rays.into_iter()
+        .map(|ray| {
+            let cell = it.alloc(Val::Tuple(vec![
+                Val::F32(f32::INFINITY),
+                Val::Int(0xFFFF_FFFF, IntTy::U32),
+            ]));
+            let bv = Val::Int(b as i128, IntTy::U64);
+            best_of(it, entry, vec![bv, ray, root.clone()], cell)
+        })
+        .collect()
+}
+
 fn best_of(it: &mut Interp<'_>, name: &str, args: Vec<Val>, cell: Val) -> (u32, u32) {
     let mut all = args;
     all.push(cell.clone());
@@ -408,22 +428,7 @@ fn pbrt_packs_and_traverses_like_the_tree_level() {
     }
     assert_eq!(visited, nodes.len());
     assert_eq!(next_prim as usize, prims.len());
-    let got: Vec<(u32, u32)> = rays()
-        .into_iter()
-        .map(|ray| {
-            let cell = it.alloc(Val::Tuple(vec![
-                Val::F32(f32::INFINITY),
-                Val::Int(0xFFFF_FFFF, IntTy::U32),
-            ]));
-            let bv = Val::Int(b as i128, IntTy::U64);
-            best_of(
-                &mut it,
-                "closest_hit",
-                vec![bv, ray, Val::Int(0, IntTy::U32)],
-                cell,
-            )
-        })
-        .collect();
+    let got = closest_hits(&mut it, "closest_hit", b, Val::Int(0, IntTy::U32), rays());
     assert_eq!(got, want);
 }
 
@@ -501,22 +506,7 @@ fn packs_and_traverses_like_the_tree_level(src: &str, layout: &str, nbuf: usize)
     let mut it = Interp::new(&m);
     let tree = put_tree(&mut it, &nodes, root, &prims);
     let (b, _) = pack(&mut it, layout, nbuf, tree);
-    let got: Vec<(u32, u32)> = rays()
-        .into_iter()
-        .map(|ray| {
-            let cell = it.alloc(Val::Tuple(vec![
-                Val::F32(f32::INFINITY),
-                Val::Int(0xFFFF_FFFF, IntTy::U32),
-            ]));
-            let bv = Val::Int(b as i128, IntTy::U64);
-            best_of(
-                &mut it,
-                "closest_hit",
-                vec![bv, ray, Val::Int(0, IntTy::U32)],
-                cell,
-            )
-        })
-        .collect();
+    let got = closest_hits(&mut it, "closest_hit", b, Val::Int(0, IntTy::U32), rays());
     assert_eq!(got, want);
 }
 
@@ -538,35 +528,10 @@ fn user_functions_in_layout_expressions() {
 fn arrays_of_children_pack_and_traverse_like_the_binary_tree() {
     // `Interior(children: BVH4[4])`: the runtime collapses the binary tree to four slots (empty
     // slots are empty leaves with empty boxes), `build children` builds the four and gives their
-    // references, and `foreach c in ch` visits them; the closest hits are the binary tree's.
-    let (nodes, root, prims) = scene();
-    let all_rays: Vec<Val> = rays().into_iter().chain(rays_at(&prims)).collect();
-    let want = reference_for(&nodes, root, prims.as_slice(), &all_rays);
-    assert!(want.iter().filter(|h| h.1 != u32::MAX).count() >= prims.len());
+    // references, and the traversal reads the children's boxes through `ch[k]`; the closest hits
+    // are the binary tree's.
     let src = include_str!("../../../../lit-tests/Inputs/wide4_layout.scion");
-    let (m, schema) = module_and_schema(src, Some("Wide4"));
-    let schema = schema.expect("the runtime fills `BVH4`");
-    assert_eq!(schema.arity, 4);
-    let mut it = Interp::new(&m);
-    let tree = put_tree_as(&mut it, &nodes, root, &prims, &schema);
-    let (b, _) = pack(&mut it, "Wide4", 3, tree);
-    let got: Vec<(u32, u32)> = all_rays
-        .into_iter()
-        .map(|ray| {
-            let cell = it.alloc(Val::Tuple(vec![
-                Val::F32(f32::INFINITY),
-                Val::Int(0xFFFF_FFFF, IntTy::U32),
-            ]));
-            let bv = Val::Int(b as i128, IntTy::U64);
-            best_of(
-                &mut it,
-                "closest_hit4",
-                vec![bv, ray, Val::Int(0, IntTy::U32)],
-                cell,
-            )
-        })
-        .collect();
-    assert_eq!(got, want);
+    packs_like_the_binary_tree(src, "Wide4", "closest_hit4", 3, 4);
 }
 
 /// Packs the scene into `layout` of `src` (`nbuf` buffers) as the runtime fills the layout's
@@ -601,16 +566,7 @@ fn packs_like_the_binary_tree(src: &str, layout: &str, entry: &str, nbuf: usize,
         )
         .expect("node runs")
         .remove(0);
-    let got: Vec<(u32, u32)> = all_rays
-        .into_iter()
-        .map(|ray| {
-            let cell = it.alloc(Val::Tuple(vec![
-                Val::F32(f32::INFINITY),
-                Val::Int(0xFFFF_FFFF, IntTy::U32),
-            ]));
-            best_of(&mut it, entry, vec![ptr(b), ray, root_ref.clone()], cell)
-        })
-        .collect();
+    let got = closest_hits(&mut it, entry, b, root_ref, all_rays);
     assert_eq!(got, want);
 }
 
