@@ -133,6 +133,9 @@ pub struct JitClosestHit {
     build: BuildFn,
     refs: Refs,
     stack_size: u32,
+    /// Whether `recursion-to-stack` deferred the traversal's calls (attribute
+    /// `deferred_calls`).
+    deferred: bool,
     /// Time of the whole compilation (front end to machine code).
     pub compile_time: Duration,
     /// Root of each packed buffer set, keyed by the buffers' addresses.
@@ -267,6 +270,10 @@ impl JitClosestHit {
             },
         )?;
         let ref_ty = check_entries(&m, &sig)?;
+        let deferred = m
+            .func_order
+            .iter()
+            .any(|&f| m.funcs[f].attrs.get("deferred_calls").is_some());
         let jit = Code::compile(&m, codegen)?;
         let get = |name: &str| {
             jit.function_ptr(name)
@@ -318,6 +325,7 @@ impl JitClosestHit {
             build,
             refs,
             stack_size: stack_size.unwrap_or(64),
+            deferred,
             compile_time: start.elapsed(),
             roots: Mutex::new(HashMap::new()),
         })
@@ -501,8 +509,9 @@ impl LayoutCode for JitClosestHit {
     }
     /// A node at depth `k` (root 1) runs with at most `k - 1` pending entries and pushes one
     /// (`recursion-to-stack` visits the first of its two children at once), so trees of depth
-    /// up to `stack_size + 1` never overflow.
+    /// up to `stack_size + 1` never overflow. A traversal whose calls are deferred pushes all
+    /// of a node's children: no depth bound then (an overflow is still reported).
     fn stack_limit(&self) -> Option<usize> {
-        Some(self.stack_size as usize + 1)
+        (!self.deferred).then_some(self.stack_size as usize + 1)
     }
 }

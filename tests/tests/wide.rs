@@ -7,7 +7,7 @@
 //! differ on rays grazing a box whose parent the rounding of the slab test misses: the wide
 //! tree skips that parent's box.)
 
-use scion_host::contract::Packed;
+use scion_host::contract::{LayoutCode, Packed};
 use scion_host::jit::{Codegen, JitClosestHit, JIT_OPT_LEVEL};
 use scion_host::mem_interp::Program;
 use scion_runtime::batch::BatchDriver;
@@ -107,6 +107,8 @@ fn wide_layouts_match_the_wide_reference() {
                 codegen,
             )
             .unwrap_or_else(|e| panic!("{layout} {codegen:?}: {e}"));
+            // The deferred calls push every child of a node: no depth bound is claimed.
+            assert_eq!(code.stack_limit(), None, "{layout}");
             let mut hits = 0;
             for (i, scene) in scenes.iter().enumerate() {
                 for kind in [TreeKind::Sah15, TreeKind::Sah4] {

@@ -331,5 +331,7 @@ pub(super) fn rewrite(
     }
     m.funcs[f].results = vec![i32t];
     m.funcs[f].attrs.set("status", Attr::Unit);
+    // A visit pushes all of its calls: the stack a tree needs is not its depth.
+    m.funcs[f].attrs.set("deferred_calls", Attr::Unit);
     Ok(())
 }
