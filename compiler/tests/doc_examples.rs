@@ -80,17 +80,35 @@ fn readme_examples_compile() {
     assert!(check_file("README.md") >= 1);
 }
 
-#[test]
-fn howto_add_a_layout_examples_compile_and_are_the_traced_file() {
-    assert!(check_file("docs/howto-add-a-layout.md") >= 5);
+/// Every `scion` block of the how-to `doc` is a verbatim piece of `file`, the file the tests
+/// trace.
+fn blocks_are_pieces_of(doc: &str, file: &str) {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
-    let md = std::fs::read_to_string(root.join("docs/howto-add-a-layout.md")).unwrap();
-    let file = std::fs::read_to_string(root.join("lit-tests/Inputs/bvh8_layout.scion")).unwrap();
+    let md = std::fs::read_to_string(root.join(doc)).unwrap();
+    let text = std::fs::read_to_string(root.join(file)).unwrap();
     for (line, block) in blocks(&md) {
         let piece = block.strip_prefix("// continued\n").unwrap_or(&block);
         assert!(
-            file.contains(piece),
-            "docs/howto-add-a-layout.md:{line}: the block is not in lit-tests/Inputs/bvh8_layout.scion"
+            text.contains(piece),
+            "{doc}:{line}: the block is not in {file}"
         );
     }
+}
+
+#[test]
+fn howto_add_a_layout_examples_compile_and_are_the_traced_file() {
+    assert!(check_file("docs/howto-add-a-layout.md") >= 5);
+    blocks_are_pieces_of(
+        "docs/howto-add-a-layout.md",
+        "lit-tests/Inputs/bvh8_layout.scion",
+    );
+}
+
+#[test]
+fn howto_add_an_algorithm_examples_compile_and_are_the_library_file() {
+    assert!(check_file("docs/howto-add-an-algorithm.md") >= 2);
+    blocks_are_pieces_of(
+        "docs/howto-add-an-algorithm.md",
+        "library/algorithms/occluded.scion",
+    );
 }
