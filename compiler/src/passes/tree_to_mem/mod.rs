@@ -107,7 +107,7 @@ fn ir_type(m: &mut Module, t: &TypeExpr) -> Option<TypeId> {
     Some(m.ty(ty))
 }
 
-fn prim(name: &str) -> Option<Type> {
+pub(super) fn prim(name: &str) -> Option<Type> {
     Some(match name {
         "bool" => Type::Bool,
         "i8" => Type::Int(IntTy::I8),
