@@ -305,8 +305,9 @@ pub fn library_seeds(library: &std::path::Path) -> std::io::Result<Vec<String>> 
 /// (`BVH4[4]`, `BVH8[8]`, `build children` into an array, `ch[k].bounds`), `sort`, array
 /// literals, `foreach c, k in ch`, user functions in layout expressions, and a tree type the
 /// runtime cannot fill (DOP-14 bounds).
-pub const LAYOUT_SEEDS: [&str; 5] = [
+pub const LAYOUT_SEEDS: [&str; 6] = [
     include_str!("../../lit-tests/Inputs/wide4_layout.scion"),
+    include_str!("../../lit-tests/Inputs/bvh8_q8_ci_layout.scion"),
     include_str!("../../lit-tests/Inputs/bvh8_layout.scion"),
     include_str!("../../lit-tests/Inputs/user_functions_layout.scion"),
     include_str!("../../lit-tests/Inputs/dop14_split.scion"),

@@ -11,8 +11,8 @@ use scion_host::contract::{LayoutCode, Packed};
 use scion_host::jit::{Codegen, JitClosestHit, JIT_OPT_LEVEL};
 use scion_host::mem_interp::Program;
 use scion_runtime::batch::BatchDriver;
-use scion_runtime::bvh::wide::collapse;
-use scion_runtime::geom::Hit;
+use scion_runtime::bvh::wide::{collapse, WideNode};
+use scion_runtime::geom::{Aabb, Hit, Vec3};
 use scion_runtime::reference::closest_hit_wide;
 use scion_runtime::scene::gen;
 use scion_tests::cases::{real_scene, RayKind, TreeKind};
@@ -20,7 +20,15 @@ use std::path::PathBuf;
 
 /// (input file under lit-tests/Inputs, layout, algorithm, bytes of a record, width, whether
 /// every node has a record (else interior nodes only, leaves being references)).
-const PROGRAMS: [(&str, &str, &str, usize, usize, bool); 3] = [
+const PROGRAMS: [(&str, &str, &str, usize, usize, bool); 4] = [
+    (
+        "bvh8_q8_ci_layout.scion",
+        "Bvh8Q8CI",
+        "closest_hit8",
+        104,
+        8,
+        false,
+    ),
     ("bvh8_layout.scion", "Bvh8", "closest_hit8", 256, 8, false),
     (
         "bvh8_aos_layout.scion",
@@ -48,11 +56,40 @@ fn records(tree: &scion_runtime::bvh::LogicalTree, width: usize, every_node: boo
     }
 }
 
-/// The wide reference's hits over `tree` collapsed to `width` children.
+/// The boxes `bvh8-q8-ci` stores for a node's children: its frame over the occupied slots
+/// (8-bit codes) and each slot's codes decoded (`scion_ir::tree::quant`, the builtins' exact
+/// semantics); empty slots stay empty.
+fn decoded8(node: &WideNode<8>) -> [Aabb; 8] {
+    use scion_ir::tree::quant::{decode, frame_origin, frame_step, quant_hi, quant_lo};
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for b in &node.bounds {
+        let (l, h) = (b.low.to_array(), b.high.to_array());
+        for a in 0..3 {
+            lo[a] = lo[a].min(l[a]);
+            hi[a] = hi[a].max(h[a]);
+        }
+    }
+    let o = lo.map(frame_origin);
+    let s = [0, 1, 2].map(|a| frame_step(o[a], hi[a], 255));
+    node.bounds.map(|b| {
+        if b.is_empty() {
+            return b;
+        }
+        let (l, h) = (b.low.to_array(), b.high.to_array());
+        let dl = [0, 1, 2].map(|a| decode(quant_lo(l[a], o[a], s[a], 255), o[a], s[a]));
+        let dh = [0, 1, 2].map(|a| decode(quant_hi(h[a], o[a], s[a], 255), o[a], s[a]));
+        Aabb::new(Vec3::from_array(dl), Vec3::from_array(dh))
+    })
+}
+
+/// The wide reference's hits over `tree` collapsed to `width` children, over the boxes the
+/// layout stores (decoded when `quantized`).
 fn wide_reference(
     tree: &scion_runtime::bvh::LogicalTree,
     rays: &[scion_runtime::geom::Ray],
     width: usize,
+    quantized: bool,
 ) -> Vec<Hit> {
     match width {
         4 => {
@@ -62,7 +99,12 @@ fn wide_reference(
                 .collect()
         }
         8 => {
-            let w = collapse::<8>(tree);
+            let mut w = collapse::<8>(tree);
+            if quantized {
+                for n in &mut w.nodes {
+                    n.bounds = decoded8(n);
+                }
+            }
             rays.iter()
                 .map(|r| closest_hit_wide(&w, &tree.primitives, r))
                 .collect()
@@ -116,7 +158,7 @@ fn wide_layouts_match_the_wide_reference() {
                     let mut rays = RayKind::Secondary.rays(scene, 300, i as u64);
                     rays.extend(RayKind::Axis.rays(scene, 100, i as u64));
                     rays.extend(RayKind::Features.rays(scene, 200, 0));
-                    let want = wide_reference(&tree, &rays, width);
+                    let want = wide_reference(&tree, &rays, width, layout == "Bvh8Q8CI");
                     let packed = Packed::new(&code, &tree)
                         .unwrap_or_else(|e| panic!("{layout} {codegen:?} scene {i}: {e}"));
                     if !tree.is_empty() {

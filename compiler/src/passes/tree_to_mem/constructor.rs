@@ -29,6 +29,7 @@ use super::{spec_of, unsupported, LayoutSpec};
 use crate::layout::logical::{LogicalAbi, LogicalField, Slot, PRIM_STRIDE};
 use crate::layout::model::GroupKind;
 use crate::layout::plan::BufferKind;
+use crate::layout::plan::Count;
 use scion_ir::attr::Attr;
 use scion_ir::diag::{Diagnostic, Diagnostics};
 use scion_ir::module::ValueDef;
@@ -170,9 +171,9 @@ fn generate(m: &mut Module, spec: &LayoutSpec, ours: &[FuncId]) -> Result<(), Di
     // every placement index stays below their count.
     let placing: Vec<String> = ours
         .iter()
-        .filter(|&&f| places(m, f))
-        .map(|&f| attr(m, f, "variant"))
-        .filter(|v| v != "root")
+        .map(|&f| (f, attr(m, f, "variant")))
+        .filter(|(f, v)| v != "root" && places(m, spec, *f, v))
+        .map(|(_, v)| v)
         .collect();
     for &f in ours {
         let variant = attr(m, f, "variant");
@@ -335,14 +336,21 @@ pub(super) fn logical_fields(
     Ok(out)
 }
 
-/// Whether build function `f` places its node: it uses `this` or reads or writes its record.
-fn places(m: &Module, f: FuncId) -> bool {
-    func_ops(m, f, Order::Pre).iter().any(|&o| {
-        matches!(
-            m.ops[o].kind,
-            OpKind::Tree(Op::This | Op::BuildStore | Op::BuildStoreBits | Op::BuildLoad)
-        )
-    })
+/// Whether build function `f` (of variant `variant`) places its node, taking the next index of
+/// the counter: its variant has a record (every variant does in a layout with a group indexed
+/// by the reference; in one with indirect groups, the variants whose split arms reach one), or
+/// its build reads or writes its record. A variant realized by its reference alone (an
+/// eight-wide leaf) places nothing: its `this` starts at 0 for `this[a:b] = e`.
+fn places(m: &Module, spec: &LayoutSpec, f: FuncId, variant: &str) -> bool {
+    let has_record = spec.plan.buffers.iter().any(|b| match &b.count {
+        Count::Nodes { .. } => true,
+        Count::VariantNodes { variants } => variants.iter().any(|v| v == variant),
+        _ => false,
+    });
+    has_record
+        || func_ops(m, f, Order::Pre)
+            .iter()
+            .any(|&o| matches!(m.ops[o].kind, OpKind::Tree(Op::BuildStore | Op::BuildLoad)))
 }
 
 /// Rewrites one build function in place (see the module docs).
@@ -461,13 +469,19 @@ fn rewrite_build(
             }
         }
     }
-    // A node is placed (takes the next index of the counter) when its build uses `this` or
-    // stores into its record; a variant realized by its reference alone (an eight-wide leaf)
-    // places nothing, so indirect groups hold exactly the records placed.
-    let this = if is_root || !places(m, f) {
+    // A node is placed (takes the next index of the counter) when it has a record (see
+    // `places`); a variant realized by its reference alone places nothing, so indirect groups
+    // hold exactly the records placed, and its `this` is 0 (what `this[a:b] = e` fills in).
+    let this = if is_root {
         None
-    } else {
+    } else if places(m, spec, f, &variant) {
         Some(take_this(m, spec, cx, at, ref_ty)?)
+    } else if m.types.as_int(ref_ty).is_some() {
+        let mut bd = Builder::new(m);
+        bd.set_insertion_point(at);
+        Some(bd.const_int(ref_ty, 0))
+    } else {
+        None
     };
     // With `this[a:b] = e` the reference is a cell starting as the placement value: `tree.this`
     // reads it, the bit stores update it. Stores into the node still use the placement value.

@@ -590,6 +590,14 @@ fn table1_bvh8_in_its_natural_form_packs_and_traverses_like_the_binary_tree() {
 }
 
 #[test]
+fn table1_bvh8_q8_ci_packs_and_traverses_like_the_binary_tree() {
+    // Catalog §4.5, §8.5: 104-byte records, eight-bit codes in a per-node frame decoded by a
+    // user function (conservative boxes), L32 links whose count goes in with `this[28:32]`.
+    let src = include_str!("../../../../lit-tests/Inputs/bvh8_q8_ci_layout.scion");
+    packs_like_the_binary_tree(src, "Bvh8Q8CI", "closest_hit8", 3, 8);
+}
+
+#[test]
 fn an_empty_tree_packs_to_zero_counts() {
     let m = module(PBRT, Some("LinearBVH"));
     let mut it = Interp::new(&m);
