@@ -14,7 +14,7 @@
 //! The stack pointer lives in a frame cell (promoted to a register by LLVM); a full stack
 //! returns status 1 as in the tail-call scheme of [`super::recursion_to_stack`].
 
-use super::recursion_to_stack::{check_stack_bytes, entry_addr, in_frame, not_tail};
+use super::recursion_to_stack::{check_stack_bytes, entry_addr, in_frame, not_tail, split_entry};
 use rustc_hash::FxHashSet;
 use scion_ir::attr::Attr;
 use scion_ir::diag::Diagnostic;
@@ -201,21 +201,7 @@ pub(super) fn rewrite(
     let body_blocks: Vec<BlockId> = m.regions[region].blocks.clone();
 
     // New entry: the stack and its pointer cell, then the old body on the arguments.
-    let new_entry = m.add_block(region, &param_tys);
-    let blocks = &mut m.regions[region].blocks;
-    blocks.retain(|&x| x != new_entry);
-    blocks.insert(0, new_entry);
-    let new_params: Vec<ValueId> = m.blocks[new_entry].args.to_vec();
-    for (i, &p) in params.iter().enumerate() {
-        if !changed.contains(&i) {
-            scion_ir::rewrite::replace_all_uses(m, p, new_params[i]);
-        }
-    }
-    let kept: Vec<ValueId> = changed.iter().map(|&i| params[i]).collect();
-    for (k, &v) in kept.iter().enumerate() {
-        m.values[v].def = ValueDef::BlockArg(entry, k as u32);
-    }
-    m.blocks[entry].args = kept.into_iter().collect();
+    let (new_entry, new_params) = split_entry(m, f, &params, &changed);
     let head = m.add_block(region, &[]);
     let done = m.add_block(region, &[]);
     let pop = m.add_block(region, &[]);

@@ -272,24 +272,9 @@ fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), D
     let param_tys = m.funcs[f].params.clone();
 
     // New entry: the stack, then the old body on the original arguments with an empty stack.
-    let new_entry = m.add_block(region, &param_tys);
-    let blocks = &mut m.regions[region].blocks;
-    blocks.retain(|&x| x != new_entry);
-    blocks.insert(0, new_entry);
-    let new_params: Vec<ValueId> = m.blocks[new_entry].args.to_vec();
     // The old entry becomes the loop body's head: its arguments are the changed parameters
-    // and the stack pointer `sp` (the number of pending entries). The parameters that no call
-    // changes are the same on every visit: their uses read the new entry's arguments.
-    for (i, &p) in params.iter().enumerate() {
-        if !changed.contains(&i) {
-            scion_ir::rewrite::replace_all_uses(m, p, new_params[i]);
-        }
-    }
-    let kept: Vec<ValueId> = changed.iter().map(|&i| params[i]).collect();
-    for (k, &v) in kept.iter().enumerate() {
-        m.values[v].def = ValueDef::BlockArg(entry, k as u32);
-    }
-    m.blocks[entry].args = kept.into_iter().collect();
+    // and the stack pointer `sp` (the number of pending entries).
+    let (new_entry, new_params) = split_entry(m, f, &params, &changed);
     let sp_entry = m.add_block_arg(entry, u32t);
     let head = m.add_block(region, &[u32t]);
     let sp_head = m.blocks[head].args[0];
@@ -378,6 +363,37 @@ fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), D
     m.funcs[f].attrs.set("status", Attr::Unit);
     drop_unreachable(m, f);
     Ok(())
+}
+
+/// A new entry block of `f` with its parameters, before the old entry `params`' block, which
+/// keeps only the `changed` parameters as its arguments: the parameters no recursive call
+/// changes are the same on every visit, so their uses read the new entry's arguments. Returns
+/// the new entry and its arguments.
+pub(super) fn split_entry(
+    m: &mut Module,
+    f: FuncId,
+    params: &[ValueId],
+    changed: &[usize],
+) -> (BlockId, Vec<ValueId>) {
+    let region = m.funcs[f].body;
+    let entry = m.regions[region].blocks[0];
+    let param_tys = m.funcs[f].params.clone();
+    let new_entry = m.add_block(region, &param_tys);
+    let blocks = &mut m.regions[region].blocks;
+    blocks.retain(|&x| x != new_entry);
+    blocks.insert(0, new_entry);
+    let new_params: Vec<ValueId> = m.blocks[new_entry].args.to_vec();
+    for (i, &p) in params.iter().enumerate() {
+        if !changed.contains(&i) {
+            scion_ir::rewrite::replace_all_uses(m, p, new_params[i]);
+        }
+    }
+    let kept: Vec<ValueId> = changed.iter().map(|&i| params[i]).collect();
+    for (k, &v) in kept.iter().enumerate() {
+        m.values[v].def = ValueDef::BlockArg(entry, k as u32);
+    }
+    m.blocks[entry].args = kept.into_iter().collect();
+    (new_entry, new_params)
 }
 
 /// The address of stack entry `sp` (a `u32`) of `entry_bytes` bytes.
