@@ -29,6 +29,10 @@ func t_box(ray: Ray, box: AABB) -> bool = intersects(ray, box)
 func t_tri(ray: Ray, tri: Triangle) -> bool = intersects(ray, tri)
 func t_cpb(p: f32x3, box: AABB) -> f32x3 = closest_point(p, box)
 func t_cpt(p: f32x3, tri: Triangle) -> f32x3 = closest_point(p, tri)
+func t_cpc(p: f32x3, tri: Triangle) -> (f32, f32x3) = {
+  let c: f32x3 = closest_point(closest_point(p, tri), bounds(tri));
+  return (length_squared(c - p), c);
+}
 func t_sat(a: Triangle, b: Triangle) -> bool = intersects(a, b)
 func t_bb(a: AABB, b: AABB) -> bool = intersects(a, b)
 func t_d2(p: f32x3, box: AABB) -> f32 = distance_squared(p, box)
@@ -62,7 +66,7 @@ func t_ifx(a: f32x3, k: u32) -> (f32, u32) = {
 "#;
 
 const FUNCS: &[&str] = &[
-    "t_hit", "t_slab", "t_box", "t_tri", "t_cpb", "t_cpt", "t_sat", "t_bb", "t_d2", "t_axis",
+    "t_hit", "t_slab", "t_box", "t_tri", "t_cpb", "t_cpt", "t_cpc", "t_sat", "t_bb", "t_d2", "t_axis",
     "t_dir", "t_lanes", "t_bits", "t_mut", "t_ifx",
 ];
 

@@ -529,6 +529,11 @@ impl Gen {
                 } else {
                     Some(self.ty(2))
                 },
+                order_by: if self.below(4) == 0 {
+                    Some(self.ident(NAMES))
+                } else {
+                    None
+                },
                 body: self.stmt(3),
                 span: Span::default(),
             }),

@@ -11,7 +11,7 @@
 //!
 //! Arenas never shrink: erasing an op only detaches it from its block (see [`crate::rewrite`]).
 
-use crate::attr::Attrs;
+use crate::attr::{Attr, Attrs};
 use crate::diag::Span;
 use crate::entity::{BlockId, FuncId, OpId, RegionId, TypeId, ValueId};
 use crate::op::Operation;
@@ -84,6 +84,27 @@ pub struct Func {
     /// Function-level facts for later levels (e.g. an entry point's ABI name), printed as
     /// `attributes {...}` after the signature.
     pub attrs: Attrs,
+}
+
+/// The function attribute of a best-first function (source `order by k`): the index of the
+/// parameter whose value orders its queued recursive calls, smallest first (docs/ir.md,
+/// "Best-first functions"). Passes that change a function's parameters keep it pointing at the
+/// same parameter (its first leaf once `mem-to-lo` scalarizes).
+pub const ORDER_BY: &str = "order_by";
+
+impl Func {
+    /// The ordering parameter of a best-first function ([`ORDER_BY`]).
+    pub fn order_by(&self) -> Option<usize> {
+        self.attrs
+            .get(ORDER_BY)
+            .and_then(Attr::as_int)
+            .and_then(|i| usize::try_from(i).ok())
+    }
+
+    /// Sets (or moves) the ordering parameter ([`ORDER_BY`]).
+    pub fn set_order_by(&mut self, index: usize) {
+        self.attrs.set(ORDER_BY, Attr::Int(index as i128));
+    }
 }
 
 /// A named, typed field of an ADT.

@@ -52,6 +52,9 @@ pub fn generate(program: &Program, typed: &TypedProgram) -> Result<Module, Inter
         let results = tys.lower_results(&mut m, typed, &f.ret)?;
         let (fid, entry) = m.add_func(&f.unique_name, &params, &results);
         m.func_spans.insert(fid, f.span);
+        if let Some(k) = f.order_by {
+            m.funcs[fid].set_order_by(k as usize);
+        }
         entries.push((FuncId(i as u32), entry, results));
     }
     for (fid, entry, results) in entries {

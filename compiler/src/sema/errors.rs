@@ -176,6 +176,25 @@ pub enum SemaError {
     IfWithoutValue { span: Span },
     /// E0241
     EmptyArray { span: Span },
+    /// E0242
+    OrderByNotParam {
+        func: String,
+        name: String,
+        span: Span,
+    },
+    /// E0243
+    OrderByType {
+        name: String,
+        ty: String,
+        span: Span,
+        param: Span,
+    },
+    /// E0244
+    OrderByResult {
+        func: String,
+        ret: String,
+        span: Span,
+    },
     /// E0353
     DiscriminantNotInt { ty: String, span: Span },
     /// E0354
@@ -291,6 +310,9 @@ impl SemaError {
             BitRange { .. } => "E0239",
             IfWithoutValue { .. } => "E0240",
             EmptyArray { .. } => "E0241",
+            OrderByNotParam { .. } => "E0242",
+            OrderByType { .. } => "E0243",
+            OrderByResult { .. } => "E0244",
             DiscriminantNotInt { .. } => "E0353",
             GroupSizeNotInt { .. } => "E0354",
             GroupByNotIndex { .. } => "E0355",
@@ -421,6 +443,15 @@ impl SemaError {
             EmptyArray { span } => e("an array literal needs at least one element".to_string())
                 .with_primary(*span, "empty array")
                 .with_note("its element type and length come from its elements"),
+            OrderByNotParam { func, name, span } => e(format!("`order by {name}`: `{func}` has no parameter `{name}`"))
+                .with_primary(*span, "not a parameter")
+                .with_note("the calls of a best-first function are ordered by one of its parameters (docs/language.md)"),
+            OrderByType { name, ty, span, param } => e(format!("`order by {name}`: the key has type `{ty}`, not a number passed by value"))
+                .with_primary(*span, "expected an integer, `f32` or `f64` parameter")
+                .with_secondary(*param, "declared here"),
+            OrderByResult { func, ret, span } => e(format!("`{func}` is ordered by a parameter (`order by`) but returns `{ret}`"))
+                .with_primary(*span, "a best-first function returns nothing")
+                .with_note("its recursive calls are queued and run later, so no value can come back from them; write results through a `mut` parameter"),
             DiscriminantNotInt { ty, span } => e(format!("split discriminant has type `{ty}`, not an integer"))
                 .with_primary(*span, "expected an integer"),
             GroupSizeNotInt { ty, span } => e(format!("group size has type `{ty}`, not an integer"))

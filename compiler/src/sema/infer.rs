@@ -264,6 +264,17 @@ impl<'a> Checker<'a> {
                 }
             }
         }
+        if let (Some(_), Some(k)) = (info.order_by, &decl.order_by) {
+            let r = self.shallow(&info.ret);
+            if !r.is_unit() && r != Ty::Error {
+                let ret = self.show(&info.ret);
+                self.error(SemaError::OrderByResult {
+                    func: info.name.clone(),
+                    ret,
+                    span: k.span,
+                });
+            }
+        }
         self.scopes.clear();
         self.ctx = Ctx::Const;
     }

@@ -361,6 +361,7 @@ impl Checker<'_> {
             } else {
                 format!("{}.{}", d.name.name, set.len())
             };
+            let order_by = d.order_by.as_ref().and_then(|k| self.order_key(d, &params, k));
             let id = FuncId(self.out.funcs.len() as u32);
             self.out.funcs.push(FuncInfo {
                 item: i,
@@ -368,6 +369,7 @@ impl Checker<'_> {
                 unique_name,
                 params,
                 ret,
+                order_by,
                 span: d.name.span,
             });
             self.overloads
@@ -375,6 +377,36 @@ impl Checker<'_> {
                 .or_default()
                 .push(id);
         }
+    }
+
+    /// The parameter `order by k` names: a parameter passed by value whose type is a number.
+    fn order_key(
+        &mut self,
+        d: &crate::syntax::ast::FuncDecl,
+        params: &[ParamInfo],
+        k: &crate::syntax::ast::Ident,
+    ) -> Option<u32> {
+        let Some(i) = params.iter().position(|p| p.name == k.name) else {
+            self.error(SemaError::OrderByNotParam {
+                func: d.name.name.clone(),
+                name: k.name.clone(),
+                span: k.span,
+            });
+            return None;
+        };
+        let p = &params[i];
+        let numeric = matches!(p.ty, Ty::Prim(q) if q.is_numeric() && q != Prim::F16);
+        if p.mutable || !numeric {
+            let ty = self.show(&p.ty);
+            self.error(SemaError::OrderByType {
+                name: k.name.clone(),
+                ty: if p.mutable { format!("mut {ty}") } else { ty },
+                span: k.span,
+                param: d.params[i].span,
+            });
+            return None;
+        }
+        Some(i as u32)
     }
 
     /// Types the default expressions of function parameters.

@@ -164,6 +164,9 @@ pub struct FuncInfo {
     pub params: Vec<ParamInfo>,
     /// Result type (declared or inferred).
     pub ret: Ty,
+    /// `order by k`: the index of parameter `k`, whose value orders the function's queued
+    /// recursive calls (smallest first).
+    pub order_by: Option<u32>,
     /// The declaration's span.
     pub span: Span,
 }

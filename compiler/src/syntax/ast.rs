@@ -161,7 +161,8 @@ pub struct VariantDecl {
     pub span: Span,
 }
 
-/// `func name(params) -> T = body` (the `-> T` is optional and inferred when absent).
+/// `func name(params) -> T order by k = body` (the `-> T` is optional and inferred when absent;
+/// `order by k` is optional).
 #[derive(Clone, Debug, PartialEq)]
 pub struct FuncDecl {
     /// Function name (overloads share a name).
@@ -170,6 +171,9 @@ pub struct FuncDecl {
     pub params: Vec<Param>,
     /// Declared result type.
     pub ret: Option<TypeExpr>,
+    /// `order by k`: the function's recursive calls are queued and run smallest `k` first
+    /// (best-first traversal); `k` names a parameter.
+    pub order_by: Option<Ident>,
     /// The body: `= stmt` (a block, a `match`, or any statement).
     pub body: Stmt,
     /// The whole declaration.

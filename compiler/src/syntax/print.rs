@@ -171,6 +171,10 @@ impl Printer {
                     self.w(" -> ");
                     self.ty(ret);
                 }
+                if let Some(k) = &d.order_by {
+                    self.w(" order by ");
+                    self.w(&k.name);
+                }
                 self.w(" = ");
                 self.stmt(&d.body, false);
                 if !ends_in_brace(&d.body) {

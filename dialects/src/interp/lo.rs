@@ -98,6 +98,16 @@ impl<'m> LoInterp<'m> {
             })?;
             return host(&args).map_err(|e| err(at, format!("`@{name}`: {e}")));
         }
+        if m.funcs[f].order_by().is_some() {
+            return Err(err(
+                at,
+                format!(
+                    "`@{}` is best-first (`order_by`): it runs once `recursion-to-stack` has \
+                     given it its queue",
+                    m.funcs[f].name
+                ),
+            ));
+        }
         if self.depth >= self.max_depth {
             return Err(err(
                 at,

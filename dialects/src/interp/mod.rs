@@ -240,6 +240,55 @@ pub struct Interp<'m> {
     /// Calls of each defined function since counting was turned on ([`Interp::count_calls`]):
     /// the work profile of a traversal (node visits, box and primitive tests).
     calls: Option<FxHashMap<FuncId, u64>>,
+    /// The functions whose bodies are running, innermost last.
+    frames: Vec<FuncId>,
+    /// The call queues of the best-first functions running, innermost last.
+    queues: Vec<CallQueue>,
+}
+
+/// The pending calls of one outer call of a best-first function (attribute `order_by`): each
+/// call the function makes of itself waits here; the smallest key runs next, and on equal keys
+/// the call queued first (docs/ir.md, "Best-first functions").
+struct CallQueue {
+    func: FuncId,
+    /// `(key, sequence number, arguments)`, in no particular order.
+    pending: Vec<(Val, u64, Vec<Val>)>,
+    next_seq: u64,
+}
+
+impl CallQueue {
+    /// Removes and returns the entry that runs next.
+    fn pop(&mut self) -> Option<Vec<Val>> {
+        let mut best: Option<usize> = None;
+        for (i, e) in self.pending.iter().enumerate() {
+            if best.is_none_or(|b| key_before(e, &self.pending[b])) {
+                best = Some(i);
+            }
+        }
+        best.map(|i| self.pending.swap_remove(i).2)
+    }
+}
+
+/// Whether queue entry `a` runs before `b`: a smaller key, or an equal key queued earlier. A NaN
+/// key counts as `+inf` (every NaN alike), so the order is total.
+fn key_before(a: &(Val, u64, Vec<Val>), b: &(Val, u64, Vec<Val>)) -> bool {
+    let f = |v: &Val| -> Option<f64> {
+        match v {
+            Val::F32(x) if x.is_nan() => Some(f64::INFINITY),
+            Val::F64(x) if x.is_nan() => Some(f64::INFINITY),
+            Val::F32(x) => Some(f64::from(*x)),
+            Val::F64(x) => Some(*x),
+            _ => None,
+        }
+    };
+    let ord = match (&a.0, &b.0) {
+        (Val::Int(x, _), Val::Int(y, _)) => x.cmp(y),
+        (x, y) => match (f(x), f(y)) {
+            (Some(x), Some(y)) => x.partial_cmp(&y).unwrap_or(std::cmp::Ordering::Equal),
+            _ => std::cmp::Ordering::Equal,
+        },
+    };
+    ord.then(a.1.cmp(&b.1)) == std::cmp::Ordering::Less
 }
 
 /// How a region was left.
@@ -266,6 +315,8 @@ impl<'m> Interp<'m> {
             max_steps: 10_000_000,
             max_depth: 64,
             calls: None,
+            frames: Vec::new(),
+            queues: Vec::new(),
         }
     }
 
@@ -351,6 +402,62 @@ impl<'m> Interp<'m> {
             })?;
             return host(&args).map_err(|e| err(at, format!("`@{name}`: {e}")));
         }
+        if let Some(k) = func.order_by() {
+            return self.call_ordered(f, k, args, at);
+        }
+        self.run_body(f, args, at)
+    }
+
+    /// A call of a best-first function: from its own body, the call is queued; otherwise the
+    /// call runs, then its queue until it is empty.
+    fn call_ordered(
+        &mut self,
+        f: FuncId,
+        k: usize,
+        args: Vec<Val>,
+        at: Option<OpId>,
+    ) -> Result<Vec<Val>, InterpError> {
+        if !self.m.funcs[f].results.is_empty() {
+            return Err(err(at, "a best-first function (`order_by`) returns values"));
+        }
+        let key = args
+            .get(k)
+            .cloned()
+            .ok_or_else(|| err(at, format!("`order_by = {k}`: no such parameter")))?;
+        if self.frames.last() == Some(&f) {
+            if let Some(q) = self.queues.last_mut().filter(|q| q.func == f) {
+                let seq = q.next_seq;
+                q.next_seq += 1;
+                q.pending.push((key, seq, args));
+                return Ok(Vec::new());
+            }
+        }
+        self.queues.push(CallQueue {
+            func: f,
+            pending: Vec::new(),
+            next_seq: 0,
+        });
+        let mut next = Some(args);
+        let mut out = Ok(Vec::new());
+        while let Some(args) = next {
+            if let Err(e) = self.run_body(f, args, at) {
+                out = Err(e);
+                break;
+            }
+            next = self.queues.last_mut().and_then(CallQueue::pop);
+        }
+        self.queues.pop();
+        out
+    }
+
+    /// Runs the body of the defined function `f`.
+    fn run_body(
+        &mut self,
+        f: FuncId,
+        args: Vec<Val>,
+        at: Option<OpId>,
+    ) -> Result<Vec<Val>, InterpError> {
+        let func = &self.m.funcs[f];
         if self.depth >= self.max_depth {
             return Err(err(
                 at,
@@ -368,8 +475,10 @@ impl<'m> Interp<'m> {
             ));
         }
         self.depth += 1;
+        self.frames.push(f);
         let mut env = Env::default();
         let flow = self.run_block(entry, args, &mut env);
+        self.frames.pop();
         self.depth -= 1;
         match flow? {
             Flow::Return(vals) => Ok(vals),

@@ -180,8 +180,9 @@ fn never_nan(
         let mut changed = false;
         for &op in ops {
             let o = &m.ops[op];
-            if let Some(&r) = o.results.first() {
-                if nn.contains(&r) && !result_never_nan(m, op, &nn, consts) {
+            // Every result: a call's second and later results are as unknown as its first.
+            for (i, &r) in o.results.iter().enumerate() {
+                if nn.contains(&r) && (i > 0 || !result_never_nan(m, op, &nn, consts)) {
                     nn.remove(&r);
                     changed = true;
                 }
@@ -353,6 +354,24 @@ mod tests {
         assert!(!f.canonicalize(v[4]) && !f.canonicalize(v[5]));
         assert!(f.canonicalize(v[6]));
         assert!(!f.never_nan(v[5]));
+    }
+
+    #[test]
+    fn every_result_of_a_call_may_be_nan() {
+        // A call's lanes are all unknown: `max(%4, %0)` needs the general form (a regression:
+        // only the first result used to be checked, so the second stayed "never NaN").
+        let (f, v) = facts(
+            r#"func @f(%0: f32) -> (f32, f32) {
+  %1, %2 = "lo.call"(%0) {callee = @g} : (f32) -> (f32, f32)
+  %3 = "lo.max"(%1, %0) : (f32, f32) -> f32
+  %4 = "lo.max"(%2, %0) : (f32, f32) -> f32
+  "lo.return"(%3, %4) : (f32, f32) -> ()
+}
+func @g(%0: f32) -> (f32, f32)
+"#,
+        );
+        assert!(!f.never_nan(v[1]) && !f.never_nan(v[2]));
+        assert_eq!(f.min_max_form(v[2], v[0]), MinMaxForm::General);
     }
 
     #[test]

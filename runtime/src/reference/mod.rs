@@ -1,9 +1,11 @@
 //! Layout-free reference results (architecture §6): what every unquantized layout must return
 //! bit for bit. [`prelude`] is the Rust image of `library/prelude.scion`'s arithmetic;
 //! [`closest_hit`] is closest-hit ray tracing (paper Figure 4) by brute force and by logical
-//! tree traversal; [`closest_hit_wide`] traverses a wide tree the same way.
+//! tree traversal; [`closest_hit_wide`] traverses a wide tree the same way; [`closest_point`]
+//! answers closest point queries by brute force, in the prelude's `f32` arithmetic and in `f64`.
 
 pub mod closest_hit;
+pub mod closest_point;
 pub mod closest_hit_wide;
 pub mod prelude;
 

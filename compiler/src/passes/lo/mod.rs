@@ -2,6 +2,7 @@
 //! explicit stack), [`inline`] (`lo-inline`), [`entries`] (`add-entries`, the exported C entry
 //! points) and [`host_kernels`] (GPU kernels as host functions, for running them on the CPU).
 
+pub mod best_first;
 pub mod deferred_calls;
 pub mod entries;
 pub mod host_kernels;

@@ -26,6 +26,9 @@
 //! after the call it returns the status (other results zero) when it is not 0. Such functions
 //! carry the attribute `status`.
 //!
+//! **Best-first functions** (attribute `order_by`, source `order by k`) queue their recursive
+//! calls in a bounded priority queue instead ([`super::best_first`]).
+//!
 //! **Calls elsewhere.** Recursive calls that are not in that tail shape (under conditions, one
 //! per child of an unrolled loop) are deferred ([`super::deferred_calls`]): each becomes a push
 //! and the visit's entries are reversed when it ends, which is the recursion exactly when
@@ -104,9 +107,13 @@ pub fn run(m: &mut Module, stack_size: u32) -> Result<bool, Diagnostic> {
             .filter(|&o| callee_of(m, o) == Some(name.as_str()))
             .collect();
         if calls.is_empty() {
+            // Without recursive calls nothing is queued: the function is an ordinary one.
+            m.funcs[f].attrs.remove(scion_ir::module::ORDER_BY);
             continue;
         }
-        if tail_shape(m, &calls).is_ok() {
+        if let Some(key) = m.funcs[f].order_by() {
+            super::best_first::rewrite(m, f, key, &calls, stack_size)?;
+        } else if tail_shape(m, &calls).is_ok() {
             rewrite(m, f, &calls, stack_size)?;
         } else {
             super::deferred_calls::rewrite(m, f, &calls, stack_size)?;

@@ -202,6 +202,10 @@ fn specialize_func(
     }
     let params: Vec<TypeId> = args.iter().map(|&a| m.values[a].ty).collect();
     m.funcs[f].params = params;
+    // `%B` is parameter 0 now: the ordering parameter moved up by one.
+    if let Some(k) = m.funcs[f].order_by() {
+        m.funcs[f].set_order_by(k + 1);
+    }
     for op in calls {
         m.ops[op].operands.insert(0, b);
     }

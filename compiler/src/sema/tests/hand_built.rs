@@ -154,6 +154,7 @@ fn func(name: &str, params: &[(&str, &str, bool)], ret: Option<&str>, body: Stmt
         name: ident(name),
         params,
         ret: ret.map(ty),
+        order_by: None,
         body,
         span: Span::default(),
     })

@@ -143,6 +143,13 @@ impl Parser<'_> {
         } else {
             None
         };
+        let order_by = if self.at_word("order") {
+            self.bump();
+            self.expect_kw(Keyword::By)?;
+            Some(self.ident("the parameter that orders the calls")?)
+        } else {
+            None
+        };
         self.expect(&TokenKind::Assign)?;
         let body = self.stmt()?;
         let span = start.to(body.span);
@@ -150,6 +157,7 @@ impl Parser<'_> {
             name,
             params,
             ret,
+            order_by,
             body,
             span,
         })

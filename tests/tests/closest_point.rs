@@ -1,0 +1,329 @@
+//! Closest point queries (`library/algorithms/closest_point.scion`) through the C ABI: the
+//! depth-first traversal (nearer child first) and the best-first one (`order by d`, a priority
+//! queue), compiled for every library layout by Cranelift and LLVM -O3 to their exported entries
+//! and called as a C host does. Every answer must be brute force's bit for bit
+//! (`scion_runtime::reference::closest_point_brute`, the same f32 arithmetic): the pruning is
+//! exact on every layout whose boxes contain their triangles, quantized ones included. The f32
+//! answers are then checked against float64 brute force: the distance within a bound relative to
+//! the scene's size, and the triangle the nearest one or one as near within that bound.
+
+// Calling the generated C entry points needs unsafe (each call carries its SAFETY note).
+#![allow(unsafe_code)]
+
+use scion_compiler::abi::EntryTarget;
+use scion_host::contract::LogicalTreeView;
+use scion_host::jit::{program_lo, Codegen, LoOptions};
+use scion_host::mem_interp::{layout_source, Program};
+use scion_runtime::bvh::schema::LogicalBytes;
+use scion_runtime::geom::{Triangle, Vec3};
+use scion_runtime::reference::closest_point::{
+    closest_point_brute, closest_point_f64, triangle_distance_f64, ClosestPoint,
+};
+use scion_runtime::scene::{gen, Scene};
+use scion_tests::cases::{real_scene, TreeKind};
+use std::path::PathBuf;
+
+type SizesFn = unsafe extern "C" fn(*const LogicalTreeView, *mut u64);
+type BuildFn = unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) -> i32;
+type RootIdxFn = unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) -> u32;
+type RootPtrFn = unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) -> *const u8;
+type BatchIdxFn =
+    unsafe extern "C" fn(*const *const u8, *const Vec3, *mut ClosestPoint, u64, u64, u32) -> i32;
+type BatchPtrFn = unsafe extern "C" fn(
+    *const *const u8,
+    *const Vec3,
+    *mut ClosestPoint,
+    u64,
+    u64,
+    *const u8,
+) -> i32;
+
+/// Every library layout: file stem and layout name.
+const LAYOUTS: &[(&str, &str)] = &[
+    ("pbrt", "LinearBVH"),
+    ("ptr", "PtrBVH"),
+    ("pbrt_align16", "PbrtAlign16"),
+    ("pbrt_soaos", "PbrtSoAoS"),
+    ("pbrt_q16", "PbrtQ16"),
+    ("sg_eq", "SgEq"),
+];
+
+fn program(stem: &str, layout: &str, entry: &str) -> Program {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../library/algorithms");
+    let alg = std::fs::read_to_string(dir.join("closest_point.scion")).expect("closest_point");
+    Program {
+        files: vec![
+            ("closest_point.scion".to_string(), alg),
+            (
+                format!("{stem}.scion"),
+                layout_source(stem).expect("a library layout").to_string(),
+            ),
+        ],
+        layout: layout.to_string(),
+        algorithm: entry.to_string(),
+    }
+}
+
+/// 64-byte aligned zeroed bytes (at least one block, so every buffer has a real address).
+fn aligned(size: usize) -> (Vec<u8>, usize) {
+    let bytes = vec![0u8; size + 128];
+    let off = bytes.as_ptr().align_offset(64);
+    (bytes, off)
+}
+
+/// Query points for `scene`: uniform in its box grown by a fifth on each side, far outside it,
+/// and on its features (corners, edge midpoints, and just off centroids), where several
+/// triangles are at the same distance.
+fn points(scene: &Scene, n: usize, seed: u64) -> Vec<Vec3> {
+    let b = scene.bounds();
+    let mut x = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
+    let mut unit = || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        (x >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let e = b.extent();
+    let lerp = |lo: f32, ext: f32, t: f64| (f64::from(lo) + f64::from(ext) * (1.4 * t - 0.2)) as f32;
+    let mut out = Vec::new();
+    for _ in 0..n {
+        out.push(Vec3::new(
+            lerp(b.low.x, e.x, unit()),
+            lerp(b.low.y, e.y, unit()),
+            lerp(b.low.z, e.z, unit()),
+        ));
+    }
+    let c = b.center();
+    let far = e.x.max(e.y).max(e.z).max(1.0) * 10.0;
+    out.push(c + Vec3::new(far, 0.0, 0.0));
+    out.push(c - Vec3::new(0.0, far, far));
+    let step = (scene.triangles.len() / (n / 4).max(1)).max(1);
+    for t in scene.triangles.iter().step_by(step) {
+        out.push(t.p0);
+        out.push((t.p1 + t.p2) * 0.5);
+        out.push(t.centroid() + Vec3::new(0.0, 0.0, 1e-3));
+    }
+    out.retain(|p| p.is_finite());
+    out
+}
+
+fn scenes() -> Vec<Scene> {
+    let mut scenes: Vec<Scene> = gen::hard_cases()
+        .into_iter()
+        .filter(|s| s.triangles.iter().all(Triangle::is_finite))
+        .collect();
+    if let Ok(s) = real_scene("teapot") {
+        scenes.push(s);
+    }
+    scenes
+}
+
+/// Runs `entry` compiled for `layout` by `codegen` on every scene; returns the answers per
+/// scene.
+fn run(stem: &str, layout: &str, entry: &str, codegen: Codegen, cases: &[Case]) -> Vec<Vec<ClosestPoint>> {
+    let lo = program_lo(
+        &program(stem, layout, entry),
+        &LoOptions {
+            // The hard cases include a chain a thousand nodes deep.
+            stack_size: Some(4096),
+            opt_level: 3,
+            dsl_opt: true,
+            target: EntryTarget::Host,
+        },
+    )
+    .unwrap_or_else(|e| panic!("{layout}: {e}"));
+    assert_eq!(lo.entry.query.size, 12, "the query is the point");
+    assert_eq!(lo.entry.result.size, 20, "the result is (distance, id, point)");
+    let code = codegen.backend().jit(&lo.module).unwrap();
+    let f = |name: String| {
+        code.function_ptr(&name)
+            .unwrap_or_else(|| panic!("no `@{name}`"))
+    };
+    let mut all = Vec::new();
+    for case in cases {
+        let bytes = LogicalBytes::fill(&case.tree, &lo.entry.logical).unwrap();
+        let view = LogicalTreeView::new(&case.tree, &bytes).unwrap();
+        let mut results: Vec<ClosestPoint> = case
+            .points
+            .iter()
+            .enumerate()
+            // Every seventh query searches within a radius only.
+            .map(|(k, _)| ClosestPoint::start(if k % 7 == 3 { case.radius } else { f32::INFINITY }))
+            .collect();
+        // SAFETY: the entries have the signatures of docs/c-abi.md for this layout's reference
+        // type (u32, or ptr for PtrBVH); the view describes the live tree; every buffer has the
+        // size `sizes` gave and is 64-byte aligned; `points` and `results` have `n` elements of
+        // the 12-byte query and the 20-byte result record the signature was checked to have.
+        unsafe {
+            let sizes = std::mem::transmute::<*const u8, SizesFn>(f(format!("scion_{layout}_sizes")));
+            let build = std::mem::transmute::<*const u8, BuildFn>(f(format!("scion_{layout}_build")));
+            let mut sz = vec![0u64; lo.entry.buffers.len()];
+            sizes(&view, sz.as_mut_ptr());
+            let mut bufs: Vec<(Vec<u8>, usize)> = sz.iter().map(|&s| aligned(s as usize)).collect();
+            let table: Vec<*mut u8> = bufs.iter_mut().map(|(b, o)| b.as_mut_ptr().add(*o)).collect();
+            assert_eq!(build(&view, table.as_ptr()), 0, "{layout}: build");
+            let ctable: Vec<*const u8> = table.iter().map(|&p| p as *const u8).collect();
+            let n = case.points.len() as u64;
+            let batch = f(format!("scion_{entry}_{layout}"));
+            let root = f(format!("scion_{layout}_root"));
+            let status = if layout == "PtrBVH" {
+                let r = std::mem::transmute::<*const u8, RootPtrFn>(root)(&view, table.as_ptr());
+                std::mem::transmute::<*const u8, BatchPtrFn>(batch)(
+                    ctable.as_ptr(),
+                    case.points.as_ptr(),
+                    results.as_mut_ptr(),
+                    0,
+                    n,
+                    r,
+                )
+            } else {
+                let r = std::mem::transmute::<*const u8, RootIdxFn>(root)(&view, table.as_ptr());
+                std::mem::transmute::<*const u8, BatchIdxFn>(batch)(
+                    ctable.as_ptr(),
+                    case.points.as_ptr(),
+                    results.as_mut_ptr(),
+                    0,
+                    n,
+                    r,
+                )
+            };
+            assert_eq!(status, 0, "{layout} {entry}: batch status");
+        }
+        all.push(results);
+    }
+    all
+}
+
+struct Case {
+    scene: Scene,
+    tree: scion_runtime::bvh::LogicalTree,
+    points: Vec<Vec3>,
+    radius: f32,
+    want: Vec<ClosestPoint>,
+}
+
+fn cases() -> Vec<Case> {
+    scenes()
+        .into_iter()
+        .enumerate()
+        .filter_map(|(i, scene)| {
+            let tree = TreeKind::Sah4.build(&scene);
+            if tree.is_empty() {
+                return None;
+            }
+            let points = points(&scene, 120, i as u64 + 1);
+            let e = scene.bounds().extent();
+            let radius = 0.05 * e.x.max(e.y).max(e.z);
+            let want = points
+                .iter()
+                .enumerate()
+                .map(|(k, &p)| {
+                    let r = if k % 7 == 3 { radius } else { f32::INFINITY };
+                    closest_point_brute(&scene.triangles, p, r)
+                })
+                .collect();
+            Some(Case {
+                scene,
+                tree,
+                points,
+                radius,
+                want,
+            })
+        })
+        .collect()
+}
+
+#[test]
+fn both_traversals_are_brute_force_on_every_layout() {
+    let cases = cases();
+    assert!(cases.len() >= 10, "{} scenes", cases.len());
+    let mut checked = 0;
+    for &(stem, layout) in LAYOUTS {
+        for entry in ["closest_point_best_first", "closest_point_query"] {
+            // The depth-first traversal on the two unquantized layouts of each reference type.
+            if entry == "closest_point_query" && !matches!(stem, "pbrt" | "ptr") {
+                continue;
+            }
+            for codegen in [Codegen::Cranelift, Codegen::Llvm(3)] {
+                let got = run(stem, layout, entry, codegen, &cases);
+                for (case, got) in cases.iter().zip(&got) {
+                    for (k, (g, w)) in got.iter().zip(&case.want).enumerate() {
+                        assert!(
+                            g.bit_eq(w),
+                            "{layout} {entry} {codegen:?} scene {} point {k} {:?}: got {g:?}, \
+                             brute force {w:?}",
+                            case.scene.name,
+                            case.points[k]
+                        );
+                    }
+                    checked += got.len();
+                }
+            }
+        }
+    }
+    assert!(checked > 10_000, "{checked} answers");
+}
+
+/// The f32 answers against float64 brute force: the distance within `1e-5` of the scene's size
+/// plus the point's distance from it, plus four f32 ulps of the largest coordinate (a scene far
+/// from the origin has coarse coordinates), and the triangle as near as the nearest within that.
+#[test]
+fn brute_force_is_within_the_f64_bound() {
+    let mut worst = 0.0f64;
+    let mut overflowed = 0;
+    let mut checked = 0;
+    for case in cases() {
+        let b = case.scene.bounds();
+        let size = f64::from(b.extent().x.max(b.extent().y).max(b.extent().z)).max(1e-30);
+        for (k, (p, w)) in case.points.iter().zip(&case.want).enumerate() {
+            if k % 7 == 3 {
+                continue;
+            }
+            let (d64, id64) = closest_point_f64(&case.scene.triangles, *p);
+            let magnitude = [b.low, b.high, *p]
+                .iter()
+                .flat_map(|v| v.to_array())
+                .fold(0.0f64, |a, x| a.max(f64::from(x.abs())));
+            let reach = size + d64;
+            let tol = 1e-5 * reach + 4.0 * f64::from(f32::EPSILON) * magnitude;
+            if magnitude.powi(4) * 64.0 > f64::from(f32::MAX) || size.powi(4) < 1e-36 {
+                // Coordinates beyond about 1e9, or a scene smaller than about 1e-9: the
+                // products of the f32 triangle test overflow or underflow (documented in the
+                // algorithm file).
+                overflowed += 1;
+                continue;
+            }
+
+            let err = (f64::from(w.distance) - d64).abs();
+            worst = worst.max(err / tol);
+            checked += 1;
+            assert!(
+                err <= tol,
+                "scene {} point {k} {p:?}: f32 {} vs f64 {d64} (id {} vs {id64})",
+                case.scene.name,
+                w.distance,
+                w.prim
+            );
+            if w.prim != id64 {
+                let t = case
+                    .scene
+                    .triangles
+                    .iter()
+                    .find(|t| t.id == w.prim)
+                    .expect("a scene triangle");
+                let dt = triangle_distance_f64(*p, t);
+                assert!(
+                    dt - d64 <= tol,
+                    "scene {} point {k}: triangle {} at {dt} but {id64} at {d64}",
+                    case.scene.name,
+                    w.prim
+                );
+            }
+        }
+    }
+    assert!(checked > 1500, "{checked} points checked");
+    eprintln!(
+        "{checked} points: largest f32 error {worst:.3} of the bound; {overflowed} points \
+         outside the f32 test's range"
+    );
+}
