@@ -288,6 +288,7 @@ pub fn library_seeds(library: &std::path::Path) -> std::io::Result<Vec<String>> 
     let mut seeds = vec![prelude.clone(), CONSTRUCTS_SEED.to_string()];
     for rel in [
         "algorithms/closest_hit.scion",
+        "algorithms/closest_point.scion",
         "layouts/pbrt.scion",
         "layouts/ptr.scion",
     ] {
@@ -304,14 +305,15 @@ pub fn library_seeds(library: &std::path::Path) -> std::io::Result<Vec<String>> 
 /// Layouts with constructs the library's layouts do not use yet: arrays of children
 /// (`BVH4[4]`, `BVH8[8]`, `build children` into an array, `ch[k].bounds`), `sort`, array
 /// literals, `foreach c, k in ch`, user functions in layout expressions, and a tree type the
-/// runtime cannot fill (DOP-14 bounds).
-pub const LAYOUT_SEEDS: [&str; 6] = [
+/// runtime cannot fill (DOP-14 bounds), and a best-first function (`order by`).
+pub const LAYOUT_SEEDS: [&str; 7] = [
     include_str!("../../lit-tests/Inputs/wide4_layout.scion"),
     include_str!("../../lit-tests/Inputs/bvh8_q8_ci_layout.scion"),
     include_str!("../../lit-tests/Inputs/bvh8_layout.scion"),
     include_str!("../../lit-tests/Inputs/user_functions_layout.scion"),
     include_str!("../../lit-tests/Inputs/dop14_split.scion"),
     include_str!("../../lit-tests/recursion-to-stack/deferred.scion"),
+    include_str!("../../lit-tests/recursion-to-stack/best-first.scion"),
 ];
 
 /// A seed with the traversal language's constructs that the library does not use yet
