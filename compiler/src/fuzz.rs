@@ -305,13 +305,17 @@ pub fn library_seeds(library: &std::path::Path) -> std::io::Result<Vec<String>> 
 /// Layouts with constructs the library's layouts do not use yet: arrays of children
 /// (`BVH4[4]`, `BVH8[8]`, `build children` into an array, `ch[k].bounds`), `sort`, array
 /// literals, `foreach c, k in ch`, user functions in layout expressions, and a tree type the
-/// runtime cannot fill (DOP-14 bounds), and a best-first function (`order by`).
+/// a DOP-14 tree (the split layout of Fig. 12 and its closest hit), and a best-first function
+/// (`order by`).
 pub const LAYOUT_SEEDS: [&str; 7] = [
     include_str!("../../lit-tests/Inputs/wide4_layout.scion"),
     include_str!("../../lit-tests/Inputs/bvh8_q8_ci_layout.scion"),
     include_str!("../../lit-tests/Inputs/bvh8_layout.scion"),
     include_str!("../../lit-tests/Inputs/user_functions_layout.scion"),
-    include_str!("../../lit-tests/Inputs/dop14_split.scion"),
+    concat!(
+        include_str!("../../library/algorithms/closest_hit_dop14.scion"),
+        include_str!("../../library/layouts/dop14_split.scion")
+    ),
     include_str!("../../lit-tests/recursion-to-stack/deferred.scion"),
     include_str!("../../lit-tests/recursion-to-stack/best-first.scion"),
 ];

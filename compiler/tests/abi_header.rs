@@ -10,16 +10,15 @@ fn repo() -> PathBuf {
 }
 
 fn header(layout: &str, file: &str, dir: &Path) -> PathBuf {
+    header_of("closest_hit", layout, file, dir)
+}
+
+/// The header of `--entry entry` (from `library/algorithms/{entry}.scion`) for `layout`.
+fn header_of(entry: &str, layout: &str, file: &str, dir: &Path) -> PathBuf {
     let r = repo();
     let out = Command::new(env!("CARGO_BIN_EXE_scionc"))
-        .args([
-            "--emit=header",
-            "--layout",
-            layout,
-            "--entry",
-            "closest_hit",
-        ])
-        .arg(r.join("library/algorithms/closest_hit.scion"))
+        .args(["--emit=header", "--layout", layout, "--entry", entry])
+        .arg(r.join(format!("library/algorithms/{entry}.scion")))
         .arg(r.join("library/layouts").join(file))
         .output()
         .expect("runs scionc");
@@ -28,7 +27,7 @@ fn header(layout: &str, file: &str, dir: &Path) -> PathBuf {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let path = dir.join(format!("closest_hit_{layout}.h"));
+    let path = dir.join(format!("{entry}_{layout}.h"));
     std::fs::write(&path, &out.stdout).unwrap();
     path
 }
@@ -46,6 +45,8 @@ fn generated_headers_compile_as_c_and_cpp() {
     std::fs::create_dir_all(&dir).unwrap();
     let pbrt = header("LinearBVH", "pbrt.scion", &dir);
     let ptr = header("PtrBVH", "ptr.scion", &dir);
+    // A logical node with a DOP-14 (56 bytes of bounds: the struct's size assertion checks it).
+    let dop = header_of("closest_hit_dop14", "DopSplit", "dop14_split.scion", &dir);
     // The runtime's hand-written header shares the contract's structs with the generated ones.
     let runtime_h = repo().join("runtime/capi/include/scion_runtime.h");
     let mut ran = 0;
@@ -62,15 +63,17 @@ fn generated_headers_compile_as_c_and_cpp() {
         std::fs::write(
             &src,
             format!(
-                "#include \"{}\"\n#include \"{}\"\n#include \"{}\"\n\
+                "#include \"{}\"\n#include \"{}\"\n#include \"{}\"\n#include \"{}\"\n\
                  int main(void) {{\n  \
                  scion_closest_hit_query q; scion_closest_hit_result r;\n  \
                  (void)q; (void)r;\n  \
                  return (int)sizeof(ScionTreeView) + SCION_LinearBVH_BUFFER_COUNT \
-                 + SCION_PtrBVH_BUFFER_ALIGN + (int)sizeof(ScionRay) + SCION_RT_OK;\n}}\n",
+                 + SCION_PtrBVH_BUFFER_ALIGN + (int)sizeof(ScionRay) + SCION_RT_OK \
+                 + (int)sizeof(ScionLogical_DopBVH);\n}}\n",
                 pbrt.display(),
                 runtime_h.display(),
-                ptr.display()
+                ptr.display(),
+                dop.display()
             ),
         )
         .unwrap();

@@ -42,10 +42,20 @@ fn decl(m: &Module, name: &str, ty: scion_ir::TypeId, slot: &Slot) -> (String, u
                     size,
                 )
             }
-            _ => (
-                format!("float {name}[6]; /* box: low x, y, z, high x, y, z */"),
-                24,
-            ),
+            // Bounds: an AABB, or a DOP-14 (layout::logical decides which the runtime fills).
+            _ => match scion_ir::data_layout::size_align(m, ty) {
+                Some((56, _)) => (
+                    format!(
+                        "float {name}[14]; /* DOP-14: min x, y, z, max x, y, z, min of x+y+z, \
+                         x+y-z, x-y+z, x-y-z, max of the same */"
+                    ),
+                    56,
+                ),
+                _ => (
+                    format!("float {name}[6]; /* box: low x, y, z, high x, y, z */"),
+                    24,
+                ),
+            },
         },
     }
 }

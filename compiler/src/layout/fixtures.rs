@@ -124,7 +124,6 @@ layout SharedSlab(I: u32, lo: f32x3, hi: f32x3) {
 /// Catalog §8.6: DOP-14 split into a hot and a cold array (32 + 32 B). The catalog's `BVH`
 /// over `DOP14` is renamed `DopBVH` so that it can sit beside the prelude's `BVH`.
 pub const DOP_SPLIT: &str = r#"
-type DOP14(lo1: f32x3, hi1: f32x3, lo2: f32x4, hi2: f32x4);
 type DopBVH(bounds: DOP14) = Interior(left: DopBVH, right: DopBVH) | Leaf(nprims: u16, data: Triangle[nprims]);
 layout DopSplit(I: u32) {
   P: u32; N: u32; primitives: Triangle[P];

@@ -124,6 +124,26 @@ fn is_aabb(m: &Module, ty: TypeId) -> bool {
     def.is_record() && def.shared.len() == 2 && def.shared.iter().all(|f| f3(f.ty))
 }
 
+/// A DOP-14 record: four vectors of `f32`, 3, 3, 4 and 4 lanes (axis minima and maxima, then
+/// the minima and maxima along x+y+z, x+y−z, x−y+z, x−y−z; `scion_runtime::bvh::dop14`).
+fn is_dop14(m: &Module, ty: TypeId) -> bool {
+    let Type::Adt(name) = m.types.get(ty) else {
+        return false;
+    };
+    let Some(def) = m.adt(name) else { return false };
+    let f = |t: TypeId, n: u32| {
+        matches!(m.types.get(t), Type::Vector { elem, lanes } if *lanes == n
+            && matches!(m.types.get(*elem), Type::Float(f) if f.bits() == 32))
+    };
+    def.is_record()
+        && def.shared.len() == 4
+        && def
+            .shared
+            .iter()
+            .zip([3, 3, 4, 4])
+            .all(|(x, n)| f(x.ty, n))
+}
+
 fn is_triangle(m: &Module, ty: TypeId) -> bool {
     matches!(m.types.get(ty), Type::Adt(n) if n == "Triangle")
         && size_align(m, ty) == Some((PRIM_STRIDE, 4))
@@ -187,24 +207,29 @@ impl LogicalAbi {
         let mut shared = Vec::new();
         let mut fields = Vec::new();
         for f in &def.shared {
-            if !is_aabb(m, f.ty) {
+            let (role, size) = if is_aabb(m, f.ty) {
+                (Role::Bounds, 24)
+            } else if is_dop14(m, f.ty) {
+                (Role::Dop14Bounds, 56)
+            } else {
                 return bad(
                     &f.name,
                     format!(
                         "a shared field of type {} (the runtime's builders give each node an \
-                         `AABB` box; other bounds need a builder that computes them)",
+                         `AABB` box or a DOP-14 of four `f32` vectors of 3, 3, 4 and 4 lanes; \
+                         other bounds need a builder that computes them)",
                         source_type(m, f.ty)
                     ),
                 );
-            }
+            };
             at = align_up(at, 4);
             shared.push(LogicalField {
                 name: f.name.clone(),
                 ty: f.ty,
                 slot: Slot::Value { offset: at },
             });
-            fields.push(SchemaField::new(Role::Bounds, SHARED, at as u32, 0, 1, 0));
-            at += 24;
+            fields.push(SchemaField::new(role, SHARED, at as u32, 0, 1, 0));
+            at += size;
         }
         // The variants' fields start together, at the largest alignment any of them needs
         // (so that C's union of the variants' structs puts them where they are here).
@@ -456,10 +481,22 @@ layout W8(R: u32) {
     }
 
     #[test]
+    fn dop14_bounds_are_a_role_of_their_own() {
+        let abi = derive(&[crate::layout::fixtures::DOP_SPLIT]).unwrap();
+        assert_eq!(
+            abi.schema.fields[0],
+            SchemaField::new(Role::Dop14Bounds, SHARED, 4, 0, 1, 0)
+        );
+        // The variants' fields start after the 56 bytes of the DOP.
+        assert!(abi.variant_base >= 60, "{}", abi.variant_base);
+    }
+
+    #[test]
     fn bounds_the_runtime_cannot_compute_are_named() {
-        let e = derive(&[crate::layout::fixtures::DOP_SPLIT]).unwrap_err();
+        let sphere = include_str!("../../../lit-tests/Inputs/sphere_bvh.scion");
+        let e = derive(&[sphere]).unwrap_err();
         assert!(
-            e.contains("`DopBVH`'s field `bounds`") && e.contains("DOP14"),
+            e.contains("`SphereBVH`'s field `bounds`") && e.contains("Sphere"),
             "{e}"
         );
     }

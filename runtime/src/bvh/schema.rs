@@ -18,6 +18,7 @@
 //! the node count bounds what a layout places.
 //! Primitives are the tree's triangles, 40 bytes each.
 
+use super::dop14::{node_dops, Dop14};
 use super::logical::{LogicalTree, NO_NODE};
 use crate::geom::Aabb;
 
@@ -37,6 +38,9 @@ pub enum Role {
     PrimCount = 4,
     /// A leaf's first primitive in the primitive array (`u32`).
     PrimOffset = 5,
+    /// The node's own DOP-14 ([`super::dop14::Dop14`], 56 bytes: `lo1`, `hi1` `f32x3`, `lo2`,
+    /// `hi2` `f32x4`).
+    Dop14Bounds = 6,
 }
 
 impl Role {
@@ -48,6 +52,7 @@ impl Role {
             3 => Role::Children,
             4 => Role::PrimCount,
             5 => Role::PrimOffset,
+            6 => Role::Dop14Bounds,
             _ => return None,
         })
     }
@@ -60,6 +65,7 @@ impl Role {
             Role::Children => "SCION_ROLE_CHILDREN",
             Role::PrimCount => "SCION_ROLE_PRIM_COUNT",
             Role::PrimOffset => "SCION_ROLE_PRIM_OFFSET",
+            Role::Dop14Bounds => "SCION_ROLE_DOP14_BOUNDS",
         }
     }
 }
@@ -301,6 +307,7 @@ fn field_size(role: Role, f: &SchemaField) -> Option<u32> {
         Role::PrimCount if matches!(f.width, 1 | 2 | 4 | 8) => f.width,
         Role::PrimCount => return None,
         Role::PrimOffset => 4,
+        Role::Dop14Bounds => 56,
     })
 }
 
@@ -324,6 +331,8 @@ pub struct LogicalBytes {
 struct Node {
     kind: u32,
     bounds: Aabb,
+    /// The node's DOP-14 (only computed when the schema has a DOP field).
+    dop: Dop14,
     children: Vec<(u32, Aabb)>,
     prims: (u32, u32),
 }
@@ -338,12 +347,21 @@ impl LogicalBytes {
     /// [`Schema::validate`]) or a tree too large for `u32` indices.
     pub fn fill(tree: &LogicalTree, schema: &Schema) -> Result<LogicalBytes, String> {
         schema.validate()?;
+        let wants_dop = schema
+            .fields
+            .iter()
+            .any(|f| f.role == Role::Dop14Bounds as u32);
+        let dops = if wants_dop {
+            node_dops(tree)
+        } else {
+            vec![Dop14::EMPTY; tree.nodes.len()]
+        };
         let (nodes, root) = if tree.is_empty() {
             (Vec::new(), NO_NODE)
         } else if schema.arity == 2 {
-            (binary_nodes(tree, schema), tree.root)
+            (binary_nodes(tree, schema, &dops), tree.root)
         } else {
-            wide_nodes(tree, schema)
+            wide_nodes(tree, schema, &dops)
         };
         if nodes.len() >= NO_NODE as usize {
             return Err(format!(
@@ -368,14 +386,16 @@ impl LogicalBytes {
     }
 }
 
-fn binary_nodes(tree: &LogicalTree, schema: &Schema) -> Vec<Node> {
+fn binary_nodes(tree: &LogicalTree, schema: &Schema, dops: &[Dop14]) -> Vec<Node> {
     tree.nodes
         .iter()
-        .map(|n| {
+        .zip(dops)
+        .map(|(n, &dop)| {
             if n.is_leaf() {
                 Node {
                     kind: schema.leaf,
                     bounds: n.aabb(),
+                    dop,
                     children: Vec::new(),
                     prims: (n.prim_offset, n.prim_count),
                 }
@@ -383,6 +403,7 @@ fn binary_nodes(tree: &LogicalTree, schema: &Schema) -> Vec<Node> {
                 Node {
                     kind: schema.interior,
                     bounds: n.aabb(),
+                    dop,
                     children: n
                         .child
                         .iter()
@@ -397,17 +418,18 @@ fn binary_nodes(tree: &LogicalTree, schema: &Schema) -> Vec<Node> {
 
 /// Collapsed to `schema.arity` slots: interior nodes in pre-order (the root first), then the
 /// leaves, then one empty leaf per empty slot.
-fn wide_nodes(tree: &LogicalTree, schema: &Schema) -> (Vec<Node>, u32) {
+fn wide_nodes(tree: &LogicalTree, schema: &Schema, dops: &[Dop14]) -> (Vec<Node>, u32) {
     let width = schema.arity as usize;
     let root = &tree.nodes[tree.root as usize];
-    let leaf = |n: &super::LogicalNode| Node {
+    let leaf = |n: &super::LogicalNode, i: u32| Node {
         kind: schema.leaf,
         bounds: n.aabb(),
+        dop: dops[i as usize],
         children: Vec::new(),
         prims: (n.prim_offset, n.prim_count),
     };
     if root.is_leaf() {
-        return (vec![leaf(root)], 0);
+        return (vec![leaf(root, tree.root)], 0);
     }
     // Pass 1: interior nodes in pre-order with their binary children.
     let mut interior: Vec<(u32, Vec<u32>)> = Vec::new();
@@ -436,13 +458,14 @@ fn wide_nodes(tree: &LogicalTree, schema: &Schema) -> (Vec<Node>, u32) {
             if n.is_leaf() {
                 index[c as usize] = next;
                 next += 1;
-                leaves.push(leaf(n));
+                leaves.push(leaf(n, c));
             }
             children.push((index[c as usize], n.aabb()));
         }
         nodes.push(Node {
             kind: schema.interior,
             bounds: tree.nodes[*bin as usize].aabb(),
+            dop: dops[*bin as usize],
             children,
             prims: (0, 0),
         });
@@ -460,6 +483,7 @@ fn wide_nodes(tree: &LogicalTree, schema: &Schema) -> (Vec<Node>, u32) {
     nodes.extend((0..empties).map(|_| Node {
         kind: schema.leaf,
         bounds: Aabb::EMPTY,
+        dop: Dop14::EMPTY,
         children: Vec::new(),
         prims: (0, 0),
     }));
@@ -505,6 +529,11 @@ fn encode(bytes: &mut [u8], n: &Node, schema: &Schema) {
                 put(bytes, at, &c[..f.width as usize]);
             }
             Some(Role::PrimOffset) => put(bytes, at, &n.prims.0.to_le_bytes()),
+            Some(Role::Dop14Bounds) => {
+                for (k, x) in n.dop.to_array().iter().enumerate() {
+                    put(bytes, at + 4 * k, &x.to_le_bytes());
+                }
+            }
             None => {}
         }
     }
@@ -534,6 +563,32 @@ mod tests {
 
     fn u32_at(b: &[u8], at: usize) -> u32 {
         u32::from_le_bytes(b[at..at + 4].try_into().unwrap())
+    }
+
+    #[test]
+    fn a_dop14_field_gets_each_nodes_dop() {
+        let t = tree(200);
+        let mut s = binary_bvh();
+        // The DopBVH of library/algorithms/closest_hit_dop14.scion: the DOP at 4, 56 bytes,
+        // then the variants at 60.
+        s.node_size = 68;
+        s.fields = vec![
+            SchemaField::new(Role::Dop14Bounds, SHARED, 4, 0, 1, 0),
+            SchemaField::new(Role::Children, 0, 60, 0, 1, 0),
+            SchemaField::new(Role::Children, 0, 64, 1, 1, 0),
+            SchemaField::new(Role::PrimOffset, 1, 64, 0, 1, 0),
+            SchemaField::new(Role::PrimCount, 1, 60, 0, 1, 2),
+        ];
+        let lb = LogicalBytes::fill(&t, &s).unwrap();
+        let dops = crate::bvh::dop14::node_dops(&t);
+        for (i, d) in dops.iter().enumerate() {
+            let b = &lb.nodes()[i * 68..(i + 1) * 68];
+            let got: Vec<f32> = (0..14)
+                .map(|k| f32::from_bits(u32_at(b, 4 + 4 * k)))
+                .collect();
+            assert_eq!(got, d.to_array());
+            assert_eq!(&got[..6], &t.nodes[i].bounds);
+        }
     }
 
     #[test]

@@ -126,14 +126,28 @@ pub fn closest_hit_tree(tree: &LogicalTree, ray: &Ray) -> Hit {
 
 /// [`closest_hit_tree`] that also counts its work into `stats`.
 pub fn closest_hit_tree_stats(tree: &LogicalTree, ray: &Ray, stats: &mut TraversalStats) -> Hit {
+    let bounds = |i: u32| tree.nodes[i as usize].aabb();
+    closest_hit_with(tree, ray, stats, |r, i, tmax| {
+        distmin_of(r, &bounds(i), tmax)
+    })
+}
+
+/// The traversal of [`closest_hit_tree_stats`] with another bounding volume test:
+/// `distmin(r, node, tmax)` is node `node`'s entry distance, or `+inf` when the ray misses it
+/// before `tmax` (never NaN).
+pub fn closest_hit_with(
+    tree: &LogicalTree,
+    ray: &Ray,
+    stats: &mut TraversalStats,
+    distmin: impl Fn(&super::prelude::SlabRay, u32, f32) -> f32,
+) -> Hit {
     let mut best = (ray.tmax, u32::MAX);
     if tree.is_empty() {
         return Hit::from_best(best.0, best.1);
     }
     let r = slab_ray(ray);
-    let bounds = |i: u32| tree.nodes[i as usize].aabb();
     stats.boxes_tested += 1;
-    let d = distmin_of(&r, &bounds(tree.root), best.0);
+    let d = distmin(&r, tree.root, best.0);
     if d == f32::INFINITY {
         // (distmin is a number or +inf, never NaN: it returns `enter` only when `enter <= exit`.)
         return Hit::from_best(best.0, best.1);
@@ -156,8 +170,8 @@ pub fn closest_hit_tree_stats(tree: &LogicalTree, ray: &Ray, stats: &mut Travers
             } else {
                 let [left, right] = node.child;
                 stats.boxes_tested += 2;
-                let dl = distmin_of(&r, &bounds(left), best.0);
-                let dr = distmin_of(&r, &bounds(right), best.0);
+                let dl = distmin(&r, left, best.0);
+                let dr = distmin(&r, right, best.0);
                 next = match (dl < f32::INFINITY, dr < f32::INFINITY) {
                     (true, true) => {
                         // The nearer first; the left one on equal distances.
@@ -184,6 +198,20 @@ pub fn closest_hit_tree_stats(tree: &LogicalTree, ray: &Ray, stats: &mut Travers
         }
     }
     Hit::from_best(best.0, best.1)
+}
+
+/// Closest hit over `tree` bounded by the DOP-14s `dops` (one per node,
+/// [`crate::bvh::dop14::node_dops`]): [`closest_hit_with`] and the prelude's DOP test
+/// (`library/algorithms/closest_hit_dop14.scion`).
+pub fn closest_hit_dop14_stats(
+    tree: &LogicalTree,
+    dops: &[crate::bvh::dop14::Dop14],
+    ray: &Ray,
+    stats: &mut TraversalStats,
+) -> Hit {
+    closest_hit_with(tree, ray, stats, |r, i, tmax| {
+        super::prelude::distmin_dop14(ray, r, &dops[i as usize], tmax)
+    })
 }
 
 /// Why the traversal of `tree` could not reach primitive `prim` at distance `t`: the first

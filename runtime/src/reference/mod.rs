@@ -10,7 +10,7 @@ pub mod closest_hit_wide;
 pub mod prelude;
 
 pub use closest_hit::{
-    closest_hit_brute, closest_hit_tree, closest_hit_tree_stats, closest_hits_brute,
+    closest_hit_brute, closest_hit_dop14_stats, closest_hit_tree, closest_hit_with, closest_hit_tree_stats, closest_hits_brute,
     closest_hits_tree, closest_hits_tree_stats, why_pruned, TraversalStats,
 };
 pub use closest_hit_wide::{closest_hit_wide, closest_hit_wide_stats, closest_hits_wide_stats};
