@@ -209,13 +209,15 @@ fn specialize_func(
     for op in calls {
         m.ops[op].operands.insert(0, b);
     }
-    for op in reads {
-        read_op(m, spec, op, b)?;
-    }
-    // Outer matches first (pre-order), so an inner match's operand is already aliased.
+    // Outer matches first (pre-order), so an inner match's operand is already aliased; then
+    // the field reads, whose operands (children bound by the matches) are references by then,
+    // so the components of a tuple reference can be taken apart.
     for op in matches {
         destruct(m, spec, op, b, tree_ty, ref_ty)?;
         retype_children(m, f, tree_ty);
+    }
+    for op in reads {
+        read_op(m, spec, op, b)?;
     }
     // Whatever still carries a tree value is a use this pass does not know.
     for op in func_ops(m, f, Order::Pre) {

@@ -246,7 +246,6 @@ fn named_members_numbers_like_member_ids() {
 #[test]
 fn member_types_choose_between_look_alike_types() {
     let t = ok("
-type DOP14(lo1: f32x3, hi1: f32x3, lo2: f32x4, hi2: f32x4);
 type DopBVH(bounds: DOP14) = Interior(left: DopBVH, right: DopBVH) | Leaf(nprims: u16, data: Triangle[nprims]);
 layout DopSplit(I: u32) {
   P: u32; N: u32; primitives: Triangle[P];

@@ -1,6 +1,7 @@
 //! The library's programs type-check with zero diagnostics: the prelude, then every other
-//! `library/*.scion` and `library/*/*.scion` file (each alone after the prelude, and all of them
-//! together), and the `lit-tests` inputs that are meant to compile.
+//! `library/*.scion` and `library/*/*.scion` file (each after the prelude, a layout also after
+//! the algorithm files, which declare the tree types beyond the prelude's that layouts realize;
+//! and all of them together), and the `lit-tests` inputs that are meant to compile.
 
 use super::{check_files, PRELUDE};
 use std::path::{Path, PathBuf};
@@ -39,8 +40,18 @@ fn library_files_type_check() {
         })
         .collect();
     let mut all: Vec<(&str, &str)> = vec![("prelude.scion", PRELUDE)];
+    let algorithms: Vec<(&str, &str)> = texts
+        .iter()
+        .filter(|(n, _)| n.contains("/algorithms/"))
+        .map(|(n, t)| (n.as_str(), t.as_str()))
+        .collect();
     for (name, text) in &texts {
-        let (_, typed, diags, sm) = check_files(&[("prelude.scion", PRELUDE), (name, text)]);
+        let mut inputs = vec![("prelude.scion", PRELUDE)];
+        if name.contains("/layouts/") {
+            inputs.extend(algorithms.iter().copied());
+        }
+        inputs.push((name, text));
+        let (_, typed, diags, sm) = check_files(&inputs);
         assert!(diags.is_empty(), "{name}:\n{}", diags.render(&sm));
         assert!(
             typed
