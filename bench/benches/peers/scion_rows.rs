@@ -26,13 +26,19 @@ fn library_layout(layout: &str) -> Result<(&'static str, &'static str), String> 
         .ok_or_else(|| format!("unknown library layout `{layout}`"))
 }
 
-/// What `--layouts` names: a library layout (`pbrt`, `pbrt-q16`, ...), or a closest hit in a
-/// file as `PATH.scion:LAYOUT:ENTRY` (`lit-tests/Inputs/bvh8_layout.scion:Bvh8:closest_hit8`).
+/// What `--layouts` names: a library layout (`pbrt`, `pbrt-q16`, ...), or a closest hit in
+/// files as `PATH.scion[+PATH.scion...]:LAYOUT:ENTRY`
+/// (`lit-tests/Inputs/bvh8_layout.scion:Bvh8:closest_hit8`,
+/// `library/algorithms/closest_hit_dop14.scion+library/layouts/dop14_split.scion:DopSplit:closest_hit_dop14`).
 fn program_of(layout: &str) -> Result<Program, String> {
-    if let [path, name, entry] = layout.split(':').collect::<Vec<_>>()[..] {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{path}: {e}"))?;
+    if let [paths, name, entry] = layout.split(':').collect::<Vec<_>>()[..] {
+        let mut files = Vec::new();
+        for path in paths.split('+') {
+            let text = std::fs::read_to_string(path).map_err(|e| format!("{path}: {e}"))?;
+            files.push((path.to_string(), text));
+        }
         return Ok(Program {
-            files: vec![(path.to_string(), text)],
+            files,
             layout: name.to_string(),
             algorithm: entry.to_string(),
         });

@@ -41,6 +41,13 @@ pub fn registry() -> PassRegistry {
         create: || Box::new(mem::inline::MemInline),
     });
     r.register(PassInfo {
+        name: "mem-sink",
+        summary: "move pure ops and layout loads into the one conditional region that uses them",
+        input: Level::Any,
+        output: Level::Any,
+        create: || Box::new(mem::sink::MemSink),
+    });
+    r.register(PassInfo {
         name: "mem-cse",
         summary: "reuse dominating equivalent pure tree/mem ops: layout and cell loads, pure calls",
         input: Level::Any,

@@ -18,7 +18,9 @@
 //! leaves payloads open); `neg` and `bitcast` keep bits exactly. `f16` is not folded. The
 //! replaced ops' results are aliased to the new constants; `dce` then removes the dead operands.
 //! A `tree.if` on a constant condition is replaced by the ops of the region it would run, when
-//! that region ends with `tree.yield`.
+//! that region ends with `tree.yield`. A field of a record just built (`tree.field` of a
+//! `tree.ctor`) and an element of a tuple just built (`tree.extract` of a `tree.tuple`) are the
+//! operand that built them.
 
 use crate::attr::Attr;
 use crate::builder::{Builder, InsertPoint, OpSpec};
@@ -140,6 +142,23 @@ pub fn fold_op(m: &Module, op: OpId, consts: &FxHashMap<ValueId, Attr>) -> Optio
         return None;
     }
     let result_ty = m.values[o.results[0]].ty;
+    // A component of a value just built: `tree.field {index = k}` of a `tree.ctor` (shared
+    // fields come first in a variant's operands too) and `tree.extract {index = k}` of a
+    // `tree.tuple` are its operand k.
+    if matches!(kind, Op::Field | Op::Extract) {
+        let k = usize::try_from(o.attr("index")?.as_int()?).ok()?;
+        let src = rewrite::resolve_value(m, *o.operands.first()?);
+        let crate::module::ValueDef::Result(def, 0) = m.values[src].def else {
+            return None;
+        };
+        let d = &m.ops[def];
+        let builds = match kind {
+            Op::Field => d.kind.is_tree(Op::Ctor),
+            _ => d.kind.is_tree(Op::Tuple),
+        };
+        let v = *d.operands.get(k).filter(|_| builds)?;
+        return (m.values[v].ty == result_ty).then_some(Folded::Alias(v));
+    }
     if kind == Op::Select {
         let c = consts.get(o.operands.first()?)?;
         return match c {

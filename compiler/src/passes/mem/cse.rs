@@ -379,7 +379,7 @@ fn writes_directly(kind: OpKind) -> bool {
 
 /// The functions that may write a layout: those holding `mem.store` or a build op, and those
 /// calling one of them (or a function without a body), to a fixed point.
-fn layout_writers(m: &Module) -> FxHashSet<FuncId> {
+pub(super) fn layout_writers(m: &Module) -> FxHashSet<FuncId> {
     let mut calls: FxHashMap<FuncId, Vec<String>> = FxHashMap::default();
     let mut writers = FxHashSet::default();
     for &f in &m.func_order {
