@@ -31,6 +31,9 @@ struct Tys {
     u64: TypeId,
     i32: TypeId,
     root: TypeId,
+    /// `@L.root_ref` and its results (the scalar leaves of the whole reference), for a
+    /// reference of several components.
+    root_ref: Option<(String, Vec<TypeId>)>,
 }
 
 /// What the lowered algorithm looks like.
@@ -94,7 +97,15 @@ pub fn add(m: &mut Module, sig: &EntrySig, target: EntryTarget) -> Result<(), Di
             .with_note("entry points pass the root reference as one scalar"))
         }
     };
+    // A reference of several components: the entries take its placed first component and
+    // `@L.root_ref` gives the root's whole reference (its other components from their defaults).
+    let root_ref = {
+        let name = format!("{l}.root_ref");
+        m.func_by_name(&name)
+            .map(|f| (name, m.funcs[f].results.clone()))
+    };
     let t = Tys {
+        root_ref,
         ptr: m.ty(Type::Ptr),
         u32: m.types.u32(),
         u64: m.types.int(IntTy::U64),
@@ -124,7 +135,10 @@ fn check_algorithm(m: &Module, sig: &EntrySig, t: &Tys) -> Result<Algo, Diagnost
     let mut want = vec![t.ptr];
     for r in &sig.roles {
         match r {
-            Role::Tree => want.push(t.root),
+            Role::Tree => match &t.root_ref {
+                Some((_, leaves)) => want.extend(leaves.iter().copied()),
+                None => want.push(t.root),
+            },
             Role::Result(_) => want.push(t.ptr),
             Role::Query(fields) => {
                 for fd in &sig.query.fields[fields.clone()] {
@@ -264,7 +278,7 @@ fn run_query(
     queries: ValueId,
     results: ValueId,
     i: ValueId,
-    root: ValueId,
+    root: &[ValueId],
 ) -> Option<ValueId> {
     let q = if sig.query.size > 0 {
         let size = b.lo_int(t.u64, sig.query.size as i128);
@@ -283,7 +297,7 @@ fn run_query(
     let mut args = vec![bufs];
     for role in &sig.roles {
         match role {
-            Role::Tree => args.push(root),
+            Role::Tree => args.extend(root.iter().copied()),
             Role::Result(off) => args.push(if *off == 0 {
                 r
             } else {
@@ -304,6 +318,18 @@ fn run_query(
     algo.status.then(|| b.result(call, 0))
 }
 
+/// The traversal's root reference from the entry's `root`: itself, or for a reference of
+/// several components the leaves `@L.root_ref(%B, %root)` gives.
+fn root_leaves(b: &mut Builder<'_>, t: &Tys, bufs: ValueId, root: ValueId) -> Vec<ValueId> {
+    match &t.root_ref {
+        None => vec![root],
+        Some((name, leaves)) => {
+            let call = b.lo_call(name, &[bufs, root], leaves);
+            (0..leaves.len()).map(|k| b.result(call, k)).collect()
+        }
+    }
+}
+
 /// `@scion_A_L(%B, %queries, %results, %begin, %end, %root) -> (i32)`.
 fn batch(m: &mut Module, sig: &EntrySig, t: &Tys, algo: &Algo) {
     let params = [t.ptr, t.ptr, t.ptr, t.u64, t.u64, t.root];
@@ -317,12 +343,13 @@ fn batch(m: &mut Module, sig: &EntrySig, t: &Tys, algo: &Algo) {
     let done = m.add_block(body, &[]);
     let i = m.blocks[head].args[0];
     let mut b = Builder::at_end(m, entry);
+    let root = root_leaves(&mut b, t, a[0], a[5]);
     b.lo_br(head, &[a[3]]);
     b.set_insertion_point_to_end(head);
     let more = b.lo_cmp(CmpPred::Lt, i, a[4]);
     b.lo_cond_br(more, (run, &[]), (done, &[]));
     b.set_insertion_point_to_end(run);
-    let status = run_query(&mut b, sig, t, algo, a[0], a[1], a[2], i, a[5]);
+    let status = run_query(&mut b, sig, t, algo, a[0], a[1], a[2], i, &root);
     match status {
         Some(s) => {
             let fail = b.m.add_block(body, &[]);
@@ -360,7 +387,8 @@ fn batch_kernel(m: &mut Module, sig: &EntrySig, t: &Tys, algo: &Algo) {
     let inside = b.lo_cmp(CmpPred::Lt, i, a[3]);
     b.lo_cond_br(inside, (run, &[]), (exit, &[]));
     b.set_insertion_point_to_end(run);
-    let status = run_query(&mut b, sig, t, algo, a[0], a[1], a[2], i, a[4]);
+    let root = root_leaves(&mut b, t, a[0], a[4]);
+    let status = run_query(&mut b, sig, t, algo, a[0], a[1], a[2], i, &root);
     match status {
         Some(s) => {
             let fail = b.m.add_block(body, &[]);

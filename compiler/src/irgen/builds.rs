@@ -51,7 +51,7 @@ pub(super) fn generate_builds(
         };
         let linfo = &typed.layouts[layout.0 as usize];
         let lname = linfo.name.clone();
-        let this_ty = tys.lower(m, typed, &linfo.ref_ty)?;
+        let this_ty = tys.lower(m, typed, &linfo.build_ref_ty)?;
         let order = match decl.order {
             BuildOrder::Pre => "pre",
             BuildOrder::Post => "post",

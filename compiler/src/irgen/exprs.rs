@@ -132,6 +132,21 @@ impl FuncCx<'_> {
                 let v = self.expr(b, base)?;
                 let t = self.expr_ty(b, e)?;
                 let base_ty = b.value_type(v);
+                // In a build, a logical child is its node index: its field is read from the
+                // logical tree (`left.bounds`).
+                if let Some(bc) = &self.build {
+                    let adt = self.typed.layouts[bc.layout].adt;
+                    let child = matches!(self.typed.expr_ty(base.id), crate::sema::Ty::Adt(a) if Some(*a) == adt);
+                    if child && b.m.types.as_int(base_ty).is_some() {
+                        let op = b.insert(
+                            OpSpec::new(Op::ChildField)
+                                .operands(&[v])
+                                .attr("field", Attr::str(name.name.clone()))
+                                .results(&[t]),
+                        );
+                        return Ok(b.result(op, 0));
+                    }
+                }
                 if let Type::Vector { .. } = b.m.types.get(base_ty) {
                     let lane = match name.name.as_str() {
                         "x" => 0,

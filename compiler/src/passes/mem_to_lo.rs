@@ -418,6 +418,7 @@ impl FnLower<'_> {
             | T::BuildStoreBits
             | T::BuildChild
             | T::BuildLoad
+            | T::ChildField
             | T::Append => {
                 return self.err(format!(
                     "`tree.{}` needs constructor specialization first",

@@ -41,7 +41,7 @@ impl Checker<'_> {
             layout: Some(LayoutId(li)),
             variants: Vec::new(),
         };
-        let ref_ty = self.out.layouts[layout].ref_ty.clone();
+        let ref_ty = self.out.layouts[layout].build_ref_ty.clone();
         if let Some(root) = &decl.root {
             // The root block sees the globals and the shared fields of the root node.
             let shared: Vec<(String, Ty)> = self.out.layouts[layout]
@@ -229,7 +229,7 @@ impl Checker<'_> {
             return logical.clone();
         };
         match l.adt {
-            Some(adt) => self.physical_of(logical, adt, &l.ref_ty),
+            Some(adt) => self.physical_of(logical, adt, &l.build_ref_ty),
             None => logical.clone(),
         }
     }

@@ -153,7 +153,7 @@ impl Checker<'_> {
             ExprKind::This => match &self.ctx {
                 Ctx::Build { .. } => self
                     .current_layout()
-                    .map(|l| l.ref_ty.clone())
+                    .map(|l| l.build_ref_ty.clone())
                     .unwrap_or(Ty::Error),
                 _ => {
                     self.error(SemaError::WrongContext {

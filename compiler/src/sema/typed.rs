@@ -257,6 +257,10 @@ pub struct LayoutInfo {
     pub params: Vec<(String, Ty)>,
     /// The reference type: the single component's type, or the tuple of all components.
     pub ref_ty: Ty,
+    /// The reference as a build places it: the first component's type. With several
+    /// components the others are the traversal's (computed by the layout's expressions for a
+    /// child, from their defaults at the root), so `this` and a built child are the first.
+    pub build_ref_ty: Ty,
     /// Named members in pre-order ([`MemberId`] indexes this).
     pub members: Vec<MemberInfo>,
     /// Split arms in pre-order.

@@ -210,6 +210,7 @@ impl Interp<'_> {
             | Op::BuildStoreBits
             | Op::BuildChild
             | Op::BuildLoad
+            | Op::ChildField
             | Op::Append => {
                 return Err(bad(
                     "build ops run only after constructor specialization, not in the interpreter",

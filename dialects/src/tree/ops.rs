@@ -115,6 +115,10 @@ pub enum Op {
     /// `tree.build_load {field}` `() -> T`: reads layout member `field` (a global, or a stored
     /// field of the node being placed) inside a build function.
     BuildLoad,
+    /// `tree.child_field {field}` `(integer) -> T`: reads shared logical field `field` (e.g.
+    /// `bounds`) of the logical child whose index is the operand, inside a build function
+    /// (`left.bounds` in `build Interior(bounds, left, right)`).
+    ChildField,
     /// `tree.append {field}` `(array<? x T>, integer) -> (integer)`: copies the first `n`
     /// elements of the logical array into the global array behind `field` at the running
     /// cursor and yields the start index.
@@ -123,7 +127,7 @@ pub enum Op {
 
 impl Op {
     /// Every op, in declaration order.
-    pub const ALL: [Op; 46] = [
+    pub const ALL: [Op; 47] = [
         Op::Const,
         Op::Add,
         Op::Sub,
@@ -169,6 +173,7 @@ impl Op {
         Op::BuildStoreBits,
         Op::BuildChild,
         Op::BuildLoad,
+        Op::ChildField,
         Op::Append,
     ];
 
@@ -220,6 +225,7 @@ impl Op {
             Op::BuildStoreBits => "build_store_bits",
             Op::BuildChild => "build_child",
             Op::BuildLoad => "build_load",
+            Op::ChildField => "child_field",
             Op::Append => "append",
         }
     }
@@ -252,6 +258,7 @@ impl Op {
                 | Op::BuildStoreBits
                 | Op::BuildChild
                 | Op::BuildLoad
+                | Op::ChildField
                 | Op::Append
         )
     }

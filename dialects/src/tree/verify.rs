@@ -452,6 +452,13 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
             counts(&ot, &rt, 0, 1)?;
             field_attr(o)
         }
+        Op::ChildField => {
+            counts(&ot, &rt, 1, 1)?;
+            require(t.as_int(ot[0]).is_some(), || {
+                format!("child index of type {}", show(ot[0]))
+            })?;
+            field_attr(o)
+        }
         Op::Append => {
             counts(&ot, &rt, 2, 1)?;
             let ok = matches!(t.get(ot[0]), Type::Array { .. } | Type::View(_))

@@ -225,6 +225,18 @@ pub fn closest_hit_dop14_stats(
 /// entry distance can exceed the computed hit distance by an ulp and pruning on
 /// `enter > best.t` then drops the node (docs/runtime.md, "Brute force and traversal").
 pub fn why_pruned(tree: &LogicalTree, ray: &Ray, prim: u32, t: f32) -> Option<(u32, f32, f32)> {
+    why_pruned_with(tree, ray, prim, t, |i| tree.nodes[i as usize].aabb())
+}
+
+/// [`why_pruned`] for a traversal of `tree` over other boxes (`bounds(node)`: the boxes a layout
+/// reconstructs or decodes, which enclose the tree's own).
+pub fn why_pruned_with(
+    tree: &LogicalTree,
+    ray: &Ray,
+    prim: u32,
+    t: f32,
+    bounds: impl Fn(u32) -> crate::geom::Aabb,
+) -> Option<(u32, f32, f32)> {
     if tree.is_empty() {
         return None;
     }
@@ -247,7 +259,7 @@ pub fn why_pruned(tree: &LogicalTree, ray: &Ray, prim: u32, t: f32) -> Option<(u
         // Resume the parent.
     }
     path.iter().find_map(|&(i, _)| {
-        let (enter, exit) = slab_interval(ray, &tree.nodes[i as usize].aabb());
+        let (enter, exit) = slab_interval(ray, &bounds(i));
         let meets = enter <= exit; // false when either is NaN
         (!meets || enter > t).then_some((i, enter, exit))
     })

@@ -322,7 +322,8 @@ fn pure_funcs(m: &Module, writers: &FxHashSet<FuncId>) -> FxHashSet<FuncId> {
             walk::Order::Pre,
             &mut |op| match m.ops[op].kind {
                 OpKind::Tree(tree::Op::Call) => callees.push(callee_of(m, op)),
-                OpKind::Tree(tree::Op::This | tree::Op::BuildLoad) | OpKind::Lo(_) => ok = false,
+                OpKind::Tree(tree::Op::This | tree::Op::BuildLoad | tree::Op::ChildField)
+                | OpKind::Lo(_) => ok = false,
                 kind => ok &= !writes_directly(kind),
             },
         );

@@ -139,6 +139,7 @@ fn inlinable(m: &Module, f: FuncId, max_ops: usize) -> bool {
                 | tree::Op::BuildStoreBits
                 | tree::Op::BuildChild
                 | tree::Op::BuildLoad
+                | tree::Op::ChildField
                 | tree::Op::Append,
             ) => false,
             OpKind::Tree(tree::Op::Foreach) => !o.regions.iter().any(|&r| holds_return(m, r)),

@@ -177,7 +177,15 @@ fn generate(m: &mut Module, spec: &LayoutSpec, ours: &[FuncId]) -> Result<(), Di
         .collect();
     for &f in ours {
         let variant = attr(m, f, "variant");
-        rewrite_build(m, spec, f, &variant, &extra, &node_name, ref_ty, post)?;
+        let b = BuildShape {
+            extra: &extra,
+            node_name: &node_name,
+            ref_ty,
+            post,
+            shared: &shared,
+            stride,
+        };
+        rewrite_build(m, spec, f, &variant, &b)?;
     }
     // @L.node: dispatch on the logical node's kind.
     {
@@ -227,6 +235,11 @@ fn generate(m: &mut Module, spec: &LayoutSpec, ours: &[FuncId]) -> Result<(), Di
     super::entries::build_fn(
         m, spec, &lname, &node_name, root_fn, ref_ty, &shared, stride,
     )?;
+    if spec.model.components.len() > 1 {
+        let full = super::destructor::reference_type(m, spec)
+            .map_err(|e| unsupported(span, e.to_string()))?;
+        super::entries::root_ref_fn(m, spec, &lname, full)?;
+    }
     Ok(())
 }
 
@@ -353,18 +366,31 @@ fn places(m: &Module, spec: &LayoutSpec, f: FuncId, variant: &str) -> bool {
             .any(|&o| matches!(m.ops[o].kind, OpKind::Tree(Op::BuildStore | Op::BuildLoad)))
 }
 
+/// What every build function of a layout shares.
+struct BuildShape<'a> {
+    /// The extra first parameters (`%tree`, `%B`, the counter, cursor and status cells).
+    extra: &'a [TypeId],
+    /// `@L.node`.
+    node_name: &'a str,
+    /// The placed reference's type.
+    ref_ty: TypeId,
+    /// `order=post`.
+    post: bool,
+    /// The logical node's shared fields (a child's `bounds`, read by `tree.child_field`).
+    shared: &'a [LogicalField],
+    /// Bytes per logical node.
+    stride: u64,
+}
+
 /// Rewrites one build function in place (see the module docs).
-#[allow(clippy::too_many_arguments)]
 fn rewrite_build(
     m: &mut Module,
     spec: &LayoutSpec,
     f: FuncId,
     variant: &str,
-    extra: &[TypeId],
-    node_name: &str,
-    ref_ty: TypeId,
-    post: bool,
+    shape: &BuildShape<'_>,
 ) -> Result<(), Diagnostic> {
+    let (extra, node_name, ref_ty, post) = (shape.extra, shape.node_name, shape.ref_ty, shape.post);
     let span = m.func_spans.get(f).copied();
     let entry = m.entry_block(f).expect("build functions have bodies");
     // Extra parameters first; array parameters become views of the logical primitives.
@@ -554,6 +580,37 @@ fn rewrite_build(
                         format!("`{field}` read in a build with a type other than its stored one"),
                     ));
                 }
+                replace_all_uses(m, old, v);
+                erase_op(m, op);
+            }
+            OpKind::Tree(Op::ChildField) => {
+                let idx = m.ops[op].operands[0];
+                let old = m.ops[op].results[0];
+                let want = m.values[old].ty;
+                let at = shape.shared.iter().find_map(|x| match x.slot {
+                    Slot::Value { offset } if x.name == field && x.ty == want => Some(offset),
+                    _ => None,
+                });
+                let Some(offset) = at else {
+                    return Err(unsupported(
+                        m.span(op).or(span),
+                        format!(
+                            "a child's field `{field}` in a build (a child's shared fields, such \
+                             as its bounds, can be read)"
+                        ),
+                    ));
+                };
+                let ptr = m.ty(Type::Ptr);
+                let u32t = m.types.u32();
+                let mut bd = Builder::new(m);
+                bd.set_insertion_point(InsertPoint::Before(op));
+                let i = if bd.value_type(idx) == u32t {
+                    idx
+                } else {
+                    bd.cast(idx, u32t)
+                };
+                let nodes = load(&mut bd, cx.tree, None, view::NODES, 0, ptr);
+                let v = load(&mut bd, nodes, Some(i), offset, shape.stride, want);
                 replace_all_uses(m, old, v);
                 erase_op(m, op);
             }

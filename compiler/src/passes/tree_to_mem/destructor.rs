@@ -115,7 +115,7 @@ pub fn specialize(m: &mut Module, spec: &LayoutSpec) -> Result<bool, PassError> 
 }
 
 /// The IR type of the layout's reference: its one component, or a tuple of them.
-fn reference_type(m: &mut Module, spec: &LayoutSpec) -> Result<TypeId, PassError> {
+pub(super) fn reference_type(m: &mut Module, spec: &LayoutSpec) -> Result<TypeId, PassError> {
     let mut comps = Vec::new();
     for c in &spec.model.components {
         match ir_type(m, &c.ty) {

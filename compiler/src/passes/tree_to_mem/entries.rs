@@ -227,3 +227,75 @@ pub(super) fn build_fn(
     bd.ret(&[s]);
     Ok(())
 }
+
+/// The name of the function that gives the whole reference of the root from its placed
+/// component, for a layout whose reference has several components.
+pub fn root_ref_name(lname: &str) -> String {
+    format!("{lname}.root_ref")
+}
+
+/// `@L.root_ref(%B: ptr, %i) -> (R)` for a reference of several components: the root's
+/// reference, its first component `%i` (what `@L.build` placed) and every other component's
+/// default, a layout expression over the globals (`lo: f32x3 = scene.low`): the traversal takes
+/// the others from the parent (`left = (I + 1, lo, with_axis(hi, axis, pl))`), so only the
+/// root's need a value of their own. A component without a default is reported (E0380).
+pub(super) fn root_ref_fn(
+    m: &mut Module,
+    spec: &LayoutSpec,
+    lname: &str,
+    ref_ty: TypeId,
+) -> Result<(), Diagnostic> {
+    let comps = &spec.model.components;
+    let ptr = m.ty(Type::Ptr);
+    let Type::Tuple(tys) = m.types.get(ref_ty).clone() else {
+        return Err(unsupported(
+            Some(spec.model.span),
+            "a reference of several components that is not a tuple",
+        ));
+    };
+    let (f, entry) = m.add_func(&root_ref_name(lname), &[ptr, tys[0]], &[ref_ty]);
+    m.func_spans.insert(f, spec.model.span);
+    let args = m.blocks[entry].args.to_vec();
+    // A placeholder to insert before; the tuple's return replaces it.
+    let first = Builder::at_end(m, entry).ret(&[]);
+    let variant = spec
+        .model
+        .adt
+        .as_ref()
+        .and_then(|a| a.variants.first())
+        .map(|v| v.name.name.clone())
+        .unwrap_or_default();
+    let mut rd = Reader::new(spec, args[0], vec![args[1]], InsertPoint::Before(first));
+    let mut vals = vec![args[1]];
+    for (k, c) in comps.iter().enumerate().skip(1) {
+        let Some(e) = &c.default else {
+            return Err(Diagnostic::error(
+                "E0380",
+                format!(
+                    "reference component `{}` without a default (its value at the root, an \
+                     expression over the globals)",
+                    c.name.name
+                ),
+            )
+            .with_primary(c.name.span, "no default")
+            .with_note(
+                "a build places the first component; a child's others come from the layout's \
+                 expression for the child, the root's from their defaults (`lo: f32x3 = scene.low`)",
+            ));
+        };
+        let v = rd.expr(m, &variant, e, Some(tys[k]))?;
+        if m.values[v].ty != tys[k] {
+            return Err(unsupported(
+                Some(c.name.span),
+                format!("the default of reference component `{}` has another type", c.name.name),
+            ));
+        }
+        vals.push(v);
+    }
+    let mut bd = Builder::new(m);
+    bd.set_insertion_point(InsertPoint::Before(first));
+    let tuple = bd.tuple(&vals);
+    bd.ret(&[tuple]);
+    erase_op(m, first);
+    Ok(())
+}

@@ -31,7 +31,16 @@ impl<'a> Reader<'a> {
                             "tree-carried reference components (`parent.`)",
                         ));
                     }
-                    return Ok(self.components[i]);
+                    return self.components.get(i).copied().ok_or_else(|| {
+                        unsupported(
+                            Some(id.span),
+                            format!(
+                                "reference component `{}` where only the placed one is known (a \
+                                 build places the first component; the others are the traversal's)",
+                                id.name
+                            ),
+                        )
+                    });
                 }
                 self.field(m, variant, &id.name)
             }
