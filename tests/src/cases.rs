@@ -75,6 +75,23 @@ impl RayKind {
     }
 }
 
+/// The generated hard cases, then those of the real scenes `names` that are present.
+pub fn hard_and_real(names: &[&str]) -> Vec<Scene> {
+    let mut scenes = scion_runtime::scene::gen::hard_cases();
+    scenes.extend(names.iter().filter_map(|n| real_scene(n).ok()));
+    scenes
+}
+
+/// Rays of every kind for `scene`, reproducible from `seed`: 300 secondary, 256 primary, 100
+/// axis-parallel and about 200 feature rays (the set the case-study tests trace).
+pub fn mixed_rays(scene: &Scene, seed: u64) -> Vec<Ray> {
+    let mut rays = RayKind::Secondary.rays(scene, 300, seed);
+    rays.extend(RayKind::Primary.rays(scene, 256, seed));
+    rays.extend(RayKind::Axis.rays(scene, 100, seed));
+    rays.extend(RayKind::Features.rays(scene, 200, 0));
+    rays
+}
+
 /// About `n` rays that stress edges and vertices (see [`RayKind::Features`]).
 pub fn feature_rays(scene: &Scene, n: usize) -> Vec<Ray> {
     let mut rays = Vec::new();

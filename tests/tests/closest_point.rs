@@ -7,14 +7,10 @@
 //! answers are then checked against float64 brute force: the distance within a bound relative to
 //! the scene's size, and the triangle the nearest one or one as near within that bound.
 
-// Calling the generated C entry points needs unsafe (each call carries its SAFETY note).
-#![allow(unsafe_code)]
+mod c_entries;
 
-use scion_compiler::abi::EntryTarget;
-use scion_host::contract::LogicalTreeView;
-use scion_host::jit::{program_lo, Codegen, LoOptions};
+use scion_host::jit::Codegen;
 use scion_host::mem_interp::{layout_source, Program};
-use scion_runtime::bvh::schema::LogicalBytes;
 use scion_runtime::geom::{Triangle, Vec3};
 use scion_runtime::reference::closest_point::{
     closest_point_brute, closest_point_f64, triangle_distance_f64, ClosestPoint,
@@ -22,21 +18,6 @@ use scion_runtime::reference::closest_point::{
 use scion_runtime::scene::{gen, Scene};
 use scion_tests::cases::{real_scene, TreeKind};
 use std::path::PathBuf;
-
-type SizesFn = unsafe extern "C" fn(*const LogicalTreeView, *mut u64);
-type BuildFn = unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) -> i32;
-type RootIdxFn = unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) -> u32;
-type RootPtrFn = unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) -> *const u8;
-type BatchIdxFn =
-    unsafe extern "C" fn(*const *const u8, *const Vec3, *mut ClosestPoint, u64, u64, u32) -> i32;
-type BatchPtrFn = unsafe extern "C" fn(
-    *const *const u8,
-    *const Vec3,
-    *mut ClosestPoint,
-    u64,
-    u64,
-    *const u8,
-) -> i32;
 
 /// Every library layout: file stem and layout name.
 const LAYOUTS: &[(&str, &str)] = &[
@@ -64,13 +45,6 @@ fn program(stem: &str, layout: &str, entry: &str) -> Program {
     }
 }
 
-/// 64-byte aligned zeroed bytes (at least one block, so every buffer has a real address).
-fn aligned(size: usize) -> (Vec<u8>, usize) {
-    let bytes = vec![0u8; size + 128];
-    let off = bytes.as_ptr().align_offset(64);
-    (bytes, off)
-}
-
 /// Query points for `scene`: uniform in its box grown by a fifth on each side, far outside it,
 /// and on its features (corners, edge midpoints, and just off centroids), where several
 /// triangles are at the same distance.
@@ -84,7 +58,8 @@ fn points(scene: &Scene, n: usize, seed: u64) -> Vec<Vec3> {
         (x >> 11) as f64 / (1u64 << 53) as f64
     };
     let e = b.extent();
-    let lerp = |lo: f32, ext: f32, t: f64| (f64::from(lo) + f64::from(ext) * (1.4 * t - 0.2)) as f32;
+    let lerp =
+        |lo: f32, ext: f32, t: f64| (f64::from(lo) + f64::from(ext) * (1.4 * t - 0.2)) as f32;
     let mut out = Vec::new();
     for _ in 0..n {
         out.push(Vec3::new(
@@ -120,75 +95,44 @@ fn scenes() -> Vec<Scene> {
 
 /// Runs `entry` compiled for `layout` by `codegen` on every scene; returns the answers per
 /// scene.
-fn run(stem: &str, layout: &str, entry: &str, codegen: Codegen, cases: &[Case]) -> Vec<Vec<ClosestPoint>> {
-    let lo = program_lo(
-        &program(stem, layout, entry),
-        &LoOptions {
-            // The hard cases include a chain a thousand nodes deep.
-            stack_size: Some(4096),
-            opt_level: 3,
-            dsl_opt: true,
-            target: EntryTarget::Host,
-        },
-    )
-    .unwrap_or_else(|e| panic!("{layout}: {e}"));
+fn run(
+    stem: &str,
+    layout: &str,
+    entry: &str,
+    codegen: Codegen,
+    cases: &[Case],
+) -> Vec<Vec<ClosestPoint>> {
+    let lo = c_entries::host_lo(&program(stem, layout, entry));
     assert_eq!(lo.entry.query.size, 12, "the query is the point");
-    assert_eq!(lo.entry.result.size, 20, "the result is (distance, id, point)");
+    assert_eq!(
+        lo.entry.result.size, 20,
+        "the result is (distance, id, point)"
+    );
     let code = codegen.backend().jit(&lo.module).unwrap();
-    let f = |name: String| {
-        code.function_ptr(&name)
-            .unwrap_or_else(|| panic!("no `@{name}`"))
-    };
     let mut all = Vec::new();
     for case in cases {
-        let bytes = LogicalBytes::fill(&case.tree, &lo.entry.logical).unwrap();
-        let view = LogicalTreeView::new(&case.tree, &bytes).unwrap();
         let mut results: Vec<ClosestPoint> = case
             .points
             .iter()
             .enumerate()
             // Every seventh query searches within a radius only.
-            .map(|(k, _)| ClosestPoint::start(if k % 7 == 3 { case.radius } else { f32::INFINITY }))
+            .map(|(k, _)| {
+                ClosestPoint::start(if k % 7 == 3 {
+                    case.radius
+                } else {
+                    f32::INFINITY
+                })
+            })
             .collect();
-        // SAFETY: the entries have the signatures of docs/c-abi.md for this layout's reference
-        // type (u32, or ptr for PtrBVH); the view describes the live tree; every buffer has the
-        // size `sizes` gave and is 64-byte aligned; `points` and `results` have `n` elements of
-        // the 12-byte query and the 20-byte result record the signature was checked to have.
-        unsafe {
-            let sizes = std::mem::transmute::<*const u8, SizesFn>(f(format!("scion_{layout}_sizes")));
-            let build = std::mem::transmute::<*const u8, BuildFn>(f(format!("scion_{layout}_build")));
-            let mut sz = vec![0u64; lo.entry.buffers.len()];
-            sizes(&view, sz.as_mut_ptr());
-            let mut bufs: Vec<(Vec<u8>, usize)> = sz.iter().map(|&s| aligned(s as usize)).collect();
-            let table: Vec<*mut u8> = bufs.iter_mut().map(|(b, o)| b.as_mut_ptr().add(*o)).collect();
-            assert_eq!(build(&view, table.as_ptr()), 0, "{layout}: build");
-            let ctable: Vec<*const u8> = table.iter().map(|&p| p as *const u8).collect();
-            let n = case.points.len() as u64;
-            let batch = f(format!("scion_{entry}_{layout}"));
-            let root = f(format!("scion_{layout}_root"));
-            let status = if layout == "PtrBVH" {
-                let r = std::mem::transmute::<*const u8, RootPtrFn>(root)(&view, table.as_ptr());
-                std::mem::transmute::<*const u8, BatchPtrFn>(batch)(
-                    ctable.as_ptr(),
-                    case.points.as_ptr(),
-                    results.as_mut_ptr(),
-                    0,
-                    n,
-                    r,
-                )
-            } else {
-                let r = std::mem::transmute::<*const u8, RootIdxFn>(root)(&view, table.as_ptr());
-                std::mem::transmute::<*const u8, BatchIdxFn>(batch)(
-                    ctable.as_ptr(),
-                    case.points.as_ptr(),
-                    results.as_mut_ptr(),
-                    0,
-                    n,
-                    r,
-                )
-            };
-            assert_eq!(status, 0, "{layout} {entry}: batch status");
-        }
+        let status = c_entries::run_batch(
+            &lo,
+            code.as_ref(),
+            &case.tree,
+            entry,
+            &case.points,
+            &mut results,
+        );
+        assert_eq!(status, 0, "{layout} {entry}: batch status");
         all.push(results);
     }
     all

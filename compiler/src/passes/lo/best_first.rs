@@ -16,7 +16,9 @@
 //! compared); a pop takes the root, then sifts the last entry down from the root. A push to a
 //! full queue returns status 1, as a full stack does ([`super::recursion_to_stack`]).
 
-use super::recursion_to_stack::{check_stack_bytes, entry_addr, in_frame, not_tail, split_entry};
+use super::recursion_to_stack::{
+    changed_args, check_stack_bytes, entry_addr, exits, not_tail, split_at_call, split_entry,
+};
 use scion_ir::attr::Attr;
 use scion_ir::diag::Diagnostic;
 use scion_ir::entity::{BlockId, FuncId, OpId, TypeId, ValueId};
@@ -56,25 +58,13 @@ pub(super) fn rewrite(
             ),
         ));
     }
-    let mut changed: Vec<usize> = Vec::new();
-    for &c in calls {
-        for (i, &a) in m.ops[c].operands.iter().enumerate() {
-            if a != params[i] {
-                if in_frame(m, a) {
-                    return Err(not_tail(
-                        m,
-                        c,
-                        "it passes a cell of the caller's frame (a `let mut` local), which does \
-                         not outlive the visit that queues the call",
-                    ));
-                }
-                if !changed.contains(&i) {
-                    changed.push(i);
-                }
-            }
-        }
-    }
-    changed.sort_unstable();
+    let changed = changed_args(
+        m,
+        calls,
+        &params,
+        "it passes a cell of the caller's frame (a `let mut` local), which does not outlive the \
+         visit that queues the call",
+    )?;
     let entry_bytes = (ARGS as u64) + 8 * changed.len() as u64;
     check_stack_bytes(m, f, entry_bytes, size)?;
     let i32t = m.types.i32();
@@ -134,18 +124,13 @@ pub(super) fn rewrite(
     let chosen = m.add_block(region, &[u32t, key_ty, u64t]);
     let sink = m.add_block(region, &[]);
     let settle = m.add_block(region, &[]);
+    exits(m, done, overflow);
     {
         let mut b = Builder::at_end(m, head);
         let n = b.lo_load(nc, 0, u32t);
         let zero = b.lo_int(u32t, 0);
         let empty = b.lo_cmp(CmpPred::Eq, n, zero);
         b.lo_cond_br(empty, (done, &[]), (pop, &[]));
-        b.set_insertion_point_to_end(done);
-        let ok = b.lo_int(i32t, 0);
-        b.lo_ret(&[ok]);
-        b.set_insertion_point_to_end(overflow);
-        let one = b.lo_int(i32t, 1);
-        b.lo_ret(&[one]);
     }
     // pop: the root's arguments go to the body; the last entry sinks from the root.
     let (top_args, n1, last, last_key, last_seq) = {
@@ -225,20 +210,7 @@ pub(super) fn rewrite(
     }
     // Each recursive call is a push: sift up from the end, then place the entry.
     for &c in calls {
-        let bb = m.ops[c].parent.expect("placed");
-        let pos = m.blocks[bb]
-            .ops
-            .iter()
-            .position(|&o| o == c)
-            .expect("listed");
-        let rest: Vec<OpId> = m.blocks[bb].ops.split_off(pos + 1);
-        let cont = m.add_block(region, &[]);
-        for &o in &rest {
-            m.ops[o].parent = Some(cont);
-        }
-        m.blocks[cont].ops = rest;
-        let args = m.ops[c].operands.to_vec();
-        scion_ir::rewrite::erase_op(m, c);
+        let (bb, cont, args) = split_at_call(m, c);
         let start = m.add_block(region, &[]);
         let up = m.add_block(region, &[u32t]);
         let parent = m.add_block(region, &[]);

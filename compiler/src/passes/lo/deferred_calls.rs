@@ -14,7 +14,9 @@
 //! The stack pointer lives in a frame cell (promoted to a register by LLVM); a full stack
 //! returns status 1 as in the tail-call scheme of [`super::recursion_to_stack`].
 
-use super::recursion_to_stack::{check_stack_bytes, entry_addr, in_frame, not_tail, split_entry};
+use super::recursion_to_stack::{
+    changed_args, check_stack_bytes, entry_addr, exits, not_tail, split_at_call, split_entry,
+};
 use rustc_hash::FxHashSet;
 use scion_ir::attr::Attr;
 use scion_ir::diag::Diagnostic;
@@ -174,25 +176,13 @@ pub(super) fn rewrite(
         }
         d
     })?;
-    let mut changed: Vec<usize> = Vec::new();
-    for &c in calls {
-        for (i, &a) in m.ops[c].operands.iter().enumerate() {
-            if a != params[i] {
-                if in_frame(m, a) {
-                    return Err(not_tail(
-                        m,
-                        c,
-                        "it passes a cell of the caller's frame (a `let mut` local), which one \
-                         explicit stack for all calls cannot keep per call",
-                    ));
-                }
-                if !changed.contains(&i) {
-                    changed.push(i);
-                }
-            }
-        }
-    }
-    changed.sort_unstable();
+    let changed = changed_args(
+        m,
+        calls,
+        &params,
+        "it passes a cell of the caller's frame (a `let mut` local), which one explicit stack \
+         for all calls cannot keep per call",
+    )?;
     let entry_bytes = 8 * changed.len().max(1) as u64;
     check_stack_bytes(m, f, entry_bytes, size)?;
     let i32t = m.types.i32();
@@ -228,17 +218,12 @@ pub(super) fn rewrite(
     };
     // The loop head: pop the next entry into the body, or return when the stack is empty.
     {
+        exits(m, done, overflow);
         let mut b = Builder::at_end(m, head);
         let sp = b.lo_load(spc, 0, u32t);
         let zero = b.lo_int(u32t, 0);
         let empty = b.lo_cmp(CmpPred::Eq, sp, zero);
         b.lo_cond_br(empty, (done, &[]), (pop, &[]));
-        b.set_insertion_point_to_end(done);
-        let ok = b.lo_int(i32t, 0);
-        b.lo_ret(&[ok]);
-        b.set_insertion_point_to_end(overflow);
-        let one = b.lo_int(i32t, 1);
-        b.lo_ret(&[one]);
         b.set_insertion_point_to_end(pop);
         let one = b.lo_int(u32t, 1);
         let sp1 = b.lo1(L::Sub, &[sp, one], u32t);
@@ -285,20 +270,7 @@ pub(super) fn rewrite(
     }
     // Each recursive call pushes its arguments and the body goes on.
     for &c in calls {
-        let bb = m.ops[c].parent.expect("placed");
-        let pos = m.blocks[bb]
-            .ops
-            .iter()
-            .position(|&o| o == c)
-            .expect("listed");
-        let rest: Vec<OpId> = m.blocks[bb].ops.split_off(pos + 1);
-        let cont = m.add_block(region, &[]);
-        for &o in &rest {
-            m.ops[o].parent = Some(cont);
-        }
-        m.blocks[cont].ops = rest;
-        let args = m.ops[c].operands.to_vec();
-        scion_ir::rewrite::erase_op(m, c);
+        let (bb, cont, args) = split_at_call(m, c);
         let push = m.add_block(region, &[]);
         let mut b = Builder::at_end(m, bb);
         let sp = b.lo_load(spc, 0, u32t);

@@ -299,16 +299,11 @@ fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), D
     }
     // The loop head: pop the next entry into the body, or return when the stack is empty.
     {
+        exits(m, done, overflow);
         let mut b = Builder::at_end(m, head);
         let zero = b.lo_int(u32t, 0);
         let empty = b.lo_cmp(CmpPred::Eq, sp_head, zero);
         b.lo_cond_br(empty, (done, &[]), (pop, &[]));
-        b.set_insertion_point_to_end(done);
-        let ok = b.lo_int(i32t, 0);
-        b.lo_ret(&[ok]);
-        b.set_insertion_point_to_end(overflow);
-        let one = b.lo_int(i32t, 1);
-        b.lo_ret(&[one]);
         b.set_insertion_point_to_end(pop);
         let one = b.lo_int(u32t, 1);
         let sp1 = b.lo1(L::Sub, &[sp_head, one], u32t);
@@ -401,6 +396,65 @@ pub(super) fn split_entry(
     }
     m.blocks[entry].args = kept.into_iter().collect();
     (new_entry, new_params)
+}
+
+/// Splits the block of call `c` after it (the rest goes to a new block, returned) and erases
+/// the call: the block ends open for what replaces the call. Returns the block, the
+/// continuation and the call's arguments.
+pub(super) fn split_at_call(m: &mut Module, c: OpId) -> (BlockId, BlockId, Vec<ValueId>) {
+    let bb = m.ops[c].parent.expect("placed");
+    let region = m.blocks[bb].parent.expect("placed");
+    let pos = m.blocks[bb]
+        .ops
+        .iter()
+        .position(|&o| o == c)
+        .expect("listed");
+    let rest: Vec<OpId> = m.blocks[bb].ops.split_off(pos + 1);
+    let cont = m.add_block(region, &[]);
+    for &o in &rest {
+        m.ops[o].parent = Some(cont);
+    }
+    m.blocks[cont].ops = rest;
+    let args = m.ops[c].operands.to_vec();
+    scion_ir::rewrite::erase_op(m, c);
+    (bb, cont, args)
+}
+
+/// The parameter positions some recursive call of `calls` changes (an argument other than
+/// the function's own parameter), in order: what a stack entry keeps. A changed argument that
+/// is a cell of the caller's frame is E0971 (`frame_why` says why it cannot be kept).
+pub(super) fn changed_args(
+    m: &Module,
+    calls: &[OpId],
+    params: &[ValueId],
+    frame_why: &str,
+) -> Result<Vec<usize>, Diagnostic> {
+    let mut changed: Vec<usize> = Vec::new();
+    for &c in calls {
+        for (i, &a) in m.ops[c].operands.iter().enumerate() {
+            if a != params[i] {
+                if in_frame(m, a) {
+                    return Err(not_tail(m, c, frame_why));
+                }
+                if !changed.contains(&i) {
+                    changed.push(i);
+                }
+            }
+        }
+    }
+    changed.sort_unstable();
+    Ok(changed)
+}
+
+/// Fills the loop's two exits: `done` returns status 0, `overflow` status 1.
+pub(super) fn exits(m: &mut Module, done: BlockId, overflow: BlockId) {
+    let i32t = m.types.i32();
+    let mut b = Builder::at_end(m, done);
+    let ok = b.lo_int(i32t, 0);
+    b.lo_ret(&[ok]);
+    b.set_insertion_point_to_end(overflow);
+    let one = b.lo_int(i32t, 1);
+    b.lo_ret(&[one]);
 }
 
 /// The address of stack entry `sp` (a `u32`) of `entry_bytes` bytes.

@@ -158,13 +158,7 @@ pub(super) fn build_fn(
     // The globals that size arrays: node and primitive counts.
     let first = bd.ret(&[szero]);
     let mut rd = Reader::new(spec, b, vec![], InsertPoint::Before(first));
-    let variant = spec
-        .model
-        .adt
-        .as_ref()
-        .and_then(|a| a.variants.first())
-        .map(|v| v.name.name.clone())
-        .unwrap_or_default();
+    let variant = first_variant(spec);
     for buf in &spec.plan.buffers {
         let (global, v) = match &buf.count {
             Count::Nodes {
@@ -258,13 +252,7 @@ pub(super) fn root_ref_fn(
     let args = m.blocks[entry].args.to_vec();
     // A placeholder to insert before; the tuple's return replaces it.
     let first = Builder::at_end(m, entry).ret(&[]);
-    let variant = spec
-        .model
-        .adt
-        .as_ref()
-        .and_then(|a| a.variants.first())
-        .map(|v| v.name.name.clone())
-        .unwrap_or_default();
+    let variant = first_variant(spec);
     let mut rd = Reader::new(spec, args[0], vec![args[1]], InsertPoint::Before(first));
     let mut vals = vec![args[1]];
     for (k, c) in comps.iter().enumerate().skip(1) {
@@ -298,4 +286,14 @@ pub(super) fn root_ref_fn(
     bd.ret(&[tuple]);
     erase_op(m, first);
     Ok(())
+}
+
+/// The name of the tree type's first variant: what the reader resolves global names in.
+fn first_variant(spec: &LayoutSpec) -> String {
+    spec.model
+        .adt
+        .as_ref()
+        .and_then(|a| a.variants.first())
+        .map(|v| v.name.name.clone())
+        .unwrap_or_default()
 }

@@ -1,0 +1,158 @@
+//! Calling a layout's generated C entry points as a C host does (docs/c-abi.md):
+//! `scion_L_sizes`, then 64-byte aligned buffers of those sizes, `scion_L_build`, `scion_L_root`
+//! and a batch entry `scion_A_L` over all queries. Shared by the tests of the algorithms and
+//! case studies that run through the C ABI (occluded, closest point, DOP-14, shared slab).
+
+#![allow(dead_code)]
+// Calling the generated entries needs unsafe (each call carries its SAFETY note).
+#![allow(unsafe_code)]
+
+use scion_compiler::abi::EntryTarget;
+use scion_host::contract::LogicalTreeView;
+use scion_host::jit::{program_lo, LibraryLo, LoOptions};
+use scion_host::mem_interp::Program;
+use scion_ir::backend::JitCode;
+use scion_ir::types::Type;
+use scion_runtime::bvh::schema::LogicalBytes;
+use scion_runtime::bvh::LogicalTree;
+use scion_runtime::geom::{Hit, Ray};
+
+type SizesFn = unsafe extern "C" fn(*const LogicalTreeView, *mut u64);
+type BuildFn = unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) -> i32;
+type RootIdxFn = unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) -> u32;
+type RootPtrFn = unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) -> *const u8;
+
+/// `program` compiled to `lo` with its C entries for the host, as `scionc -O3` does, with a
+/// stack of 4096 entries (the hard cases include a chain a thousand nodes deep).
+pub fn host_lo(program: &Program) -> LibraryLo {
+    program_lo(
+        program,
+        &LoOptions {
+            stack_size: Some(4096),
+            opt_level: 3,
+            dsl_opt: true,
+            target: EntryTarget::Host,
+        },
+    )
+    .unwrap_or_else(|e| panic!("{}: {e}", program.layout))
+}
+
+/// 64-byte aligned zeroed bytes (at least one block, so every buffer has a real address).
+fn aligned(size: usize) -> (Vec<u8>, usize) {
+    let bytes = vec![0u8; size + 128];
+    let off = bytes.as_ptr().align_offset(64);
+    (bytes, off)
+}
+
+/// Packs `tree` with the layout's entries in `code` (compiled from `lo`) and runs the batch
+/// entry of algorithm `algorithm` over `queries`, updating `results` (which the caller
+/// initialized); returns the batch's status. `Q` and `R` are the `#[repr(C)]` query and result
+/// records, checked against the entry's sizes.
+pub fn run_batch<Q, R>(
+    lo: &LibraryLo,
+    code: &dyn JitCode,
+    tree: &LogicalTree,
+    algorithm: &str,
+    queries: &[Q],
+    results: &mut [R],
+) -> i32 {
+    assert_eq!(
+        std::mem::size_of::<Q>() as u64,
+        lo.entry.query.size,
+        "query record"
+    );
+    assert_eq!(
+        std::mem::size_of::<R>() as u64,
+        lo.entry.result.size,
+        "result record"
+    );
+    assert_eq!(queries.len(), results.len());
+    let layout = &lo.entry.layout;
+    let f = |name: String| {
+        code.function_ptr(&name)
+            .unwrap_or_else(|| panic!("no `@{name}`"))
+    };
+    let root_name = format!("scion_{layout}_root");
+    let by_pointer = lo.module.func_by_name(&root_name).is_some_and(|r| {
+        matches!(
+            lo.module.types.get(lo.module.funcs[r].results[0]),
+            Type::Ptr
+        )
+    });
+    let bytes = LogicalBytes::fill(tree, &lo.entry.logical).unwrap();
+    let view = LogicalTreeView::new(tree, &bytes).unwrap();
+    let n = queries.len() as u64;
+    // SAFETY: the entries have the signatures of docs/c-abi.md for this layout's reference type
+    // (a pointer when `scion_L_root` returns one, else a `u32`); the view describes the live
+    // tree; every buffer has the size `sizes` gave and is 64-byte aligned; `queries` and
+    // `results` have `n` elements of the record sizes the entry was checked to have above.
+    unsafe {
+        let sizes = std::mem::transmute::<*const u8, SizesFn>(f(format!("scion_{layout}_sizes")));
+        let build = std::mem::transmute::<*const u8, BuildFn>(f(format!("scion_{layout}_build")));
+        let mut sz = vec![0u64; lo.entry.buffers.len()];
+        sizes(&view, sz.as_mut_ptr());
+        let mut bufs: Vec<(Vec<u8>, usize)> = sz.iter().map(|&s| aligned(s as usize)).collect();
+        let table: Vec<*mut u8> = bufs
+            .iter_mut()
+            .map(|(b, o)| b.as_mut_ptr().add(*o))
+            .collect();
+        assert_eq!(build(&view, table.as_ptr()), 0, "{layout}: build");
+        let ctable: Vec<*const u8> = table.iter().map(|&p| p as *const u8).collect();
+        let batch = f(format!("scion_{algorithm}_{layout}"));
+        if by_pointer {
+            let root = std::mem::transmute::<*const u8, RootPtrFn>(f(root_name));
+            let batch = std::mem::transmute::<
+                *const u8,
+                unsafe extern "C" fn(
+                    *const *const u8,
+                    *const Q,
+                    *mut R,
+                    u64,
+                    u64,
+                    *const u8,
+                ) -> i32,
+            >(batch);
+            let r = root(&view, table.as_ptr());
+            batch(
+                ctable.as_ptr(),
+                queries.as_ptr(),
+                results.as_mut_ptr(),
+                0,
+                n,
+                r,
+            )
+        } else {
+            let root = std::mem::transmute::<*const u8, RootIdxFn>(f(root_name));
+            let batch = std::mem::transmute::<
+                *const u8,
+                unsafe extern "C" fn(*const *const u8, *const Q, *mut R, u64, u64, u32) -> i32,
+            >(batch);
+            let r = root(&view, table.as_ptr());
+            batch(
+                ctable.as_ptr(),
+                queries.as_ptr(),
+                results.as_mut_ptr(),
+                0,
+                n,
+                r,
+            )
+        }
+    }
+}
+
+/// The closest hits of `rays` by a closest-hit algorithm's batch entry (`best` starting at
+/// `(ray.tmax, u32::MAX)`); panics on a status other than 0.
+pub fn closest_hits(
+    lo: &LibraryLo,
+    code: &dyn JitCode,
+    tree: &LogicalTree,
+    algorithm: &str,
+    rays: &[Ray],
+) -> Vec<Hit> {
+    let mut best: Vec<(f32, u32)> = rays.iter().map(|r| (r.tmax, u32::MAX)).collect();
+    let status = run_batch(lo, code, tree, algorithm, rays, &mut best);
+    assert_eq!(status, 0, "{algorithm}: batch status");
+    best.into_iter()
+        .map(|(t, p)| Hit::from_best(t, p))
+        .collect()
+}
