@@ -130,7 +130,10 @@ fn every_engine_visits_in_key_order() {
     let (tree, lo) = lowered(64);
     let visit = lo.func_by_name("visit").expect("visit");
     assert!(lo.funcs[visit].attrs.get("best_first").is_some());
-    assert!(lo.funcs[visit].order_by().is_none(), "the queue replaced the attribute");
+    assert!(
+        lo.funcs[visit].order_by().is_none(),
+        "the queue replaced the attribute"
+    );
     let jits = engines(&lo);
     let mut pending_seen = 0;
     for n in 0..300u32 {
@@ -140,7 +143,11 @@ fn every_engine_visits_in_key_order() {
             let got = Interp::new(&tree)
                 .call("run", vec![u32v(n), u32v(salt)])
                 .unwrap_or_else(|e| panic!("tree interpreter, n = {n}: {e}"));
-            assert_eq!(as_u64(&got[0]), want, "tree interpreter, n = {n}, salt {salt}");
+            assert_eq!(
+                as_u64(&got[0]),
+                want,
+                "tree interpreter, n = {n}, salt {salt}"
+            );
             let out = LoInterp::new(&lo)
                 .call("run", vec![u32v(n), u32v(salt)])
                 .unwrap_or_else(|e| panic!("lo interpreter, n = {n}: {e}"));
@@ -161,7 +168,10 @@ fn every_engine_visits_in_key_order() {
             }
         }
     }
-    assert!(pending_seen > 20, "the queue held {pending_seen} calls at most");
+    assert!(
+        pending_seen > 20,
+        "the queue held {pending_seen} calls at most"
+    );
 }
 
 #[test]

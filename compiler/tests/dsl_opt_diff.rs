@@ -84,7 +84,10 @@ fn tree_module() -> Module {
 fn optimized(m: &Module, max_ops: usize) -> Module {
     let mut out = m.clone();
     let names = for_level(3);
-    assert_eq!(names, ["mem-inline", "const-fold", "mem-cse", "dce", "mem-sink"]);
+    assert_eq!(
+        names,
+        ["mem-inline", "const-fold", "mem-cse", "dce", "mem-sink"]
+    );
     let registry = scion_compiler::passes::registry();
     let mut pm = PassManager::from_names(&registry, &names).expect("known passes");
     pm.options.verify_each = true;

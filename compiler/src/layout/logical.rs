@@ -137,11 +137,7 @@ fn is_dop14(m: &Module, ty: TypeId) -> bool {
     };
     def.is_record()
         && def.shared.len() == 4
-        && def
-            .shared
-            .iter()
-            .zip([3, 3, 4, 4])
-            .all(|(x, n)| f(x.ty, n))
+        && def.shared.iter().zip([3, 3, 4, 4]).all(|(x, n)| f(x.ty, n))
 }
 
 fn is_triangle(m: &Module, ty: TypeId) -> bool {

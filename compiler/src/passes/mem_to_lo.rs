@@ -136,7 +136,8 @@ pub fn lower_module(
             dst.funcs[g].attrs = func.attrs.clone();
             // The ordering parameter's first leaf (parameters before it may have several).
             if let Some(k) = func.order_by() {
-                let before: Result<Vec<Type>, String> = sig(&func.params[..k.min(func.params.len())]);
+                let before: Result<Vec<Type>, String> =
+                    sig(&func.params[..k.min(func.params.len())]);
                 if let Ok(before) = before {
                     dst.funcs[g].set_order_by(before.len());
                 }

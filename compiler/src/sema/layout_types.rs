@@ -64,7 +64,9 @@ impl Checker<'_> {
             [(_, t)] => t.clone(),
             _ => Ty::Tuple(params.iter().map(|p| p.1.clone()).collect()),
         };
-        let build_ref_ty = params.first().map_or_else(|| ref_ty.clone(), |p| p.1.clone());
+        let build_ref_ty = params
+            .first()
+            .map_or_else(|| ref_ty.clone(), |p| p.1.clone());
         self.out.layouts.push(LayoutInfo {
             item,
             name: decl.name.name.clone(),

@@ -361,7 +361,10 @@ impl Checker<'_> {
             } else {
                 format!("{}.{}", d.name.name, set.len())
             };
-            let order_by = d.order_by.as_ref().and_then(|k| self.order_key(d, &params, k));
+            let order_by = d
+                .order_by
+                .as_ref()
+                .and_then(|k| self.order_key(d, &params, k));
             let id = FuncId(self.out.funcs.len() as u32);
             self.out.funcs.push(FuncInfo {
                 item: i,

@@ -71,9 +71,8 @@ impl Dop14 {
 
     /// The DOP of triangles' corners.
     pub fn of_triangles(tris: &[Triangle]) -> Dop14 {
-        tris.iter().fold(Dop14::EMPTY, |d, t| {
-            d.grow(t.p0).grow(t.p1).grow(t.p2)
-        })
+        tris.iter()
+            .fold(Dop14::EMPTY, |d, t| d.grow(t.p0).grow(t.p1).grow(t.p2))
     }
 
     /// The 14 floats in field order (`lo1`, `hi1`, `lo2`, `hi2`).

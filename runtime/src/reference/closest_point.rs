@@ -251,7 +251,10 @@ mod tests {
         ] {
             let got = closest_point_brute(&[t], p, f32::INFINITY);
             assert_eq!(got.prim, 3);
-            assert!((f64::from(got.distance) - want).abs() < 1e-6, "{p:?}: {got:?}");
+            assert!(
+                (f64::from(got.distance) - want).abs() < 1e-6,
+                "{p:?}: {got:?}"
+            );
             let (d, id) = closest_point_f64(&[t], p);
             assert_eq!(id, 3);
             assert!((d - want).abs() < 1e-12, "{p:?}: {d}");

@@ -5,12 +5,13 @@
 //! answers closest point queries by brute force, in the prelude's `f32` arithmetic and in `f64`.
 
 pub mod closest_hit;
-pub mod closest_point;
 pub mod closest_hit_wide;
+pub mod closest_point;
 pub mod prelude;
 
 pub use closest_hit::{
-    closest_hit_brute, closest_hit_dop14_stats, closest_hit_tree, closest_hit_with, closest_hit_tree_stats, closest_hits_brute,
-    closest_hits_tree, closest_hits_tree_stats, why_pruned, why_pruned_with, TraversalStats,
+    closest_hit_brute, closest_hit_dop14_stats, closest_hit_tree, closest_hit_tree_stats,
+    closest_hit_with, closest_hits_brute, closest_hits_tree, closest_hits_tree_stats, why_pruned,
+    why_pruned_with, TraversalStats,
 };
 pub use closest_hit_wide::{closest_hit_wide, closest_hit_wide_stats, closest_hits_wide_stats};

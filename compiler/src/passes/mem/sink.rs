@@ -112,10 +112,7 @@ fn sink_func(m: &mut Module, f: FuncId) -> bool {
             if !ok || !any {
                 continue;
             }
-            let conditional = matches!(
-                m.ops[a].kind,
-                OpKind::Tree(tree::Op::If | tree::Op::Match)
-            );
+            let conditional = matches!(m.ops[a].kind, OpKind::Tree(tree::Op::If | tree::Op::Match));
             if !conditional {
                 continue;
             }

@@ -275,7 +275,10 @@ pub(super) fn root_ref_fn(
         if m.values[v].ty != tys[k] {
             return Err(unsupported(
                 Some(c.name.span),
-                format!("the default of reference component `{}` has another type", c.name.name),
+                format!(
+                    "the default of reference component `{}` has another type",
+                    c.name.name
+                ),
             ));
         }
         vals.push(v);
