@@ -177,6 +177,16 @@ impl Operation {
         self.attrs.get(name).and_then(Attr::as_str)
     }
 
+    /// The function a `tree.call` or `lo.call` names (its `callee` symbol).
+    pub fn callee(&self) -> Option<&str> {
+        self.attrs.get("callee").and_then(Attr::as_sym)
+    }
+
+    /// The predicate of a `tree.cmp` or `lo.cmp` (`pred`), when it is a known one.
+    pub fn pred(&self) -> Option<tree::CmpPred> {
+        self.str_attr("pred").and_then(tree::CmpPred::from_name)
+    }
+
     /// The `tree` op kind, if this is a `tree` op.
     pub fn tree_op(&self) -> Option<tree::Op> {
         match self.kind {

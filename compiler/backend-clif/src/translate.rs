@@ -324,10 +324,7 @@ impl Fx<'_, '_> {
                 ))
             }
             L::Cmp => {
-                let pred = o
-                    .str_attr("pred")
-                    .and_then(CmpPred::from_name)
-                    .ok_or("bad predicate")?;
+                let pred = o.pred().ok_or("bad predicate")?;
                 let t = self.b.func.dfg.value_type(args[0]);
                 Some(if is_float(t) {
                     let cc = match pred {
@@ -420,10 +417,7 @@ impl Fx<'_, '_> {
                 Some(self.b.ins().stack_addr(self.ptr, slot, 0))
             }
             L::Call => {
-                let callee = o
-                    .attr("callee")
-                    .and_then(|a| a.as_sym())
-                    .ok_or("call without callee")?;
+                let callee = o.callee().ok_or("call without callee")?;
                 let id = *syms
                     .funcs
                     .get(callee)

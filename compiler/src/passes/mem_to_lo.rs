@@ -347,10 +347,7 @@ impl FnLower<'_> {
                     .collect()
             }
             T::Cmp => {
-                let pred = o
-                    .str_attr("pred")
-                    .and_then(CmpPred::from_name)
-                    .ok_or(("bad predicate".to_string(), self.span))?;
+                let pred = o.pred().ok_or(("bad predicate".to_string(), self.span))?;
                 let (a, b) = (ins[0].clone(), ins[1].clone());
                 a.iter()
                     .zip(&b)
@@ -427,7 +424,7 @@ impl FnLower<'_> {
                 ))
             }
             T::Call => {
-                let callee = o.attr("callee").and_then(Attr::as_sym).unwrap_or("");
+                let callee = o.callee().unwrap_or("");
                 let Some(g) = self.dst.func_by_name(callee) else {
                     return self.err(format!("calls `@{callee}`, which cannot be lowered"));
                 };

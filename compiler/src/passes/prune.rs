@@ -8,7 +8,6 @@
 //! user's layout (the specializations' `@L.build`, `@L.sizes`, ...) carry its span, so they stay.
 
 use rustc_hash::FxHashSet;
-use scion_ir::attr::Attr;
 use scion_ir::diag::FileId;
 use scion_ir::entity::FuncId;
 use scion_ir::lo::Op as L;
@@ -86,8 +85,8 @@ fn callees(m: &Module, f: FuncId) -> Vec<String> {
             for &op in &m.blocks[b].ops {
                 let o = &m.ops[op];
                 if matches!(o.kind, OpKind::Tree(Op::Call) | OpKind::Lo(L::Call)) {
-                    if let Some(Attr::Sym(s)) = o.attr("callee") {
-                        names.push(s.clone());
+                    if let Some(s) = o.callee() {
+                        names.push(s.to_string());
                     }
                 }
                 regions.extend(o.regions.iter().copied());

@@ -17,7 +17,7 @@ use crate::module::Module;
 use crate::op::OpKind;
 use crate::tree::directed;
 use crate::tree::scalar::{self, Scalar};
-use crate::tree::CmpPred;
+
 use crate::types::{FloatTy, IntTy, Type};
 use rustc_hash::FxHashMap;
 
@@ -176,8 +176,7 @@ impl<'m> LoInterp<'m> {
                     }
                     Op::Call => {
                         let callee = o
-                            .attr("callee")
-                            .and_then(|a| a.as_sym())
+                            .callee()
                             .and_then(|c| m.func_by_name(c))
                             .ok_or_else(|| err(Some(op), "unknown callee"))?;
                         let res = self.call_func(callee, vals, Some(op))?;
@@ -237,10 +236,7 @@ impl<'m> LoInterp<'m> {
                 Val::from_scalar(scalar::unary(t, sc(0)?).ok_or_else(bad)?)
             }
             Op::Cmp => {
-                let pred = o
-                    .str_attr("pred")
-                    .and_then(CmpPred::from_name)
-                    .ok_or_else(bad)?;
+                let pred = o.pred().ok_or_else(bad)?;
                 let (a, b) = (ptr_as_scalar(&vals[0]), ptr_as_scalar(&vals[1]));
                 Val::Bool(
                     scalar::compare(pred, a.ok_or_else(bad)?, b.ok_or_else(bad)?)

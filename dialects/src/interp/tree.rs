@@ -6,7 +6,7 @@ use crate::attr::Attr;
 use crate::entity::{OpId, TypeId, ValueId};
 use crate::op::OpKind;
 use crate::tree::scalar::{self, Scalar};
-use crate::tree::{CmpPred, Op};
+use crate::tree::Op;
 use crate::types::Type;
 use std::rc::Rc;
 
@@ -183,10 +183,7 @@ impl Interp<'_> {
                 Vec::new()
             }
             Op::Call => {
-                let callee = o
-                    .attr("callee")
-                    .and_then(Attr::as_sym)
-                    .ok_or_else(|| bad("no callee"))?;
+                let callee = o.callee().ok_or_else(|| bad("no callee"))?;
                 let f = m
                     .func_by_name(callee)
                     .ok_or_else(|| bad(&format!("unknown function `@{callee}`")))?;
@@ -259,10 +256,7 @@ impl Interp<'_> {
                 let [a, b] = &args[..] else {
                     return Err(bad("two operands expected"));
                 };
-                let pred = o
-                    .str_attr("pred")
-                    .and_then(CmpPred::from_name)
-                    .ok_or_else(|| bad("bad predicate"))?;
+                let pred = o.pred().ok_or_else(|| bad("bad predicate"))?;
                 vec![lanewise2(a, b, &|x, y| {
                     scalar::compare(pred, x, y)
                         .map(Scalar::Bool)

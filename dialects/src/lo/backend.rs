@@ -43,9 +43,7 @@ pub fn reverse_post_order(m: &Module, blocks: &[BlockId]) -> Vec<BlockId> {
 /// True when some `lo.call` of `m` names `callee`.
 pub fn is_called(m: &Module, callee: &str) -> bool {
     m.ops.iter().any(|(_, o)| {
-        o.parent.is_some()
-            && o.kind == OpKind::Lo(super::Op::Call)
-            && o.attr("callee").and_then(|a| a.as_sym()) == Some(callee)
+        o.parent.is_some() && o.kind == OpKind::Lo(super::Op::Call) && o.callee() == Some(callee)
     })
 }
 

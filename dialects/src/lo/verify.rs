@@ -8,7 +8,7 @@ use super::ops::Op;
 use crate::attr::Attr;
 use crate::entity::{OpId, TypeId};
 use crate::module::Module;
-use crate::tree::CmpPred;
+
 use crate::types::{FloatTy, IntTy, Type};
 use crate::verify::OpContext;
 
@@ -149,7 +149,7 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
         }
         Op::Cmp => {
             counts(2, 1)?;
-            let pred = o.str_attr("pred").and_then(CmpPred::from_name);
+            let pred = o.pred();
             require(pred.is_some(), || {
                 format!("`{name}` needs `pred` = eq, ne, lt, le, gt or ge")
             })?;
@@ -219,7 +219,7 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
             })
         }
         Op::Call => {
-            let callee = o.attr("callee").and_then(Attr::as_sym);
+            let callee = o.callee();
             let Some(f) = callee.and_then(|c| m.func_by_name(c)) else {
                 return Err(format!("`{name}` needs `callee` naming a function"));
             };

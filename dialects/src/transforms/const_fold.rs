@@ -30,7 +30,7 @@ use crate::op::OpKind;
 use crate::pass::{Pass, PassCx, PassError};
 use crate::rewrite;
 use crate::tree::scalar::{binary, bitcast, cast, compare, unary, Scalar};
-use crate::tree::{CmpPred, Op};
+use crate::tree::Op;
 use crate::walk;
 use rustc_hash::FxHashMap;
 
@@ -188,9 +188,7 @@ pub fn fold_op(m: &Module, op: OpId, consts: &FxHashMap<ValueId, Attr>) -> Optio
             [a, b],
         ) => binary(kind, *a, *b)?,
         (Op::Neg | Op::BitNot | Op::Not, [a]) => unary(kind, *a)?,
-        (Op::Cmp, [a, b]) => {
-            Scalar::Bool(compare(CmpPred::from_name(o.str_attr("pred")?)?, *a, *b)?)
-        }
+        (Op::Cmp, [a, b]) => Scalar::Bool(compare(o.pred()?, *a, *b)?),
         (Op::Cast, [a]) => cast(*a, m.types.get(result_ty))?,
         (Op::Bitcast, [a]) => bitcast(*a, m.types.get(result_ty))?,
         _ => return None,

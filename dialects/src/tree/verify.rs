@@ -105,10 +105,7 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
         Op::Cmp => {
             counts(&ot, &rt, 2, 1)?;
             same(&ot[0], &[ot[1]], &show)?;
-            let pred = o
-                .str_attr("pred")
-                .and_then(CmpPred::from_name)
-                .ok_or("`pred` must be one of eq ne lt le gt ge")?;
+            let pred = o.pred().ok_or("`pred` must be one of eq ne lt le gt ge")?;
             let scalar = t.scalar_of(ot[0]);
             let ordered = !matches!(pred, CmpPred::Eq | CmpPred::Ne);
             if !(is_numeric(m, ot[0]) || matches!(t.get(scalar), Type::Bool) && !ordered) {
@@ -370,10 +367,7 @@ pub fn verify_op(m: &Module, id: OpId, kind: Op, cx: &OpContext<'_>) -> VResult 
             }
         }
         Op::Call => {
-            let callee = o
-                .attr("callee")
-                .and_then(Attr::as_sym)
-                .ok_or("`callee` must be a symbol")?;
+            let callee = o.callee().ok_or("`callee` must be a symbol")?;
             let f = m
                 .func_by_name(callee)
                 .ok_or_else(|| format!("call to unknown function `@{callee}`"))?;

@@ -572,10 +572,7 @@ impl<'c> Fn<'_, 'c> {
             }
             L::NextUp | L::NextDown => Some(self.next(kind == L::NextUp, flt(0))?),
             L::Cmp => {
-                let pred = o
-                    .str_attr("pred")
-                    .and_then(CmpPred::from_name)
-                    .ok_or("bad predicate")?;
+                let pred = o.pred().ok_or("bad predicate")?;
                 Some(self.compare(pred, args[0], args[1], signed)?.into())
             }
             L::Select => Some(b.build_select(int(0), args[1], args[2], "").map_err(be)?),
@@ -656,10 +653,7 @@ impl<'c> Fn<'_, 'c> {
                 Some(self.entry_alloca(ty, align)?.into())
             }
             L::Call => {
-                let callee = o
-                    .attr("callee")
-                    .and_then(|a| a.as_sym())
-                    .ok_or("call without callee")?;
+                let callee = o.callee().ok_or("call without callee")?;
                 let f = *self
                     .funcs
                     .get(callee)

@@ -66,10 +66,8 @@ fn check(m: &Module, f: FuncId, calls: &[OpId], params: &[ValueId]) -> Result<()
     let name = m.funcs[f].name.as_str();
     let region = m.funcs[f].body;
     let blocks = m.regions[region].blocks.clone();
-    let is_self = |op: OpId| {
-        m.ops[op].kind == OpKind::Lo(L::Call)
-            && m.ops[op].attr("callee").and_then(Attr::as_sym) == Some(name)
-    };
+    let is_self =
+        |op: OpId| m.ops[op].kind == OpKind::Lo(L::Call) && m.ops[op].callee() == Some(name);
     // Parameters written through: stores, pointers passed to other functions, or to the
     // recursion at another position.
     let mut written: FxHashSet<usize> = FxHashSet::default();

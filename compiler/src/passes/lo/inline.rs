@@ -14,7 +14,6 @@
 //! may be entry points).
 
 use rustc_hash::FxHashMap;
-use scion_ir::attr::Attr;
 use scion_ir::diag::Diagnostic;
 use scion_ir::entity::{FuncId, OpId};
 use scion_ir::lo::Op as L;
@@ -67,7 +66,7 @@ fn callee(m: &Module, op: OpId) -> Option<FuncId> {
     if o.kind != OpKind::Lo(L::Call) {
         return None;
     }
-    m.func_by_name(o.attr("callee").and_then(Attr::as_sym)?)
+    m.func_by_name(o.callee()?)
 }
 
 /// Inlines qualifying calls in the whole module; returns whether anything changed.

@@ -91,7 +91,7 @@ fn callee_of(m: &Module, op: OpId) -> Option<&str> {
     if o.kind != OpKind::Lo(L::Call) {
         return None;
     }
-    o.attr("callee").and_then(Attr::as_sym)
+    o.callee()
 }
 
 /// Rewrites every qualifying function of the `lo` module `m`; returns whether anything changed.

@@ -251,11 +251,11 @@ fn writes_layout(m: &Module, writers: &FxHashSet<FuncId>, op: OpId) -> bool {
     let here = |op: OpId| {
         let o = &m.ops[op];
         match o.kind {
-            OpKind::Tree(tree::Op::Call) => match o.attr("callee") {
-                Some(scion_ir::attr::Attr::Sym(s)) => m
+            OpKind::Tree(tree::Op::Call) => match o.callee() {
+                Some(s) => m
                     .func_by_name(s)
                     .is_none_or(|g| writers.contains(&g) || m.is_declaration(g)),
-                _ => true,
+                None => true,
             },
             kind => writes_directly(kind),
         }
@@ -272,10 +272,7 @@ fn writes_layout(m: &Module, writers: &FxHashSet<FuncId>, op: OpId) -> bool {
 
 /// The function a `tree.call` names, when the module has it.
 fn callee_of(m: &Module, op: OpId) -> Option<FuncId> {
-    match m.ops[op].attr("callee") {
-        Some(scion_ir::attr::Attr::Sym(s)) => m.func_by_name(s),
-        _ => None,
-    }
+    m.ops[op].callee().and_then(|s| m.func_by_name(s))
 }
 
 /// True when `op` (or an op in its regions) may write a cell: `tree.store`, or a call of a
@@ -389,9 +386,9 @@ pub(super) fn layout_writers(m: &Module) -> FxHashSet<FuncId> {
         walk::walk_region(m, m.funcs[f].body, walk::Order::Pre, &mut |op| {
             let o = &m.ops[op];
             match o.kind {
-                OpKind::Tree(tree::Op::Call) => match o.attr("callee") {
-                    Some(scion_ir::attr::Attr::Sym(s)) => callees.push(s.clone()),
-                    _ => writes = true,
+                OpKind::Tree(tree::Op::Call) => match o.callee() {
+                    Some(s) => callees.push(s.to_string()),
+                    None => writes = true,
                 },
                 kind => writes |= writes_directly(kind),
             }

@@ -33,7 +33,6 @@
 //! ```
 
 use rustc_hash::{FxHashMap, FxHashSet};
-use scion_ir::attr::Attr;
 use scion_ir::diag::Diagnostic;
 use scion_ir::op::OpKind;
 use scion_ir::rewrite::{
@@ -109,7 +108,7 @@ fn callee(m: &Module, op: OpId) -> Option<FuncId> {
     if !o.kind.is_tree(tree::Op::Call) {
         return None;
     }
-    let f = m.func_by_name(o.attr("callee").and_then(Attr::as_sym)?)?;
+    let f = m.func_by_name(o.callee()?)?;
     (!m.is_declaration(f)).then_some(f)
 }
 

@@ -180,7 +180,7 @@ fn specialize_func(
             OpKind::Tree(Op::Match) if on_tree => matches.push(op),
             OpKind::Tree(Op::Field | Op::Is) if on_tree => reads.push(op),
             OpKind::Tree(Op::Call) => {
-                if let Some(Attr::Sym(s)) = o.attr("callee") {
+                if let Some(s) = o.callee() {
                     if specialized.contains(s) {
                         calls.push(op);
                     }
