@@ -3,8 +3,9 @@
 //! (docs/language.md, docs/ir.md). The order-sensitive visit log must be the same in a plain
 //! Rust model of that rule, the `tree` interpreter, the `lo` interpreter after
 //! `recursion-to-stack` (a binary heap in the frame) and the JIT-compiled code (Cranelift, LLVM
-//! -O0 and -O3), for trees of every size up to 300 nodes and keys full of ties and NaNs; a queue
-//! too small returns status 1 in every compiled engine.
+//! -O0 and -O3), for trees of every size up to 300 nodes and keys full of ties and NaNs (and
+//! signed integer keys, the smallest `i32` among them); a queue too small returns status 1 in
+//! every compiled engine.
 
 mod common;
 
@@ -23,10 +24,22 @@ func key(i: u32, salt: u32) -> f32 = {
   if h % 13 == 0 { return 0.0 / 0.0; }
   return ((h >> 20) % 5) as f32 - 2.0;
 }
+"#;
 
+/// The same with integer keys: ties, negative keys, and the smallest `i32` one in thirteen.
+const INT_KEYS: &str = r#"
+func key(i: u32, salt: u32) -> i32 = {
+  let h: u32 = (i + salt) * 2654435761;
+  if h % 13 == 0 { return -2147483648; }
+  return ((h >> 20) % 5) as i32 - 2;
+}
+"#;
+
+/// The traversal, over keys of type `K`.
+const VISIT: &str = r#"
 // Node i of an implicit binary tree of n nodes; the log records the visit order, and the body
 // reads and writes it after queueing the children.
-func visit(i: u32, k: f32, n: u32, salt: u32, log: mut u64) order by k = {
+func visit(i: u32, k: K, n: u32, salt: u32, log: mut u64) order by k = {
   log = log * 1000003 + (i + 1) as u64;
   let c: u32 = 2 * i + 1;
   if c < n { visit(c, key(c, salt), n, salt, log); }
@@ -41,19 +54,29 @@ func run(n: u32, salt: u32) -> u64 = {
 }
 "#;
 
+/// The program with float keys, or integer keys.
+fn source(int_keys: bool) -> String {
+    if int_keys {
+        format!("{INT_KEYS}{}", VISIT.replace("k: K", "k: i32"))
+    } else {
+        format!("{SRC}{}", VISIT.replace("k: K", "k: f32"))
+    }
+}
+
 /// The rule of docs/language.md written out: the log `run(n, salt)` must produce, and the
 /// largest number of calls pending at once.
-fn model(n: u32, salt: u32) -> (u64, usize) {
-    let key = |i: u32| -> f32 {
+fn model(n: u32, salt: u32, int_keys: bool) -> (u64, usize) {
+    // The key as the queue orders it: a float NaN is +inf.
+    let order_key = |i: u32| -> f64 {
         let h = i.wrapping_add(salt).wrapping_mul(2_654_435_761);
-        if h % 13 == 0 {
-            return f32::NAN;
+        match (h % 13 == 0, int_keys) {
+            (true, true) => f64::from(i32::MIN),
+            (true, false) => f64::INFINITY,
+            (false, _) => f64::from((h >> 20) % 5) - 2.0,
         }
-        ((h >> 20) % 5) as f32 - 2.0
     };
-    let order_key = |k: f32| if k.is_nan() { f32::INFINITY } else { k };
     let mut log: u64 = 0;
-    let mut queue: Vec<(f32, u64, u32)> = Vec::new();
+    let mut queue: Vec<(f64, u64, u32)> = Vec::new();
     let mut seq = 0u64;
     let mut next = Some(0u32);
     let mut most = 0;
@@ -61,11 +84,11 @@ fn model(n: u32, salt: u32) -> (u64, usize) {
         log = log.wrapping_mul(1_000_003).wrapping_add(u64::from(i + 1));
         let c = 2 * i + 1;
         if c < n {
-            queue.push((order_key(key(c)), seq, c));
+            queue.push((order_key(c), seq, c));
             seq += 1;
         }
         if c + 1 < n && log % 17 != 3 {
-            queue.push((order_key(key(c + 1)), seq, c + 1));
+            queue.push((order_key(c + 1), seq, c + 1));
             seq += 1;
         }
         log = log.wrapping_add(7);
@@ -80,8 +103,8 @@ fn model(n: u32, salt: u32) -> (u64, usize) {
     (log, most)
 }
 
-fn lowered(stack_size: u32) -> (Module, Module) {
-    let tree = common::tree_module_of(&[("best_first.scion", SRC)], false)
+fn lowered(stack_size: u32, int_keys: bool) -> (Module, Module) {
+    let tree = common::tree_module_of(&[("best_first.scion", &source(int_keys))], false)
         .unwrap_or_else(|e| panic!("{e}"));
     let mut lo = tree.clone();
     let reg = passes::registry();
@@ -127,7 +150,16 @@ fn engines(lo: &Module) -> Vec<(String, Box<dyn JitCode>)> {
 
 #[test]
 fn every_engine_visits_in_key_order() {
-    let (tree, lo) = lowered(64);
+    visits_in_key_order(false);
+}
+
+#[test]
+fn integer_keys_order_signed() {
+    visits_in_key_order(true);
+}
+
+fn visits_in_key_order(int_keys: bool) {
+    let (tree, lo) = lowered(64, int_keys);
     let visit = lo.func_by_name("visit").expect("visit");
     assert!(lo.funcs[visit].attrs.get("best_first").is_some());
     assert!(
@@ -138,7 +170,7 @@ fn every_engine_visits_in_key_order() {
     let mut pending_seen = 0;
     for n in 0..300u32 {
         for salt in [0u32, 1, 7, 1234] {
-            let (want, most) = model(n, salt);
+            let (want, most) = model(n, salt, int_keys);
             pending_seen = pending_seen.max(most);
             let got = Interp::new(&tree)
                 .call("run", vec![u32v(n), u32v(salt)])
@@ -176,10 +208,10 @@ fn every_engine_visits_in_key_order() {
 
 #[test]
 fn a_full_queue_is_status_one() {
-    let (_, lo) = lowered(4);
+    let (_, lo) = lowered(4, false);
     let jits = engines(&lo);
     for n in [40u32, 100, 299] {
-        let (_, most) = model(n, 7);
+        let (_, most) = model(n, 7, false);
         assert!(most > 4, "n = {n} needs {most} entries");
         let out = LoInterp::new(&lo)
             .call("run", vec![u32v(n), u32v(7)])
@@ -193,7 +225,7 @@ fn a_full_queue_is_status_one() {
         }
     }
     // Small trees fit.
-    let (want, most) = model(6, 7);
+    let (want, most) = model(6, 7, false);
     assert!(most <= 4);
     let out = LoInterp::new(&lo)
         .call("run", vec![u32v(6), u32v(7)])
