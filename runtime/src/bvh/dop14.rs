@@ -90,7 +90,7 @@ impl Dop14 {
 fn round_down(x: f64) -> f32 {
     let f = x as f32;
     if f64::from(f) > x {
-        f.next_down()
+        -step_up(-f)
     } else {
         f
     }
@@ -100,10 +100,23 @@ fn round_down(x: f64) -> f32 {
 fn round_up(x: f64) -> f32 {
     let f = x as f32;
     if f64::from(f) < x {
-        f.next_up()
+        step_up(f)
     } else {
         f
     }
+}
+
+/// The next `f32` toward `+inf` (`f32::next_up`, which the crate's minimum Rust does not have);
+/// NaN and `+inf` stay.
+fn step_up(f: f32) -> f32 {
+    if f.is_nan() || f == f32::INFINITY {
+        return f;
+    }
+    if f == 0.0 {
+        return f32::from_bits(1);
+    }
+    let b = f.to_bits();
+    f32::from_bits(if f > 0.0 { b + 1 } else { b - 1 })
 }
 
 /// Every node's DOP-14, by node index: a leaf's from its triangles, an interior node's the

@@ -18,6 +18,7 @@
 //! - The widening factor is the literal `1.0000004` rounded to `f32` (`1 + 3 * 2^-23`).
 
 use crate::geom::{Aabb, Ray, Triangle, Vec3};
+use std::cmp::Ordering;
 
 /// `1.0000004` as the prelude writes it, rounded to `f32`.
 pub const FAR_WIDENING: f32 = 1.000_000_4;
@@ -169,6 +170,52 @@ pub fn hit_distance(ray: &Ray, tri: &Triangle) -> f32 {
     f32::INFINITY
 }
 
+/// The prelude's `0.00000095367431640625` (2^-20), the diagonal test's margin per unit of
+/// magnitude.
+pub const DIAGONAL_MARGIN: f32 = 1.0 / 1_048_576.0;
+
+/// The prelude's `diagonals(p)`: `(x+y+z, x+y-z, x-y+z, x-y-z)`, left to right.
+#[inline]
+pub fn diagonals(p: Vec3) -> [f32; 4] {
+    [
+        p.x + p.y + p.z,
+        p.x + p.y - p.z,
+        p.x - p.y + p.z,
+        p.x - p.y - p.z,
+    ]
+}
+
+/// The prelude's `hmax`: the lanes folded left to right by `max` (minNum semantics).
+fn hmax4(v: [f32; 4]) -> f32 {
+    max_num(max_num(max_num(v[0], v[1]), v[2]), v[3])
+}
+
+/// The prelude's `distmin(ray, r, dop, tmax)`: the axis slabs' entry distance unless the
+/// conservative diagonal test separates the ray's piece inside them from the DOP.
+pub fn distmin_dop14(ray: &Ray, r: &SlabRay, dop: &crate::bvh::dop14::Dop14, tmax: f32) -> f32 {
+    let b = Aabb::new(Vec3::from_array(dop.lo1), Vec3::from_array(dop.hi1));
+    let (t0, t1) = slab_interval_of(r, &b, tmax);
+    // A miss: not `t0 <= t1` (false too when either is NaN).
+    if !matches!(t0.partial_cmp(&t1), Some(Ordering::Less | Ordering::Equal)) {
+        return f32::INFINITY;
+    }
+    if t0.abs() < f32::INFINITY && t1.abs() < f32::INFINITY {
+        let o = diagonals(ray.origin);
+        let d = diagonals(ray.dir);
+        let s0: [f32; 4] = std::array::from_fn(|k| o[k] + d[k] * t0);
+        let s1: [f32; 4] = std::array::from_fn(|k| o[k] + d[k] * t1);
+        let hsum_abs = |v: Vec3| v.x.abs() + v.y.abs() + v.z.abs();
+        let reach = hsum_abs(ray.origin) + max_num(t0.abs(), t1.abs()) * hsum_abs(ray.dir);
+        let e = reach * DIAGONAL_MARGIN;
+        let above: [f32; 4] = std::array::from_fn(|k| min_num(s0[k], s1[k]) - e - dop.hi2[k]);
+        let below: [f32; 4] = std::array::from_fn(|k| dop.lo2[k] - (max_num(s0[k], s1[k]) + e));
+        if hmax4(above) > 0.0 || hmax4(below) > 0.0 {
+            return f32::INFINITY;
+        }
+    }
+    t0
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -238,45 +285,4 @@ mod tests {
             f32::INFINITY
         );
     }
-}
-
-/// The prelude's `diagonals(p)`: `(x+y+z, x+y-z, x-y+z, x-y-z)`, left to right.
-#[inline]
-pub fn diagonals(p: Vec3) -> [f32; 4] {
-    [
-        p.x + p.y + p.z,
-        p.x + p.y - p.z,
-        p.x - p.y + p.z,
-        p.x - p.y - p.z,
-    ]
-}
-
-/// The prelude's `hmax`: the lanes folded left to right by `max` (minNum semantics).
-fn hmax4(v: [f32; 4]) -> f32 {
-    max_num(max_num(max_num(v[0], v[1]), v[2]), v[3])
-}
-
-/// The prelude's `distmin(ray, r, dop, tmax)`: the axis slabs' entry distance unless the
-/// conservative diagonal test separates the ray's piece inside them from the DOP.
-pub fn distmin_dop14(ray: &Ray, r: &SlabRay, dop: &crate::bvh::dop14::Dop14, tmax: f32) -> f32 {
-    let b = Aabb::new(Vec3::from_array(dop.lo1), Vec3::from_array(dop.hi1));
-    let (t0, t1) = slab_interval_of(r, &b, tmax);
-    if !(t0 <= t1) {
-        return f32::INFINITY;
-    }
-    if t0.abs() < f32::INFINITY && t1.abs() < f32::INFINITY {
-        let o = diagonals(ray.origin);
-        let d = diagonals(ray.dir);
-        let s0: [f32; 4] = std::array::from_fn(|k| o[k] + d[k] * t0);
-        let s1: [f32; 4] = std::array::from_fn(|k| o[k] + d[k] * t1);
-        let hsum_abs = |v: Vec3| v.x.abs() + v.y.abs() + v.z.abs();
-        let reach = hsum_abs(ray.origin) + max_num(t0.abs(), t1.abs()) * hsum_abs(ray.dir);
-        let e = reach * 0.000_000_953_674_316_406_25;
-        let above: [f32; 4] = std::array::from_fn(|k| min_num(s0[k], s1[k]) - e - dop.hi2[k]);
-        let below: [f32; 4] = std::array::from_fn(|k| dop.lo2[k] - (max_num(s0[k], s1[k]) + e));
-        if hmax4(above) > 0.0 || hmax4(below) > 0.0 {
-            return f32::INFINITY;
-        }
-    }
-    t0
 }
