@@ -17,7 +17,7 @@
 //! full queue returns status 1, as a full stack does ([`super::recursion_to_stack`]).
 
 use super::recursion_to_stack::{
-    changed_args, check_stack_bytes, entry_addr, exits, not_tail, split_at_call, split_entry,
+    body_of, changed_args, check_stack_bytes, entry_addr, exits, split_at_call, split_entry,
 };
 use scion_ir::attr::Attr;
 use scion_ir::diag::Diagnostic;
@@ -43,12 +43,7 @@ pub(super) fn rewrite(
     calls: &[OpId],
     size: u32,
 ) -> Result<(), Diagnostic> {
-    if !m.funcs[f].results.is_empty() {
-        return Err(not_tail(m, calls[0], "the function returns values"));
-    }
-    let region = m.funcs[f].body;
-    let entry = m.regions[region].blocks[0];
-    let params: Vec<ValueId> = m.blocks[entry].args.to_vec();
+    let (region, entry, params) = body_of(m, f, calls)?;
     if key >= params.len() {
         return Err(Diagnostic::error(
             "E0971",

@@ -15,7 +15,8 @@
 //! returns status 1 as in the tail-call scheme of [`super::recursion_to_stack`].
 
 use super::recursion_to_stack::{
-    changed_args, check_stack_bytes, entry_addr, exits, not_tail, split_at_call, split_entry,
+    body_of, changed_args, check_stack_bytes, entry_addr, exits, not_tail, split_at_call,
+    split_entry,
 };
 use rustc_hash::FxHashSet;
 use scion_ir::attr::Attr;
@@ -161,12 +162,7 @@ pub(super) fn rewrite(
     calls: &[OpId],
     size: u32,
 ) -> Result<(), Diagnostic> {
-    if !m.funcs[f].results.is_empty() {
-        return Err(not_tail(m, calls[0], "the function returns values"));
-    }
-    let region = m.funcs[f].body;
-    let entry = m.regions[region].blocks[0];
-    let params: Vec<ValueId> = m.blocks[entry].args.to_vec();
+    let (region, entry, params) = body_of(m, f, calls)?;
     check(m, f, calls, &params).map_err(|(op, why)| {
         let mut d = not_tail(m, calls[0], &why);
         if let Some(s) = m.span(op) {

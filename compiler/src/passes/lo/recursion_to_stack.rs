@@ -37,7 +37,7 @@
 use rustc_hash::{FxHashMap, FxHashSet};
 use scion_ir::attr::Attr;
 use scion_ir::diag::{Diagnostic, Diagnostics};
-use scion_ir::entity::{BlockId, FuncId, OpId, TypeId, ValueId};
+use scion_ir::entity::{BlockId, FuncId, OpId, RegionId, TypeId, ValueId};
 use scion_ir::lo::Op as L;
 use scion_ir::module::{ValueData, ValueDef};
 use scion_ir::op::OpKind;
@@ -245,12 +245,7 @@ pub(super) fn check_stack_bytes(
 }
 
 fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), Diagnostic> {
-    if !m.funcs[f].results.is_empty() {
-        return Err(not_tail(m, calls[0], "the function returns values"));
-    }
-    let region = m.funcs[f].body;
-    let entry = m.regions[region].blocks[0];
-    let params: Vec<ValueId> = m.blocks[entry].args.to_vec();
+    let (region, entry, params) = body_of(m, f, calls)?;
     let by_block = tail_shape(m, calls)?;
     let mut changed: FxHashSet<usize> = FxHashSet::default();
     for cs in by_block.values() {
@@ -444,6 +439,21 @@ pub(super) fn changed_args(
     }
     changed.sort_unstable();
     Ok(changed)
+}
+
+/// The body's region, its entry block and the parameters of `f`, whose recursive calls are
+/// `calls`; a function with results cannot become a loop of calls (E0971).
+pub(super) fn body_of(
+    m: &Module,
+    f: FuncId,
+    calls: &[OpId],
+) -> Result<(RegionId, BlockId, Vec<ValueId>), Diagnostic> {
+    if !m.funcs[f].results.is_empty() {
+        return Err(not_tail(m, calls[0], "the function returns values"));
+    }
+    let region = m.funcs[f].body;
+    let entry = m.regions[region].blocks[0];
+    Ok((region, entry, m.blocks[entry].args.to_vec()))
 }
 
 /// Fills the loop's two exits: `done` returns status 0, `overflow` status 1.
