@@ -21,21 +21,20 @@ use scion_runtime::reference::{
 use scion_tests::cases::{hard_and_real, mixed_rays, TreeKind};
 use std::path::PathBuf;
 
-fn program() -> Program {
+/// The library's closest hit with `layout` of the shared slab files.
+fn program(layout: &str) -> Program {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
     let read = |rel: &str| std::fs::read_to_string(root.join(rel)).expect(rel);
+    let files = [
+        "library/algorithms/closest_hit.scion",
+        "lit-tests/Inputs/shared_slab.scion",
+    ];
     Program {
-        files: vec![
-            (
-                "closest_hit.scion".to_string(),
-                read("library/algorithms/closest_hit.scion"),
-            ),
-            (
-                "shared_slab.scion".to_string(),
-                read("lit-tests/Inputs/shared_slab.scion"),
-            ),
-        ],
-        layout: "SharedSlab".to_string(),
+        files: files
+            .iter()
+            .map(|f| (f.rsplit('/').next().unwrap().to_string(), read(f)))
+            .collect(),
+        layout: layout.to_string(),
         algorithm: "closest_hit".to_string(),
     }
 }
@@ -84,7 +83,19 @@ fn slab_boxes(tree: &LogicalTree) -> Vec<Aabb> {
 
 #[test]
 fn shared_slab_is_packed_and_traced_like_the_reference() {
-    let lo = c_entries::host_lo(&program());
+    traced_like_the_reference("SharedSlab");
+}
+
+/// The same nodes with the box carried by `parent.` (the compiler widens the reference with
+/// the parent's index, axis and planes): the same boxes, so the same hits.
+#[test]
+fn shared_slab_with_parent_is_packed_and_traced_like_the_reference() {
+    traced_like_the_reference("SharedSlabParent");
+}
+
+fn traced_like_the_reference(layout: &str) {
+    // 2048 entries: the carried reference takes 96 bytes of the thread's stack per entry.
+    let lo = c_entries::host_lo_stack(&program(layout), 2048);
     let nodes: Vec<u64> = lo
         .entry
         .buffers
@@ -146,7 +157,7 @@ fn shared_slab_is_packed_and_traced_like_the_reference() {
     assert!(compared > 20_000, "{compared} rays");
     assert!(visits.0 >= visits.1, "looser boxes never visit fewer nodes");
     eprintln!(
-        "{compared} rays, {exceptions} differing from the exact boxes by the rounding exception; \
+        "{layout}: {compared} rays, {exceptions} differing from the exact boxes by the rounding exception; \
          nodes visited: slab {} vs exact boxes {} ({:.1} %)",
         visits.0,
         visits.1,

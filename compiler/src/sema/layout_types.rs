@@ -64,6 +64,27 @@ impl Checker<'_> {
             [(_, t)] => t.clone(),
             _ => Ty::Tuple(params.iter().map(|p| p.1.clone()).collect()),
         };
+        // A child's reference as the layout's expression for it gives it: the components
+        // that are not tree-carried (`c: T = parent.x` is filled by the compiler).
+        let own: Vec<Ty> = decl
+            .params
+            .iter()
+            .zip(&params)
+            .enumerate()
+            // The first is placed, never carried (a carried one is E0328).
+            .filter(|(k, (p, _))| {
+                *k == 0
+                    || !matches!(
+                        p.default.as_ref().map(|d| &d.kind),
+                        Some(ExprKind::Parent(_))
+                    )
+            })
+            .map(|(_, (_, t))| t.1.clone())
+            .collect();
+        let child_ty = match own.as_slice() {
+            [t] => t.clone(),
+            _ => Ty::Tuple(own),
+        };
         let build_ref_ty = params
             .first()
             .map_or_else(|| ref_ty.clone(), |p| p.1.clone());
@@ -73,6 +94,7 @@ impl Checker<'_> {
             adt: None,
             params,
             ref_ty,
+            child_ty,
             build_ref_ty,
             members: Vec::new(),
             arms: Vec::new(),
@@ -281,7 +303,7 @@ impl Checker<'_> {
     /// Among several candidate sum types, the one whose logical field types the layout's typed
     /// members agree with most (`None` when that does not decide either).
     fn pick_adt_by_types(&mut self, layout: usize, cands: &[AdtId]) -> Option<AdtId> {
-        let ref_ty = self.out.layouts[layout].ref_ty.clone();
+        let ref_ty = self.out.layouts[layout].child_ty.clone();
         let members: Vec<(String, Ty)> = self.out.layouts[layout]
             .members
             .iter()
@@ -529,7 +551,7 @@ impl Checker<'_> {
                 .find(|f| f.name == mi.name)
                 .cloned()
         })?;
-        let expected = self.physical_of(&f.ty, adt, &l.ref_ty);
+        let expected = self.physical_of(&f.ty, adt, &l.child_ty);
         Some((f.ty, expected))
     }
 

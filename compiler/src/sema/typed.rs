@@ -257,6 +257,9 @@ pub struct LayoutInfo {
     pub params: Vec<(String, Ty)>,
     /// The reference type: the single component's type, or the tuple of all components.
     pub ref_ty: Ty,
+    /// A child's reference as the layout's expression for it (`left = I + 1`) gives it: the
+    /// components that are not tree-carried (the compiler adds `c: T = parent.x` itself).
+    pub child_ty: Ty,
     /// The reference as a build places it: the first component's type. With several
     /// components the others are the traversal's (computed by the layout's expressions for a
     /// child, from their defaults at the root), so `this` and a built child are the first.

@@ -25,10 +25,16 @@ type RootPtrFn = unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) ->
 /// `program` compiled to `lo` with its C entries for the host, as `scionc -O3` does, with a
 /// stack of 4096 entries (the hard cases include a chain a thousand nodes deep).
 pub fn host_lo(program: &Program) -> LibraryLo {
+    host_lo_stack(program, 4096)
+}
+
+/// [`host_lo`] with a stack of `entries` (a wide reference takes more of the thread's stack
+/// per entry).
+pub fn host_lo_stack(program: &Program, entries: u32) -> LibraryLo {
     program_lo(
         program,
         &LoOptions {
-            stack_size: Some(4096),
+            stack_size: Some(entries),
             opt_level: 3,
             dsl_opt: true,
             target: EntryTarget::Host,

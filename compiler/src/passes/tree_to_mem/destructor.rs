@@ -406,7 +406,11 @@ fn destruct(
             if !uses.contains(a) {
                 continue;
             }
-            let v = rd.field(m, &variant, field)?;
+            let v = if m.values[*a].ty == tree_ty {
+                rd.child_ref(m, &variant, field)?
+            } else {
+                rd.field(m, &variant, field)?
+            };
             if m.values[*a].ty == tree_ty && m.values[v].ty != ref_ty {
                 return Err(unsupported(
                     m.span(op),

@@ -256,6 +256,19 @@ pub(super) fn root_ref_fn(
     let mut rd = Reader::new(spec, args[0], vec![args[1]], InsertPoint::Before(first));
     let mut vals = vec![args[1]];
     for (k, c) in comps.iter().enumerate().skip(1) {
+        if c.carried.is_some() {
+            // The root has no parent: its carried components are zero.
+            let mut bd = Builder::new(m);
+            bd.set_insertion_point(InsertPoint::Before(first));
+            let z = zero(&mut bd, tys[k]).ok_or_else(|| {
+                unsupported(
+                    Some(c.name.span),
+                    "a tree-carried component of a type without a zero value",
+                )
+            })?;
+            vals.push(z);
+            continue;
+        }
         let Some(e) = &c.default else {
             return Err(Diagnostic::error(
                 "E0380",
@@ -289,6 +302,39 @@ pub(super) fn root_ref_fn(
     bd.ret(&[tuple]);
     erase_op(m, first);
     Ok(())
+}
+
+/// The zero value of `ty` (numbers 0, `false`, records, tuples, vectors and arrays of zeros).
+fn zero(bd: &mut Builder<'_>, ty: TypeId) -> Option<ValueId> {
+    Some(match bd.m.types.get(ty).clone() {
+        Type::Bool => bd.const_bool(false),
+        Type::Int(_) => bd.const_int(ty, 0),
+        Type::Float(_) => bd.const_float(ty, 0.0),
+        Type::Vector { elem, lanes } => {
+            let z = zero(bd, elem)?;
+            bd.vector(&vec![z; lanes as usize])?
+        }
+        Type::Tuple(es) => {
+            let vals = es
+                .iter()
+                .map(|&e| zero(bd, e))
+                .collect::<Option<Vec<_>>>()?;
+            bd.tuple(&vals)
+        }
+        Type::Adt(name) => {
+            let adt = bd.m.adt(&name)?;
+            if !adt.is_record() {
+                return None;
+            }
+            let tys: Vec<TypeId> = adt.shared.iter().map(|f| f.ty).collect();
+            let vals = tys
+                .iter()
+                .map(|&e| zero(bd, e))
+                .collect::<Option<Vec<_>>>()?;
+            bd.ctor(ty, None, &vals)
+        }
+        _ => return None,
+    })
 }
 
 /// The name of the tree type's first variant: what the reader resolves global names in.

@@ -357,29 +357,46 @@ func pair(bvh: BVH) -> u32 =
 }
 
 #[test]
-fn parent_values_are_diagnosed() {
+fn parent_values_are_carried_or_diagnosed() {
+    // `pb` carries the parent's derived `bounds`; `parent.hi` of a stored field adds a
+    // component of its own.
     let layout = r#"
-layout Par(I: u32, lo: f32x3 = parent.lo) {
+layout Par(I: u32, pb: AABB = parent.bounds) {
   P: u32; N: u32; primitives: Triangle[P];
   group nodes[size=N] by I {
     hi: f32x3;
-    bounds = AABB(lo, hi);
+    bounds = AABB(min(pb.low, parent.hi), hi);
     split nprims {
       > 0 -> Leaf { p_o: u32; data = primitives[p_o : p_o + nprims]; };
-      0 -> Interior { c_o: u32; left = (I + 1, lo); right = (I + c_o, lo); };
+      0 -> Interior { c_o: u32; left = I + 1; right = I + c_o; };
     };
     nprims: u16;
   };
 };
 "#;
     let algo = "func lo(bvh: BVH) -> f32 = bvh.bounds.low.x";
-    let e = mem(&[algo, layout], "Par").unwrap_err();
+    let out = mem(&[COUNT, algo, layout], "Par").unwrap();
+    // The reference: the index, the parent's box and the parent's `hi`.
     assert!(
-        e.contains("E0380") && e.contains("tree-carried reference components"),
+        out.contains("(u32, !tree.adt<\"AABB\">, vector<3xf32>)"),
+        "{out}"
+    );
+    // The placed component cannot be carried; a derived field is carried only by a declared
+    // component (its type is not written anywhere).
+    let first = layout.replace(
+        "Par(I: u32, pb: AABB = parent.bounds)",
+        "Par(I: u32 = parent.c_o)",
+    );
+    let e = mem(&[COUNT, &first], "Par").unwrap_err();
+    assert!(
+        e.contains("E0328") && e.contains("first reference component"),
         "{e}"
     );
-    let e = mem(&[COUNT, layout], "Par").unwrap_err();
-    assert!(e.contains("E0380") && e.contains("(`parent.`)"), "{e}");
+    let derived = layout
+        .replace("Par(I: u32, pb: AABB = parent.bounds)", "Par(I: u32)")
+        .replace("min(pb.low, parent.hi)", "parent.bounds.low");
+    let e = mem(&[COUNT, &derived], "Par").unwrap_err();
+    assert!(e.contains("E0328") && e.contains("`parent.bounds`"), "{e}");
 }
 
 #[test]

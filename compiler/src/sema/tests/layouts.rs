@@ -142,7 +142,7 @@ layout Carry(I: u32, b: AABB = parent.bounds) {
   N: u32;
   group nodes[size=N] by I {
     bounds: AABB;
-    split nprims { 0 -> Interior { left = (I + 1, bounds); right = (I + 2, bounds); };
+    split nprims { 0 -> Interior { left = I + 1; right = I + 2; };
                    _ -> Leaf { data = primitives[0:0]; }; };
     nprims: u16;
   };

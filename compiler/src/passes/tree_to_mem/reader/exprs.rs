@@ -25,12 +25,6 @@ impl<'a> Reader<'a> {
         match &e.kind {
             ExprKind::Name(id) => {
                 if let Some(i) = self.spec.model.component(&id.name) {
-                    if self.spec.model.components[i].carried.is_some() {
-                        return Err(unsupported(
-                            Some(id.span),
-                            "tree-carried reference components (`parent.`)",
-                        ));
-                    }
                     return self.components.get(i).copied().ok_or_else(|| {
                         unsupported(
                             Some(id.span),
@@ -182,10 +176,30 @@ impl<'a> Reader<'a> {
                 });
                 Ok(self.builder(m, false).build1(Op::Array, &vals, t))
             }
-            ExprKind::Parent(id) => Err(unsupported(
-                Some(id.span),
-                "`parent.` values are not supported by destructor specialization",
-            )),
+            // The component that carries `x` (declared `c: T = parent.x`, or added for it).
+            ExprKind::Parent(id) => {
+                let model = &self.spec.model;
+                let Some(i) = model
+                    .components
+                    .iter()
+                    .position(|c| c.carried.as_ref().is_some_and(|x| x.name == id.name))
+                else {
+                    return Err(unsupported(
+                        Some(id.span),
+                        format!("`parent.{}` carried by no reference component", id.name),
+                    ));
+                };
+                self.components.get(i).copied().ok_or_else(|| {
+                    unsupported(
+                        Some(id.span),
+                        format!(
+                            "`parent.{}` where only the placed component is known (a build \
+                             places the first component; the carried ones are the traversal's)",
+                            id.name
+                        ),
+                    )
+                })
+            }
             _ => Err(unsupported(Some(e.span), "this form of layout expression")),
         }
     }

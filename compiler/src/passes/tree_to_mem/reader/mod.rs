@@ -145,6 +145,64 @@ impl<'a> Reader<'a> {
         Ok(v)
     }
 
+    /// The whole reference of recursive field `name` of `variant`. The layout's expression
+    /// for it (`left = I + 1`) gives the components that are not tree-carried (one value, or
+    /// a tuple of them in order); each carried component (`c = parent.x`) takes this node's
+    /// value of `x`.
+    pub fn child_ref(&mut self, m: &mut Module, variant: &str, name: &str) -> R<ValueId> {
+        let v = self.field(m, variant, name)?;
+        let comps = &self.spec.model.components;
+        if comps.iter().all(|c| c.carried.is_none()) {
+            return Ok(v);
+        }
+        let own = comps.iter().filter(|c| c.carried.is_none()).count();
+        let span = Some(self.spec.model.span);
+        if matches!(m.types.get(m.values[v].ty), Type::Array { .. }) {
+            return Err(unsupported(
+                span,
+                format!("an array of children (`{name}`) in a layout with tree-carried components"),
+            ));
+        }
+        let own_vals: Vec<ValueId> = if own == 1 {
+            vec![v]
+        } else {
+            match m.types.get(m.values[v].ty) {
+                Type::Tuple(es) if es.len() == own => {}
+                _ => {
+                    return Err(unsupported(
+                        span,
+                        format!(
+                            "child `{name}` of `{variant}` gives no tuple of the {own} components \
+                             that are not carried"
+                        ),
+                    ))
+                }
+            }
+            let mut bd = self.builder(m, false);
+            (0..own).filter_map(|k| bd.extract(v, k)).collect()
+        };
+        let carried: Vec<(usize, Option<String>)> = comps
+            .iter()
+            .enumerate()
+            .map(|(k, c)| (k, c.carried.as_ref().map(|x| x.name.clone())))
+            .collect();
+        let mut own_iter = own_vals.into_iter();
+        let mut vals = Vec::with_capacity(carried.len());
+        for (_, x) in carried {
+            let val = match x {
+                None => own_iter.next().expect("one value per own component"),
+                Some(x) => match self.spec.model.component(&x) {
+                    Some(j) => self.components.get(j).copied().ok_or_else(|| {
+                        unsupported(span, format!("component `{x}` unknown here"))
+                    })?,
+                    None => self.field(m, variant, &x)?,
+                },
+            };
+            vals.push(val);
+        }
+        Ok(self.builder(m, false).tuple(&vals))
+    }
+
     fn path_value(
         &mut self,
         m: &mut Module,
@@ -180,9 +238,6 @@ impl<'a> Reader<'a> {
             } => {
                 for (id, dep) in deps {
                     let msg = match dep {
-                        Dep::Parent(_) => {
-                            "`parent.` values are not supported by destructor specialization"
-                        }
                         Dep::Unknown(_) => {
                             "a name of this derived field is on no route of the variant"
                         }
