@@ -39,6 +39,7 @@ typedef struct ScionTreeView {
 #define SCION_ROLE_PRIM_COUNT 4   /* a leaf's primitive count: an unsigned int of width bytes */
 #define SCION_ROLE_PRIM_OFFSET 5  /* a leaf's first primitive: uint32_t */
 #define SCION_ROLE_DOP14_BOUNDS 6 /* the node's DOP-14: float[14], axis mins, maxes, diagonal mins, maxes */
+#define SCION_ROLE_CHILD_OBBS 7   /* oriented boxes of child slots: float[count][15], columns vx, vy, vz of M, then the box of M*x */
 #define SCION_SHARED 0xFFFFFFFFu  /* `variant` of a field every variant has */
 typedef struct ScionLogicalField {
     uint32_t role, variant, offset, slot, count, width;

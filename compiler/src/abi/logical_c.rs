@@ -31,10 +31,21 @@ fn decl(m: &Module, name: &str, ty: scion_ir::TypeId, slot: &Slot) -> (String, u
             4,
         ),
         Slot::Value { .. } => match m.types.get(ty) {
-            Type::Array { len: Some(n), .. } => (
-                format!("float {name}[{n}][6]; /* boxes: low x, y, z, high x, y, z */"),
-                24 * n,
-            ),
+            // Oriented boxes (60 bytes each) or boxes.
+            Type::Array { elem, len: Some(n) } => match scion_ir::data_layout::size_align(m, *elem)
+            {
+                Some((60, _)) => (
+                    format!(
+                        "float {name}[{n}][15]; /* oriented boxes: columns vx, vy, vz of M, \
+                         then low x, y, z, high x, y, z of the box of M*x */"
+                    ),
+                    60 * n,
+                ),
+                _ => (
+                    format!("float {name}[{n}][6]; /* boxes: low x, y, z, high x, y, z */"),
+                    24 * n,
+                ),
+            },
             Type::Int(_) => {
                 let (size, _) = scion_ir::data_layout::size_align(m, ty).unwrap_or((4, 4));
                 (

@@ -97,8 +97,11 @@ pub struct LogicalAbi {
     pub shared: usize,
     /// Where the variants' own fields start.
     pub variant_base: u64,
-    /// Kind of the interior variant.
+    /// Kind of the (axis-aligned) interior variant.
     pub interior: usize,
+    /// Kinds of every variant with children: `interior`, and an oriented one (child boxes
+    /// of type `OBB[n]`) when the type has it.
+    pub interiors: Vec<usize>,
     /// Kind of the leaf variant.
     pub leaf: usize,
     /// Bytes per node.
@@ -138,6 +141,23 @@ fn is_dop14(m: &Module, ty: TypeId) -> bool {
     def.is_record()
         && def.shared.len() == 4
         && def.shared.iter().zip([3, 3, 4, 4]).all(|(x, n)| f(x.ty, n))
+}
+
+/// An oriented box record: three `f32x3` columns of a matrix `M`, then an `AABB` (the box of
+/// `M·x`; `scion_runtime::bvh::oriented`).
+fn is_obb(m: &Module, ty: TypeId) -> bool {
+    let Type::Adt(name) = m.types.get(ty) else {
+        return false;
+    };
+    let Some(def) = m.adt(name) else { return false };
+    let f3 = |t: TypeId| {
+        matches!(m.types.get(t), Type::Vector { elem, lanes: 3 }
+            if matches!(m.types.get(*elem), Type::Float(f) if f.bits() == 32))
+    };
+    def.is_record()
+        && def.shared.len() == 4
+        && def.shared[..3].iter().all(|f| f3(f.ty))
+        && is_aabb(m, def.shared[3].ty)
 }
 
 fn is_triangle(m: &Module, ty: TypeId) -> bool {
@@ -184,18 +204,41 @@ impl LogicalAbi {
                 .filter_map(|f| children_of(f.ty))
                 .sum::<u64>()
         };
-        let (interior, leaf) = match def.variants.as_slice() {
-            [a, b] if shape(a) > 0 && shape(b) == 0 => (0, 1),
-            [a, b] if shape(b) > 0 && shape(a) == 0 => (1, 0),
+        // One leaf variant; one axis-aligned interior variant and at most one oriented one
+        // (child boxes `OBB[n]`), all of the same arity.
+        let oriented_variant = |v: &scion_ir::module::Variant| {
+            v.fields.iter().any(|f| {
+                matches!(m.types.get(f.ty), Type::Array { elem, len: Some(_) } if is_obb(m, *elem))
+            })
+        };
+        let leaves: Vec<usize> = (0..def.variants.len())
+            .filter(|&k| shape(&def.variants[k]) == 0)
+            .collect();
+        let interiors: Vec<usize> = (0..def.variants.len())
+            .filter(|&k| shape(&def.variants[k]) > 0)
+            .collect();
+        let aligned: Vec<usize> = interiors
+            .iter()
+            .copied()
+            .filter(|&k| !oriented_variant(&def.variants[k]))
+            .collect();
+        let arity = interiors.first().map_or(0, |&k| shape(&def.variants[k]));
+        let (interior, leaf) = match (&leaves[..], &aligned[..]) {
+            ([l], [i])
+                if interiors.len() <= 2
+                    && interiors.iter().all(|&k| shape(&def.variants[k]) == arity) =>
+            {
+                (*i, *l)
+            }
             _ => {
                 return Err(format!(
-                    "the runtime builds trees of two variants, one with children and one with \
-                     primitives; `{name}` has {} variant(s) of another shape",
+                    "the runtime builds trees of one variant with primitives, one with children \
+                     and at most one more with children and oriented child boxes (`OBB[n]`), of \
+                     the same arity; `{name}` has {} variant(s) of another shape",
                     def.variants.len()
                 ))
             }
         };
-        let arity = shape(&def.variants[interior]);
         let bad = |field: &str, what: String| Err(format!("`{name}`'s field `{field}`: {what}"));
         // Shared fields.
         let mut at = 4u64;
@@ -242,8 +285,8 @@ impl LogicalAbi {
         let base = align_up(at, ualign);
         let mut end = at;
         let mut variants = Vec::new();
-        let mut next_slot = 0u64;
         for (k, v) in def.variants.iter().enumerate() {
+            let mut next_slot = 0u64;
             let mut at = base;
             let mut out = shared.clone();
             let mut pending: Vec<(usize, String)> = Vec::new();
@@ -291,6 +334,26 @@ impl LogicalAbi {
                                 },
                                 Some(r),
                             )
+                        }
+                        Type::Array { elem, len: Some(n) }
+                            if k != interior && interiors.contains(&k) && is_obb(m, *elem) =>
+                        {
+                            if *n != arity {
+                                return bad(
+                                    &f.name,
+                                    format!("{n} oriented child boxes for {arity} children"),
+                                );
+                            }
+                            let o = align_up(at, 4);
+                            let r = SchemaField::new(
+                                Role::ChildObbs,
+                                k as u32,
+                                o as u32,
+                                0,
+                                *n as u32,
+                                0,
+                            );
+                            (60 * n, 4, Slot::Value { offset: o }, Some(r))
                         }
                         Type::Array { elem, len: Some(n) }
                             if k == interior && is_aabb(m, *elem) =>
@@ -408,6 +471,7 @@ impl LogicalAbi {
             shared: shared.len(),
             variant_base: base,
             interior,
+            interiors,
             leaf,
             node_size,
             node_align: align,
@@ -485,6 +549,30 @@ layout W8(R: u32) {
         );
         // The variants' fields start after the 56 bytes of the DOP.
         assert!(abi.variant_base >= 60, "{}", abi.variant_base);
+    }
+
+    #[test]
+    fn an_oriented_interior_variant_has_its_own_slots() {
+        let hair = concat!(
+            include_str!("../../../library/algorithms/closest_hit_hair.scion"),
+            include_str!("../../../library/layouts/hair_bvh.scion")
+        );
+        let abi = derive(&[hair]).unwrap();
+        let s = &abi.schema;
+        assert_eq!((s.arity, s.interior, s.leaf), (4, 0, 2));
+        assert_eq!(abi.interiors, [0, 1]);
+        assert_eq!(s.oriented(), Some(1));
+        // Both interior variants number their children from slot 0.
+        let children: Vec<(u32, u32, u32)> = s
+            .fields
+            .iter()
+            .filter(|f| f.role == Role::Children as u32)
+            .map(|f| (f.variant, f.slot, f.count))
+            .collect();
+        assert_eq!(children, [(0, 0, 4), (1, 0, 4)]);
+        assert!(s
+            .fields
+            .contains(&SchemaField::new(Role::ChildObbs, 1, 4, 0, 4, 0)));
     }
 
     #[test]

@@ -87,7 +87,7 @@ impl Dop14 {
 }
 
 /// The largest `f32` at most `x`.
-fn round_down(x: f64) -> f32 {
+pub(crate) fn round_down(x: f64) -> f32 {
     let f = x as f32;
     if f64::from(f) > x {
         -step_up(-f)
@@ -97,7 +97,7 @@ fn round_down(x: f64) -> f32 {
 }
 
 /// The smallest `f32` at least `x`.
-fn round_up(x: f64) -> f32 {
+pub(crate) fn round_up(x: f64) -> f32 {
     let f = x as f32;
     if f64::from(f) < x {
         step_up(f)

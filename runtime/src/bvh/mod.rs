@@ -14,6 +14,7 @@ pub mod chain;
 pub mod dop14;
 pub mod logical;
 pub mod median;
+pub mod oriented;
 pub mod reinsert;
 pub mod sah_binned;
 pub mod schema;

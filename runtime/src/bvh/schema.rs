@@ -20,7 +20,8 @@
 
 use super::dop14::{node_dops, Dop14};
 use super::logical::{LogicalTree, NO_NODE};
-use crate::geom::Aabb;
+use super::oriented::{fit, OrientedNode, OrientedOptions};
+use crate::geom::{Aabb, Vec3};
 
 /// What the runtime writes into a logical field.
 #[repr(u32)]
@@ -41,6 +42,12 @@ pub enum Role {
     /// The node's own DOP-14 ([`super::dop14::Dop14`], 56 bytes: `lo1`, `hi1` `f32x3`, `lo2`,
     /// `hi2` `f32x4`).
     Dop14Bounds = 6,
+    /// Oriented boxes of child slots `slot .. slot + count` ([`super::oriented`]), 60 bytes
+    /// each: the columns `vx`, `vy`, `vz` (`f32x3`) of the node's integer matrix `M` and the
+    /// box (`AABB`) of the child's triangles mapped by `M` (an empty slot: zero columns and
+    /// [`Aabb::EMPTY`]). Its variant is the oriented interior variant: a node of the tree
+    /// takes it where [`super::oriented::fit`] orients it.
+    ChildObbs = 7,
 }
 
 impl Role {
@@ -53,6 +60,7 @@ impl Role {
             4 => Role::PrimCount,
             5 => Role::PrimOffset,
             6 => Role::Dop14Bounds,
+            7 => Role::ChildObbs,
             _ => return None,
         })
     }
@@ -66,6 +74,7 @@ impl Role {
             Role::PrimCount => "SCION_ROLE_PRIM_COUNT",
             Role::PrimOffset => "SCION_ROLE_PRIM_OFFSET",
             Role::Dop14Bounds => "SCION_ROLE_DOP14_BOUNDS",
+            Role::ChildObbs => "SCION_ROLE_CHILD_OBBS",
         }
     }
 }
@@ -114,7 +123,8 @@ pub struct Schema {
     pub node_size: u32,
     /// Alignment of a node.
     pub node_align: u32,
-    /// Kind of the interior variant.
+    /// Kind of the interior variant (of the axis-aligned one when the type also has an
+    /// oriented one: the variant with [`Role::ChildObbs`] fields).
     pub interior: u32,
     /// Kind of the leaf variant.
     pub leaf: u32,
@@ -171,7 +181,9 @@ impl Schema {
         if self.arity == 0 || self.interior == self.leaf {
             return Err(format!("`{name}`: no interior variant with children"));
         }
-        let mut slots = vec![0u32; self.arity as usize];
+        // Per interior variant (the interior kind, and any other variant with children),
+        // how many references each slot has.
+        let mut slots: Vec<(u32, Vec<u32>)> = vec![(self.interior, vec![0; self.arity as usize])];
         let mut used: Vec<(u32, u32, u32)> = vec![(SHARED, 0, 4)];
         for (k, f) in self.fields.iter().enumerate() {
             let role = Role::from_u32(f.role)
@@ -182,11 +194,17 @@ impl Schema {
             if end > u64::from(self.node_size) {
                 return Err(format!("`{name}`: field {k} ({role:?}) ends past the node"));
             }
-            let in_interior = f.variant == SHARED || f.variant == self.interior;
             match role {
-                Role::Children | Role::ChildBounds if !in_interior || f.variant == SHARED => {
+                Role::Children | Role::ChildBounds | Role::ChildObbs
+                    if f.variant == SHARED || f.variant == self.leaf =>
+                {
                     return Err(format!(
-                        "`{name}`: field {k} ({role:?}) is not the interior's"
+                        "`{name}`: field {k} ({role:?}) is not an interior variant's"
+                    ));
+                }
+                Role::ChildObbs if f.variant == self.interior => {
+                    return Err(format!(
+                        "`{name}`: field {k} ({role:?}) is in the axis-aligned interior variant"
                     ));
                 }
                 Role::PrimCount | Role::PrimOffset if f.variant != self.leaf => {
@@ -195,8 +213,15 @@ impl Schema {
                 _ => {}
             }
             if role == Role::Children {
+                let at = match slots.iter().position(|(v, _)| *v == f.variant) {
+                    Some(i) => i,
+                    None => {
+                        slots.push((f.variant, vec![0; self.arity as usize]));
+                        slots.len() - 1
+                    }
+                };
                 for s in f.slot..f.slot.saturating_add(f.count) {
-                    match slots.get_mut(s as usize) {
+                    match slots[at].1.get_mut(s as usize) {
                         Some(n) => *n += 1,
                         None => {
                             return Err(format!(
@@ -207,7 +232,9 @@ impl Schema {
                     }
                 }
             }
-            if role == Role::ChildBounds && f.slot.saturating_add(f.count) > self.arity {
+            if matches!(role, Role::ChildBounds | Role::ChildObbs)
+                && f.slot.saturating_add(f.count) > self.arity
+            {
                 return Err(format!(
                     "`{name}`: child box slots past arity {}",
                     self.arity
@@ -221,17 +248,35 @@ impl Schema {
             }
             used.push((f.variant, f.offset, size));
         }
-        if let Some(s) = slots.iter().position(|&n| n != 1) {
-            return Err(format!(
-                "`{name}`: child slot {s} has {} references",
-                slots[s]
-            ));
+        for (v, counts) in &slots {
+            if let Some(s) = counts.iter().position(|&n| n != 1) {
+                return Err(format!(
+                    "`{name}`: child slot {s} of variant {v} has {} references",
+                    counts[s]
+                ));
+            }
+        }
+        if let Some(v) = self.oriented() {
+            if !slots.iter().any(|(k, _)| *k == v) {
+                return Err(format!(
+                    "`{name}`: the oriented variant {v} has no children"
+                ));
+            }
         }
         Ok(())
     }
 }
 
 impl Schema {
+    /// The kind of the oriented interior variant (the one with [`Role::ChildObbs`] fields), if
+    /// the type has one.
+    pub fn oriented(&self) -> Option<u32> {
+        self.fields
+            .iter()
+            .find(|f| f.role == Role::ChildObbs as u32)
+            .map(|f| f.variant)
+    }
+
     /// One line of text (`BVH 36 4 0 1 2 1,4294967295,4,0,1,0;...`): the tree type's name,
     /// node size and alignment, interior and leaf kinds, arity, then each field's six numbers.
     pub fn to_text(&self) -> String {
@@ -308,6 +353,7 @@ fn field_size(role: Role, f: &SchemaField) -> Option<u32> {
         Role::PrimCount => return None,
         Role::PrimOffset => 4,
         Role::Dop14Bounds => 56,
+        Role::ChildObbs => 60 * f.count,
     })
 }
 
@@ -334,6 +380,8 @@ struct Node {
     /// The node's DOP-14 (only computed when the schema has a DOP field).
     dop: Dop14,
     children: Vec<(u32, Aabb)>,
+    /// The oriented form of an interior node of the oriented variant.
+    obb: Option<OrientedNode>,
     prims: (u32, u32),
 }
 
@@ -344,8 +392,18 @@ impl LogicalBytes {
     }
 
     /// `tree` in `schema`'s form; an error names a schema the runtime cannot fill (see
-    /// [`Schema::validate`]) or a tree too large for `u32` indices.
+    /// [`Schema::validate`]) or a tree too large for `u32` indices. A schema with an
+    /// oriented interior variant orients nodes by [`OrientedOptions::default`].
     pub fn fill(tree: &LogicalTree, schema: &Schema) -> Result<LogicalBytes, String> {
+        Self::fill_oriented(tree, schema, &OrientedOptions::default())
+    }
+
+    /// [`LogicalBytes::fill`] with the rule for orienting nodes ([`super::oriented::fit`]).
+    pub fn fill_oriented(
+        tree: &LogicalTree,
+        schema: &Schema,
+        oriented: &OrientedOptions,
+    ) -> Result<LogicalBytes, String> {
         schema.validate()?;
         let wants_dop = schema
             .fields
@@ -358,10 +416,10 @@ impl LogicalBytes {
         };
         let (nodes, root) = if tree.is_empty() {
             (Vec::new(), NO_NODE)
-        } else if schema.arity == 2 {
+        } else if schema.arity == 2 && schema.oriented().is_none() {
             (binary_nodes(tree, schema, &dops), tree.root)
         } else {
-            wide_nodes(tree, schema, &dops)
+            wide_nodes(tree, schema, &dops, oriented)
         };
         if nodes.len() >= NO_NODE as usize {
             return Err(format!(
@@ -397,6 +455,7 @@ fn binary_nodes(tree: &LogicalTree, schema: &Schema, dops: &[Dop14]) -> Vec<Node
                     bounds: n.aabb(),
                     dop,
                     children: Vec::new(),
+                    obb: None,
                     prims: (n.prim_offset, n.prim_count),
                 }
             } else {
@@ -409,6 +468,7 @@ fn binary_nodes(tree: &LogicalTree, schema: &Schema, dops: &[Dop14]) -> Vec<Node
                         .iter()
                         .map(|&c| (c, tree.nodes[c as usize].aabb()))
                         .collect(),
+                    obb: None,
                     prims: (0, 0),
                 }
             }
@@ -417,8 +477,14 @@ fn binary_nodes(tree: &LogicalTree, schema: &Schema, dops: &[Dop14]) -> Vec<Node
 }
 
 /// Collapsed to `schema.arity` slots: interior nodes in pre-order (the root first), then the
-/// leaves, then one empty leaf per empty slot.
-fn wide_nodes(tree: &LogicalTree, schema: &Schema, dops: &[Dop14]) -> (Vec<Node>, u32) {
+/// leaves, then one empty leaf per empty slot. With an oriented variant, each interior node
+/// that [`fit`] orients takes it.
+fn wide_nodes(
+    tree: &LogicalTree,
+    schema: &Schema,
+    dops: &[Dop14],
+    oriented: &OrientedOptions,
+) -> (Vec<Node>, u32) {
     let width = schema.arity as usize;
     let root = &tree.nodes[tree.root as usize];
     let leaf = |n: &super::LogicalNode, i: u32| Node {
@@ -426,6 +492,7 @@ fn wide_nodes(tree: &LogicalTree, schema: &Schema, dops: &[Dop14]) -> (Vec<Node>
         bounds: n.aabb(),
         dop: dops[i as usize],
         children: Vec::new(),
+        obb: None,
         prims: (n.prim_offset, n.prim_count),
     };
     if root.is_leaf() {
@@ -462,11 +529,18 @@ fn wide_nodes(tree: &LogicalTree, schema: &Schema, dops: &[Dop14]) -> (Vec<Node>
             }
             children.push((index[c as usize], n.aabb()));
         }
+        // The root stays axis-aligned (catalog §6: AABB nodes near the root), so every
+        // oriented node has an axis-aligned ancestor whose exit distance bounds its hits.
+        let obb = schema
+            .oriented()
+            .filter(|_| *bin != tree.root)
+            .and_then(|v| Some((v, fit(tree, slots, oriented)?)));
         nodes.push(Node {
-            kind: schema.interior,
+            kind: obb.as_ref().map_or(schema.interior, |o| o.0),
             bounds: tree.nodes[*bin as usize].aabb(),
             dop: dops[*bin as usize],
             children,
+            obb: obb.map(|o| o.1),
             prims: (0, 0),
         });
     }
@@ -485,6 +559,7 @@ fn wide_nodes(tree: &LogicalTree, schema: &Schema, dops: &[Dop14]) -> (Vec<Node>
         bounds: Aabb::EMPTY,
         dop: Dop14::EMPTY,
         children: Vec::new(),
+        obb: None,
         prims: (0, 0),
     }));
     (nodes, 0)
@@ -529,6 +604,24 @@ fn encode(bytes: &mut [u8], n: &Node, schema: &Schema) {
                 put(bytes, at, &c[..f.width as usize]);
             }
             Some(Role::PrimOffset) => put(bytes, at, &n.prims.0.to_le_bytes()),
+            Some(Role::ChildObbs) => {
+                for k in 0..f.count as usize {
+                    let at = at + 60 * k;
+                    let slot = f.slot as usize + k;
+                    let (cols, b) = match &n.obb {
+                        Some(o) if slot < o.boxes.len() => {
+                            ([0, 1, 2].map(|j| o.orientation.column(j)), o.boxes[slot])
+                        }
+                        _ => ([Vec3::splat(0.0); 3], Aabb::EMPTY),
+                    };
+                    for (j, c) in cols.iter().enumerate() {
+                        for (l, x) in c.to_array().iter().enumerate() {
+                            put(bytes, at + 12 * j + 4 * l, &x.to_le_bytes());
+                        }
+                    }
+                    put_box(bytes, at + 36, b);
+                }
+            }
             Some(Role::Dop14Bounds) => {
                 for (k, x) in n.dop.to_array().iter().enumerate() {
                     put(bytes, at + 4 * k, &x.to_le_bytes());
@@ -683,7 +776,25 @@ mod tests {
     fn bad_schemas_are_refused() {
         let mut s = binary_bvh();
         s.fields[2].slot = 0;
-        assert!(s.validate().unwrap_err().contains("slot 0 has 2"));
+        assert!(s
+            .validate()
+            .unwrap_err()
+            .contains("slot 0 of variant 0 has 2"));
+        // Oriented child boxes belong to a second interior variant with children of its own.
+        let mut s = binary_bvh();
+        s.fields
+            .push(SchemaField::new(Role::ChildObbs, 0, 36, 0, 2, 0));
+        s.node_size = 156;
+        assert!(s.validate().unwrap_err().contains("axis-aligned interior"));
+        s.fields.last_mut().unwrap().variant = 2;
+        assert!(s
+            .validate()
+            .unwrap_err()
+            .contains("oriented variant 2 has no children"));
+        s.fields
+            .push(SchemaField::new(Role::Children, 2, 28, 0, 2, 0));
+        assert_eq!(s.validate(), Ok(()));
+        assert_eq!(s.oriented(), Some(2));
         let mut s = binary_bvh();
         s.fields[4].width = 3;
         assert!(s.validate().unwrap_err().contains("width 3"));

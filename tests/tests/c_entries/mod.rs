@@ -19,8 +19,6 @@ use scion_runtime::geom::{Hit, Ray};
 
 type SizesFn = unsafe extern "C" fn(*const LogicalTreeView, *mut u64);
 type BuildFn = unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) -> i32;
-type RootIdxFn = unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) -> u32;
-type RootPtrFn = unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) -> *const u8;
 
 /// `program` compiled to `lo` with its C entries for the host, as `scionc -O3` does, with a
 /// stack of 4096 entries (the hard cases include a chain a thousand nodes deep).
@@ -62,6 +60,20 @@ pub fn run_batch<Q, R>(
     queries: &[Q],
     results: &mut [R],
 ) -> i32 {
+    let bytes = LogicalBytes::fill(tree, &lo.entry.logical).unwrap();
+    run_batch_bytes(lo, code, tree, &bytes, algorithm, queries, results)
+}
+
+/// [`run_batch`] over logical nodes filled by the caller (`LogicalBytes::fill_oriented`).
+pub fn run_batch_bytes<Q, R>(
+    lo: &LibraryLo,
+    code: &dyn JitCode,
+    tree: &LogicalTree,
+    bytes: &LogicalBytes,
+    algorithm: &str,
+    queries: &[Q],
+    results: &mut [R],
+) -> i32 {
     assert_eq!(
         std::mem::size_of::<Q>() as u64,
         lo.entry.query.size,
@@ -79,17 +91,15 @@ pub fn run_batch<Q, R>(
             .unwrap_or_else(|| panic!("no `@{name}`"))
     };
     let root_name = format!("scion_{layout}_root");
-    let by_pointer = lo.module.func_by_name(&root_name).is_some_and(|r| {
-        matches!(
-            lo.module.types.get(lo.module.funcs[r].results[0]),
-            Type::Ptr
-        )
-    });
-    let bytes = LogicalBytes::fill(tree, &lo.entry.logical).unwrap();
-    let view = LogicalTreeView::new(tree, &bytes).unwrap();
+    // The root reference's C type: a pointer, a 64-bit or a 32-bit integer.
+    let root_ty = lo
+        .module
+        .func_by_name(&root_name)
+        .map(|r| lo.module.types.get(lo.module.funcs[r].results[0]).clone());
+    let view = LogicalTreeView::new(tree, bytes).unwrap();
     let n = queries.len() as u64;
     // SAFETY: the entries have the signatures of docs/c-abi.md for this layout's reference type
-    // (a pointer when `scion_L_root` returns one, else a `u32`); the view describes the live
+    // (the root reference's type is what `scion_L_root` returns); the view describes the live
     // tree; every buffer has the size `sizes` gave and is 64-byte aligned; `queries` and
     // `results` have `n` elements of the record sizes the entry was checked to have above.
     unsafe {
@@ -103,47 +113,44 @@ pub fn run_batch<Q, R>(
             .map(|(b, o)| b.as_mut_ptr().add(*o))
             .collect();
         assert_eq!(build(&view, table.as_ptr()), 0, "{layout}: build");
-        let ctable: Vec<*const u8> = table.iter().map(|&p| p as *const u8).collect();
         let batch = f(format!("scion_{algorithm}_{layout}"));
-        if by_pointer {
-            let root = std::mem::transmute::<*const u8, RootPtrFn>(f(root_name));
-            let batch = std::mem::transmute::<
-                *const u8,
-                unsafe extern "C" fn(
-                    *const *const u8,
-                    *const Q,
-                    *mut R,
-                    u64,
-                    u64,
-                    *const u8,
-                ) -> i32,
-            >(batch);
-            let r = root(&view, table.as_ptr());
-            batch(
-                ctable.as_ptr(),
-                queries.as_ptr(),
-                results.as_mut_ptr(),
-                0,
-                n,
-                r,
-            )
-        } else {
-            let root = std::mem::transmute::<*const u8, RootIdxFn>(f(root_name));
-            let batch = std::mem::transmute::<
-                *const u8,
-                unsafe extern "C" fn(*const *const u8, *const Q, *mut R, u64, u64, u32) -> i32,
-            >(batch);
-            let r = root(&view, table.as_ptr());
-            batch(
-                ctable.as_ptr(),
-                queries.as_ptr(),
-                results.as_mut_ptr(),
-                0,
-                n,
-                r,
-            )
+        let root = f(root_name);
+        let (q, r) = (queries.as_ptr(), results.as_mut_ptr());
+        match root_ty {
+            Some(Type::Ptr) => batch_from::<*const u8, Q, R>(root, batch, &view, &table, q, r, n),
+            Some(Type::Int(t)) if t.bits() == 64 => {
+                batch_from::<u64, Q, R>(root, batch, &view, &table, q, r, n)
+            }
+            _ => batch_from::<u32, Q, R>(root, batch, &view, &table, q, r, n),
         }
     }
+}
+
+/// Runs batch entry `batch` from the root reference (of C type `Rt`) that `root` gives.
+///
+/// # Safety
+/// `root` and `batch` are a layout's `scion_L_root` and `scion_A_L` with reference type `Rt`;
+/// `table` holds the built buffers; `q` and `r` have `n` records of the entry's sizes.
+unsafe fn batch_from<Rt, Q, R>(
+    root: *const u8,
+    batch: *const u8,
+    view: &LogicalTreeView,
+    table: &[*mut u8],
+    q: *const Q,
+    r: *mut R,
+    n: u64,
+) -> i32 {
+    let root = std::mem::transmute::<
+        *const u8,
+        unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) -> Rt,
+    >(root);
+    let batch = std::mem::transmute::<
+        *const u8,
+        unsafe extern "C" fn(*const *const u8, *const Q, *mut R, u64, u64, Rt) -> i32,
+    >(batch);
+    let ctable: Vec<*const u8> = table.iter().map(|&p| p as *const u8).collect();
+    let start = root(view, table.as_ptr());
+    batch(ctable.as_ptr(), q, r, 0, n, start)
 }
 
 /// The closest hits of `rays` by a closest-hit algorithm's batch entry (`best` starting at
@@ -155,8 +162,21 @@ pub fn closest_hits(
     algorithm: &str,
     rays: &[Ray],
 ) -> Vec<Hit> {
+    let bytes = LogicalBytes::fill(tree, &lo.entry.logical).unwrap();
+    closest_hits_bytes(lo, code, tree, &bytes, algorithm, rays)
+}
+
+/// [`closest_hits`] over logical nodes filled by the caller.
+pub fn closest_hits_bytes(
+    lo: &LibraryLo,
+    code: &dyn JitCode,
+    tree: &LogicalTree,
+    bytes: &LogicalBytes,
+    algorithm: &str,
+    rays: &[Ray],
+) -> Vec<Hit> {
     let mut best: Vec<(f32, u32)> = rays.iter().map(|r| (r.tmax, u32::MAX)).collect();
-    let status = run_batch(lo, code, tree, algorithm, rays, &mut best);
+    let status = run_batch_bytes(lo, code, tree, bytes, algorithm, rays, &mut best);
     assert_eq!(status, 0, "{algorithm}: batch status");
     best.into_iter()
         .map(|(t, p)| Hit::from_best(t, p))

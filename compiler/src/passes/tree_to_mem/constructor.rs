@@ -136,19 +136,26 @@ fn generate(m: &mut Module, spec: &LayoutSpec, ours: &[FuncId]) -> Result<(), Di
         .as_ref()
         .ok_or_else(|| unsupported(span, "a layout whose tree type is unknown"))?;
     let logical = LogicalAbi::derive(m, model_adt).map_err(|e| unsupported(span, e))?;
-    let interior = logical.variants[logical.interior].0.clone();
-    let leaf = logical.variants[logical.leaf].0.clone();
     let find = |v: &str| ours.iter().copied().find(|&f| attr(m, f, "variant") == v);
-    let (Some(fi), Some(fl)) = (find(&interior), find(&leaf)) else {
-        return Err(unsupported(
-            span,
-            format!("the build of `{lname}` has no function for `{interior}` or `{leaf}` (a construct irgen cannot lower)"),
-        ));
-    };
+    // The variants a logical node can be: every interior one (the axis-aligned first), then
+    // the leaf; each has its build function.
+    let mut kinds: Vec<usize> = logical.interiors.clone();
+    kinds.sort_by_key(|&k| k != logical.interior);
+    kinds.push(logical.leaf);
+    let mut arms_fns: Vec<(usize, FuncId)> = Vec::new();
+    for &k in &kinds {
+        let v = &logical.variants[k].0;
+        let Some(f) = find(v) else {
+            return Err(unsupported(
+                span,
+                format!("the build of `{lname}` has no function for `{v}` (a construct irgen cannot lower)"),
+            ));
+        };
+        arms_fns.push((k, f));
+    }
+    let fi = arms_fns[0].1;
     let root_fn = find("root");
-    let li = logical.variants[logical.interior].1.clone();
-    let ll = logical.variants[logical.leaf].1.clone();
-    let shared: Vec<LogicalField> = li[..logical.shared].to_vec();
+    let shared: Vec<LogicalField> = logical.variants[logical.interior].1[..logical.shared].to_vec();
     let stride = logical.node_size;
     let post = attr(m, fi, "order") == "post";
     let ref_ty = m.funcs[fi]
@@ -195,40 +202,29 @@ fn generate(m: &mut Module, spec: &LayoutSpec, ours: &[FuncId]) -> Result<(), Di
         let mut bd = Builder::at_end(m, node_entry);
         let nodes = load(&mut bd, tree, None, view::NODES, 0, ptr);
         let kind = load(&mut bd, nodes, Some(i), 0, stride, u32t);
-        let want = bd.const_int(u32t, logical.interior as i128);
-        let is_interior = bd.cmp(CmpPred::Eq, kind, want);
-        let fi_name = bd.m.funcs[fi].name.clone();
-        let fl_name = bd.m.funcs[fl].name.clone();
-        let fi_params = bd.m.funcs[fi].params.clone();
-        let fl_params = bd.m.funcs[fl].params.clone();
         let prims = load(&mut bd, tree, None, view::PRIMS, 0, ptr);
-        let failed = std::cell::RefCell::new(None);
-        let arm =
-            |bd: &mut Builder<'_>, name: &str, params: &[TypeId], logical: &[LogicalField]| {
-                match logical_fields(bd, params, logical, nodes, prims, i, stride) {
-                    Ok(vals) => {
-                        let all: Vec<ValueId> = pass.iter().copied().chain(vals).collect();
-                        let c = bd.call(name, &all, &[ref_ty]);
-                        let r = bd.result(c, 0);
-                        bd.yield_(&[r]);
-                    }
-                    Err(e) => {
-                        *failed.borrow_mut() = Some(e);
-                        let r = bd.const_int(u32t, 0);
-                        bd.yield_(&[r]);
-                    }
-                }
-            };
-        let if_op = bd.if_(
-            is_interior,
-            &[ref_ty],
-            |bd| arm(bd, &fi_name, &fi_params[5..], &li),
-            |bd| arm(bd, &fl_name, &fl_params[5..], &ll),
-        );
-        if let Some(e) = failed.into_inner() {
-            return Err(unsupported(span, e));
-        }
-        let r = bd.result(if_op, 0);
+        let arms: Vec<Arm> = arms_fns
+            .iter()
+            .map(|&(k, f)| Arm {
+                kind: k as u32,
+                name: bd.m.funcs[f].name.clone(),
+                params: bd.m.funcs[f].params[5..].to_vec(),
+                fields: logical.variants[k].1.clone(),
+            })
+            .collect();
+        let cx = Dispatch {
+            pass,
+            nodes,
+            prims,
+            i,
+            kind,
+            stride,
+            ref_ty,
+        };
+        let r = match dispatch(&mut bd, &cx, &arms) {
+            Ok(r) => r,
+            Err(e) => return Err(unsupported(span, e)),
+        };
         bd.ret(&[r]);
     }
     super::entries::sizes_fn(m, spec, &lname, &logical, &placing)?;
@@ -241,6 +237,75 @@ fn generate(m: &mut Module, spec: &LayoutSpec, ours: &[FuncId]) -> Result<(), Di
         super::entries::root_ref_fn(m, spec, &lname, full)?;
     }
     Ok(())
+}
+
+/// One variant's arm of `@L.node`: its kind, build function and logical fields.
+struct Arm {
+    kind: u32,
+    name: String,
+    params: Vec<TypeId>,
+    fields: Vec<LogicalField>,
+}
+
+/// What every arm of `@L.node` reads.
+struct Dispatch {
+    /// `%tree, %out, %next, %count, %status` passed on to the build functions.
+    pass: [ValueId; 5],
+    nodes: ValueId,
+    prims: ValueId,
+    i: ValueId,
+    kind: ValueId,
+    stride: u64,
+    ref_ty: TypeId,
+}
+
+/// `if kind == k0 { build k0 } else if ... else { build the last }`: the call of the build
+/// function of node `i`'s variant with its logical fields.
+fn dispatch(bd: &mut Builder<'_>, cx: &Dispatch, arms: &[Arm]) -> Result<ValueId, String> {
+    let call = |bd: &mut Builder<'_>, a: &Arm| -> Result<ValueId, String> {
+        let vals = logical_fields(
+            bd, &a.params, &a.fields, cx.nodes, cx.prims, cx.i, cx.stride,
+        )?;
+        let all: Vec<ValueId> = cx.pass.iter().copied().chain(vals).collect();
+        let c = bd.call(&a.name, &all, &[cx.ref_ty]);
+        Ok(bd.result(c, 0))
+    };
+    let [first, rest @ ..] = arms else {
+        return Err("a tree type without variants".into());
+    };
+    if rest.is_empty() {
+        return call(bd, first);
+    }
+    let u32t = bd.m.types.u32();
+    let want = bd.const_int(u32t, i128::from(first.kind));
+    let test = bd.cmp(CmpPred::Eq, cx.kind, want);
+    let failed = std::cell::RefCell::new(None);
+    let arm = |bd: &mut Builder<'_>, r: Result<ValueId, String>| match r {
+        Ok(v) => {
+            bd.yield_(&[v]);
+        }
+        Err(e) => {
+            *failed.borrow_mut() = Some(e);
+            let z = bd.const_int(u32t, 0);
+            bd.yield_(&[z]);
+        }
+    };
+    let if_op = bd.if_(
+        test,
+        &[cx.ref_ty],
+        |bd| {
+            let r = call(bd, first);
+            arm(bd, r)
+        },
+        |bd| {
+            let r = dispatch(bd, cx, rest);
+            arm(bd, r)
+        },
+    );
+    if let Some(e) = failed.into_inner() {
+        return Err(e);
+    }
+    Ok(bd.result(if_op, 0))
 }
 
 pub(super) fn load(
@@ -564,14 +629,12 @@ fn rewrite_build(
             }
             OpKind::Tree(Op::BuildStore) => {
                 let v = m.ops[op].operands[0];
-                let comps = this.into_iter().collect();
-                let mut rd = Reader::new(spec, cx.b, comps, InsertPoint::Before(op));
+                let mut rd = Reader::placing(spec, cx.b, this, InsertPoint::Before(op));
                 rd.store_field(m, &variant, &field, v)?;
                 erase_op(m, op);
             }
             OpKind::Tree(Op::BuildLoad) => {
-                let comps = this.into_iter().collect();
-                let mut rd = Reader::new(spec, cx.b, comps, InsertPoint::Before(op));
+                let mut rd = Reader::placing(spec, cx.b, this, InsertPoint::Before(op));
                 let v = rd.field(m, &variant, &field)?;
                 let old = m.ops[op].results[0];
                 if m.values[old].ty != m.values[v].ty {
@@ -651,8 +714,7 @@ fn rewrite_build(
             OpKind::Tree(Op::Append) => {
                 let (data, count) = (m.ops[op].operands[0], m.ops[op].operands[1]);
                 let rt = m.values[m.ops[op].results[0]].ty;
-                let comps = this.into_iter().collect();
-                let mut rd = Reader::new(spec, cx.b, comps, InsertPoint::Before(op));
+                let mut rd = Reader::placing(spec, cx.b, this, InsertPoint::Before(op));
                 let (gbuf, stride, elem) = rd.array_of_field(m, &variant, &field)?;
                 let u32t = m.types.u32();
                 let mut bd = Builder::new(m);

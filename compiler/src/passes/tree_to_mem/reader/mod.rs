@@ -51,6 +51,9 @@ pub(super) struct Reader<'a> {
     components: Vec<ValueId>,
     /// Innermost last.
     pub layers: Vec<Layer>,
+    /// Reading or writing the record a build places: its first component is the placed
+    /// index itself (see [`Reader::placing`]).
+    placing: bool,
 }
 
 impl<'a> Reader<'a> {
@@ -67,7 +70,23 @@ impl<'a> Reader<'a> {
             b,
             components,
             layers: vec![Layer::new(outer)],
+            placing: false,
         }
+    }
+
+    /// A reader of the node a build places, whose `this` is `this`. A record of an indirect
+    /// group reached by a key over the reference (`AABBNode from aabb_nodes[I[5:64]]`) is the
+    /// one at the placed index itself: the build returns a reference whose key gives that
+    /// index (`this << 5`), which the compiler cannot invert.
+    pub fn placing(
+        spec: &'a LayoutSpec,
+        b: ValueId,
+        this: Option<ValueId>,
+        outer: InsertPoint,
+    ) -> Reader<'a> {
+        let mut r = Reader::new(spec, b, this.into_iter().collect(), outer);
+        r.placing = true;
+        r
     }
 
     pub(super) fn lookup(&self, key: &str) -> Option<ValueId> {
@@ -356,6 +375,14 @@ impl<'a> Reader<'a> {
                     ));
                 };
                 match &last.index {
+                    Index::Key(e) if self.placing && self.over_components(e) => {
+                        let idx = self.components.first().copied().ok_or_else(|| {
+                            unsupported(span, "a placed record without its index")
+                        })?;
+                        let (base, stride) =
+                            self.buffer(m, &BufferKind::GroupArray { group, array })?;
+                        Ok((base, Some(idx), offset, stride))
+                    }
                     Index::Value(e) | Index::Key(e) => {
                         let idx = self.expr(m, variant, e, None)?;
                         let (base, stride) =
@@ -440,6 +467,13 @@ impl<'a> Reader<'a> {
             )),
             Storage::None => Err(unsupported(span, "a field without storage")),
         }
+    }
+
+    /// Whether `e` reads only reference components (a key over the reference, `I[5:64]`).
+    fn over_components(&self, e: &crate::syntax::ast::Expr) -> bool {
+        crate::layout::resolve::names_in(e)
+            .iter()
+            .all(|id| self.spec.model.component(&id.name).is_some())
     }
 
     /// Stores `value` into stored field `name` of the node (constructor specialization).
