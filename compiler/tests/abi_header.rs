@@ -47,6 +47,8 @@ fn generated_headers_compile_as_c_and_cpp() {
     let ptr = header("PtrBVH", "ptr.scion", &dir);
     // A logical node with a DOP-14 (56 bytes of bounds: the struct's size assertion checks it).
     let dop = header_of("closest_hit_dop14", "DopSplit", "dop14_split.scion", &dir);
+    // Three variants, two interior, oriented child boxes (260 bytes: the size assertion).
+    let hair = header_of("closest_hit_hair", "HairBVH", "hair_bvh.scion", &dir);
     // The runtime's hand-written header shares the contract's structs with the generated ones.
     let runtime_h = repo().join("runtime/capi/include/scion_runtime.h");
     let mut ran = 0;
@@ -64,16 +66,19 @@ fn generated_headers_compile_as_c_and_cpp() {
             &src,
             format!(
                 "#include \"{}\"\n#include \"{}\"\n#include \"{}\"\n#include \"{}\"\n\
+                 #include \"{}\"\n\
                  int main(void) {{\n  \
                  scion_closest_hit_query q; scion_closest_hit_result r;\n  \
                  (void)q; (void)r;\n  \
                  return (int)sizeof(ScionTreeView) + SCION_LinearBVH_BUFFER_COUNT \
                  + SCION_PtrBVH_BUFFER_ALIGN + (int)sizeof(ScionRay) + SCION_RT_OK \
-                 + (int)sizeof(ScionLogical_DopBVH);\n}}\n",
+                 + (int)sizeof(ScionLogical_DopBVH) + (int)sizeof(ScionLogical_Hair) \
+                 + SCION_HairBVH_BUFFER_COUNT;\n}}\n",
                 pbrt.display(),
                 runtime_h.display(),
                 ptr.display(),
-                dop.display()
+                dop.display(),
+                hair.display()
             ),
         )
         .unwrap();
