@@ -306,9 +306,10 @@ pub fn library_seeds(library: &std::path::Path) -> std::io::Result<Vec<String>> 
 /// (`BVH4[4]`, `BVH8[8]`, `build children` into an array, `ch[k].bounds`), `sort`, array
 /// literals, `foreach c, k in ch`, user functions in layout expressions, and a tree type the
 /// a DOP-14 tree (the split layout of Fig. 12 and its closest hit), a best-first function
-/// (`order by`), and the shared slab (a reference of several components, a build reading its
-/// children's boxes).
-pub const LAYOUT_SEEDS: [&str; 8] = [
+/// (`order by`), the shared slab (a reference of several components, a build reading its
+/// children's boxes, tree-carried `parent.` components), and the hair BVH (three variants,
+/// oriented child boxes, `f64` arithmetic, 64-bit tagged references).
+pub const LAYOUT_SEEDS: [&str; 9] = [
     include_str!("../../lit-tests/Inputs/wide4_layout.scion"),
     include_str!("../../lit-tests/Inputs/bvh8_q8_ci_layout.scion"),
     include_str!("../../lit-tests/Inputs/bvh8_layout.scion"),
@@ -320,6 +321,10 @@ pub const LAYOUT_SEEDS: [&str; 8] = [
     include_str!("../../lit-tests/recursion-to-stack/deferred.scion"),
     include_str!("../../lit-tests/recursion-to-stack/best-first.scion"),
     include_str!("../../lit-tests/Inputs/shared_slab.scion"),
+    concat!(
+        include_str!("../../library/algorithms/closest_hit_hair.scion"),
+        include_str!("../../library/layouts/hair_bvh.scion")
+    ),
 ];
 
 /// A seed with the traversal language's constructs that the library does not use yet
