@@ -8,7 +8,7 @@
 use crate::abi::{self, EntrySig, EntryTarget};
 use crate::driver::cli::{Emit, Options, Target};
 use crate::driver::lower;
-use crate::layout::model::LayoutModel;
+use crate::layout::model::Models;
 use crate::layout::{check_build, check_layout};
 use crate::passes::lo::entries::EntryRequest;
 use crate::passes::prune::UserFiles;
@@ -120,8 +120,12 @@ pub fn compile(
     out.diagnostics.extend(diags);
     // The structural checks of paper §6 overlap with sema's typing of layouts and builds on
     // a few rules (an unknown variant, a duplicate member, ...); report each place once.
-    let structural = check_layout::check_layouts(&program).list.into_iter();
-    for d in structural.chain(check_build::check_builds(&program).list) {
+    // One model per layout, realizing the type sema chose.
+    let models = Models::of(&program, &typed);
+    let structural = check_layout::check_layouts(&program, &models)
+        .list
+        .into_iter();
+    for d in structural.chain(check_build::check_builds(&program, &models).list) {
         let dup = d.is_error()
             && d.primary_span().is_some()
             && out
@@ -170,7 +174,9 @@ pub fn compile(
             );
             return out;
         };
-        let model = LayoutModel::from_ast(decl, &program);
+        let Some(model) = models.get(&decl.name.name).cloned() else {
+            return out;
+        };
         let logical = model
             .adt
             .as_ref()

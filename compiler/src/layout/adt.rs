@@ -161,7 +161,43 @@ pub(crate) fn find_adt(
             }
         }
     };
-    let t = chosen?;
+    adt_of_decl(chosen?)
+}
+
+/// E0311 for every variant a split arm of `decl` names that `chosen` (the type the checker
+/// chose for it) does not have.
+pub(crate) fn unknown_variants(
+    decl: &LayoutDecl,
+    program: &Program,
+    chosen: &crate::syntax::ast::TypeDecl,
+    diags: &mut Diagnostics,
+) {
+    let mut named: Vec<Ident> = Vec::new();
+    collect_arm_variants(&decl.members, &mut named, 0);
+    let has = |t: &crate::syntax::ast::TypeDecl, v: &str| {
+        t.variants
+            .as_ref()
+            .is_some_and(|vs| vs.iter().any(|x| x.name.name == v))
+    };
+    for v in named.iter().filter(|v| !has(chosen, &v.name)) {
+        let elsewhere = program
+            .items
+            .iter()
+            .any(|i| matches!(i, Item::Type(t) if has(t, &v.name)));
+        let msg = if elsewhere {
+            format!(
+                "`{}` is not a variant of `{}`, the type layout `{}` realizes",
+                v.name, chosen.name.name, decl.name.name
+            )
+        } else {
+            format!("`{}` is not a variant of any type", v.name)
+        };
+        diags.push(err("E0311", msg, v.span, "unknown variant"));
+    }
+}
+
+/// The logical tree of sum type `t`: its variants with their fields, shared ones first.
+pub(crate) fn adt_of_decl(t: &crate::syntax::ast::TypeDecl) -> Option<Adt> {
     let shared = &t.fields;
     let variants = t
         .variants

@@ -351,11 +351,26 @@ impl Adt {
     }
 }
 
+/// The type a layout realizes, as the type checker decided it.
+#[derive(Clone, Copy, Debug)]
+pub enum AdtChoice<'a> {
+    /// The sum type of this name.
+    Chosen(&'a str),
+    /// None could be told (the model's search reports why, E0311).
+    Undecided,
+}
+
 impl LayoutModel {
-    /// Builds the model of `decl`; `program` supplies the `type` declarations and the build of
-    /// the same name (used to find the ADT of a layout without splits).
+    /// Builds the model of `decl`, finding the type it realizes by itself (for tests of the
+    /// layout checks without the type checker); `program` supplies the `type` declarations and
+    /// the build of the same name.
     pub fn from_ast(decl: &LayoutDecl, program: &Program) -> LayoutModel {
-        crate::layout::place::build(decl, program)
+        crate::layout::place::build(decl, program, None)
+    }
+
+    /// The model of `decl` realizing the type the type checker chose (`LayoutInfo::adt`).
+    pub fn of(decl: &LayoutDecl, program: &Program, adt: AdtChoice<'_>) -> LayoutModel {
+        crate::layout::place::build(decl, program, Some(adt))
     }
 
     /// The member's stored-field data, if it is a stored field.
@@ -396,5 +411,57 @@ impl LayoutModel {
             MemberModel::Stored(s) if s.name.name == name => Some(s.storage),
             _ => None,
         })
+    }
+}
+
+/// The layout models of a program: one per layout name (its first declaration), each built
+/// once, realizing the type the type checker chose. The layout and build checks, the
+/// specializations and the C ABI all read these.
+#[derive(Clone, Debug, Default)]
+pub struct Models {
+    models: Vec<LayoutModel>,
+}
+
+impl Models {
+    /// The models of `program`'s layouts, with `typed`'s choices of types.
+    pub fn of(program: &Program, typed: &crate::sema::TypedProgram) -> Models {
+        let mut models: Vec<LayoutModel> = Vec::new();
+        for item in &program.items {
+            let crate::syntax::ast::Item::Layout(decl) = item else {
+                continue;
+            };
+            if models.iter().any(|m| m.name.name == decl.name.name) {
+                continue;
+            }
+            let chosen = typed
+                .layouts
+                .iter()
+                .find(|l| l.name == decl.name.name)
+                .and_then(|l| l.adt)
+                .and_then(|a| typed.adts.get(a))
+                .map(|a| a.name.as_str());
+            let choice = chosen.map_or(AdtChoice::Undecided, AdtChoice::Chosen);
+            models.push(LayoutModel::of(decl, program, choice));
+        }
+        Models { models }
+    }
+
+    /// The models of `program`'s layouts with their types found by the layout model alone
+    /// (tests of the layout checks).
+    pub fn inferred(program: &Program) -> Models {
+        let mut models: Vec<LayoutModel> = Vec::new();
+        for item in &program.items {
+            if let crate::syntax::ast::Item::Layout(decl) = item {
+                if !models.iter().any(|m| m.name.name == decl.name.name) {
+                    models.push(LayoutModel::from_ast(decl, program));
+                }
+            }
+        }
+        Models { models }
+    }
+
+    /// The model of layout `name`.
+    pub fn get(&self, name: &str) -> Option<&LayoutModel> {
+        self.models.iter().find(|m| m.name.name == name)
     }
 }

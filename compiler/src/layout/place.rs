@@ -7,17 +7,18 @@
 //! start at the split's offset and the split is as large as its largest arm; a nested group is
 //! a tile of `count` elements of each of its arrays, one block after the other.
 
-use crate::layout::adt::find_adt;
+use crate::layout::adt::{adt_of_decl, find_adt, unknown_variants};
 use crate::layout::model::*;
 use crate::layout::types::{record_shape, round_up, Shape, TypeEnv};
 use crate::syntax::ast::{
-    ArrayLen, Expr, ExprKind, GroupAttrKind, GroupDecl, Ident, LayoutDecl, Member, MemberKind,
-    Program, SplitArmBody, TypeExpr, TypeExprKind,
+    ArrayLen, Expr, ExprKind, GroupAttrKind, GroupDecl, Ident, Item, LayoutDecl, Member,
+    MemberKind, Program, SplitArmBody, TypeExpr, TypeExprKind,
 };
 use scion_ir::diag::{Diagnostic, Diagnostics, Span};
 
-/// Builds the model of `decl` (see [`LayoutModel::from_ast`]).
-pub(crate) fn build(decl: &LayoutDecl, program: &Program) -> LayoutModel {
+/// Builds the model of `decl` (see [`LayoutModel::of`]); `adt` is the type it realizes when
+/// the type checker chose it, `None` to find it here ([`find_adt`]).
+pub(crate) fn build(decl: &LayoutDecl, program: &Program, adt: Option<AdtChoice>) -> LayoutModel {
     let env = TypeEnv::new(program);
     let mut b = Builder {
         m: LayoutModel {
@@ -41,7 +42,25 @@ pub(crate) fn build(decl: &LayoutDecl, program: &Program) -> LayoutModel {
         env,
     };
     b.components(decl);
-    b.m.adt = find_adt(decl, program, &mut b.m.diagnostics);
+    b.m.adt = match adt {
+        None => find_adt(decl, program, &mut b.m.diagnostics),
+        Some(AdtChoice::Chosen(name)) => {
+            let t = program.items.iter().find_map(|i| match i {
+                Item::Type(t) if t.name.name == name => Some(t),
+                _ => None,
+            });
+            if let Some(t) = t {
+                unknown_variants(decl, program, t, &mut b.m.diagnostics);
+            }
+            t.and_then(adt_of_decl)
+        }
+        // The type checker could not tell: the search says why (E0311), and the model
+        // realizes no type rather than one the checker did not choose.
+        Some(AdtChoice::Undecided) => {
+            find_adt(decl, program, &mut b.m.diagnostics);
+            None
+        }
+    };
     if let Some(adt) = &b.m.adt {
         b.env.reference = Some((adt.name.clone(), b.m.reference));
     }

@@ -14,7 +14,7 @@
 //! stays within the reference's bits; a body reads no field that only other variants have.
 
 use crate::layout::check_build_root::{check_root, GlobalFacts};
-use crate::layout::model::{LayoutModel, LogicalField, MemberId, MemberModel};
+use crate::layout::model::{LayoutModel, LogicalField, MemberId, MemberModel, Models};
 use crate::layout::resolve::{FieldPath, Resolver};
 use crate::syntax::ast::{
     BuildDecl, BuildVariant, Expr, ExprKind, Ident, Item, Program, Stmt, StmtKind,
@@ -23,7 +23,7 @@ use rustc_hash::{FxHashMap, FxHashSet};
 use scion_ir::diag::{Diagnostic, Diagnostics, Span};
 
 /// Checks every build of `program`.
-pub fn check_builds(program: &Program) -> Diagnostics {
+pub fn check_builds(program: &Program, models: &Models) -> Diagnostics {
     let mut out = Diagnostics::new();
     let mut seen: FxHashMap<&str, Span> = FxHashMap::default();
     for item in &program.items {
@@ -37,13 +37,13 @@ pub fn check_builds(program: &Program) -> Diagnostics {
             continue;
         }
         seen.insert(&b.name.name, b.name.span);
-        out.extend(check_build(b, program));
+        out.extend(check_build(b, program, models));
     }
     out
 }
 
 /// Checks one build against its layout.
-pub fn check_build(build: &BuildDecl, program: &Program) -> Diagnostics {
+pub fn check_build(build: &BuildDecl, program: &Program, models: &Models) -> Diagnostics {
     let mut d = Diagnostics::new();
     let layout = program.items.iter().find_map(|i| match i {
         Item::Layout(l) if l.name.name == build.name.name => Some(l),
@@ -69,7 +69,9 @@ pub fn check_build(build: &BuildDecl, program: &Program) -> Diagnostics {
         d.push(diag);
         return d;
     };
-    let model = LayoutModel::from_ast(layout, program);
+    let Some(model) = models.get(&layout.name.name) else {
+        return d;
+    };
     let Some(adt) = model.adt.clone() else {
         return d;
     };

@@ -11,19 +11,17 @@
 //! arms that can never match. The unique-path search is [`crate::layout::resolve`].
 
 use crate::layout::domain::{coverage, Uncovered};
-use crate::layout::model::{ArmBody, LayoutModel, MemberId, MemberModel, ScopeId};
+use crate::layout::model::{ArmBody, LayoutModel, MemberId, MemberModel, Models, ScopeId};
 use crate::layout::resolve::{
     dep_of, names_in, Dep, FieldPath, ResolveError, Resolver, Route, RouteError,
 };
 use crate::layout::types::integer_domain;
-use crate::syntax::ast::{
-    Expr, ExprKind, Item, LayoutDecl, Program, SplitPatternKind, TypeExpr, TypeExprKind,
-};
+use crate::syntax::ast::{Expr, ExprKind, Item, Program, SplitPatternKind, TypeExpr, TypeExprKind};
 use rustc_hash::{FxHashMap, FxHashSet};
 use scion_ir::diag::{Diagnostic, Diagnostics, Span};
 
-/// Checks every layout of `program`.
-pub fn check_layouts(program: &Program) -> Diagnostics {
+/// Checks every layout of `program` (their models are `models`').
+pub fn check_layouts(program: &Program, models: &Models) -> Diagnostics {
     let mut out = Diagnostics::new();
     let mut seen: FxHashMap<&str, Span> = FxHashMap::default();
     for item in &program.items {
@@ -40,16 +38,17 @@ pub fn check_layouts(program: &Program) -> Diagnostics {
             continue;
         }
         seen.insert(&l.name.name, l.name.span);
-        out.extend(check_layout(l, program));
+        if let Some(model) = models.get(&l.name.name) {
+            out.extend(check_layout(model));
+        }
     }
     out
 }
 
 /// Checks one layout.
-pub fn check_layout(decl: &LayoutDecl, program: &Program) -> Diagnostics {
-    let model = LayoutModel::from_ast(decl, program);
+pub fn check_layout(model: &LayoutModel) -> Diagnostics {
     let mut c = Checker {
-        m: &model,
+        m: model,
         d: model.diagnostics.clone(),
         reported: FxHashSet::default(),
     };

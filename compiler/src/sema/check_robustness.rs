@@ -13,8 +13,13 @@ use crate::layout::LayoutModel;
 use crate::syntax::ast::*;
 
 fn run_everything(p: &Program) {
-    let _ = check_layouts(p);
-    let _ = check_builds(p);
+    let models = crate::layout::model::Models::inferred(p);
+    let _ = check_layouts(p, &models);
+    let _ = check_builds(p, &models);
+    let (typed, _) = crate::sema::check_program(p);
+    let typed_models = crate::layout::model::Models::of(p, &typed);
+    let _ = check_layouts(p, &typed_models);
+    let _ = check_builds(p, &typed_models);
     for item in &p.items {
         if let Item::Layout(l) = item {
             let m = LayoutModel::from_ast(l, p);

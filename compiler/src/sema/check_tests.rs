@@ -8,8 +8,9 @@ use scion_ir::diag::{Diagnostics, SourceMap};
 
 fn diags(sources: &[&str]) -> Diagnostics {
     let p = program(sources);
-    let mut d = check_layouts(&p);
-    d.extend(check_builds(&p));
+    let models = crate::layout::model::Models::inferred(&p);
+    let mut d = check_layouts(&p, &models);
+    d.extend(check_builds(&p, &models));
     d
 }
 
@@ -66,7 +67,7 @@ fn catalog_layouts_pass_every_check() {
 fn diagnostics_render_with_code_and_position() {
     let bad = pbrt_with("c_o: u32;", "c_o: u32; c_o: u32;");
     let p = program(&[&bad]);
-    let d = check_layouts(&p);
+    let d = check_layouts(&p, &crate::layout::model::Models::inferred(&p));
     let mut sm = SourceMap::new();
     let mut text = String::from(PRELUDE);
     text.push('\n');

@@ -80,8 +80,11 @@ pub(super) fn structural(src: &str, code: &str) {
         diags.render(&sm)
     );
     let mut all = Diagnostics::new();
-    all.extend(crate::layout::check_layout::check_layouts(&program));
-    all.extend(crate::layout::check_build::check_builds(&program));
+    let models = crate::layout::model::Models::inferred(&program);
+    all.extend(crate::layout::check_layout::check_layouts(
+        &program, &models,
+    ));
+    all.extend(crate::layout::check_build::check_builds(&program, &models));
     assert!(
         all.list.iter().any(|d| d.code.as_deref() == Some(code)),
         "expected {code}, got:\n{}",

@@ -169,8 +169,9 @@ fn word_swaps_never_panic_and_clean_programs_are_fully_typed() {
         parsed += 1;
         let result = std::panic::catch_unwind(|| {
             let (typed, diags) = check_program(&program);
-            let layout = crate::layout::check_layout::check_layouts(&program);
-            let build = crate::layout::check_build::check_builds(&program);
+            let models = crate::layout::model::Models::inferred(&program);
+            let layout = crate::layout::check_layout::check_layouts(&program, &models);
+            let build = crate::layout::check_build::check_builds(&program, &models);
             (
                 typed,
                 diags.has_errors() || layout.has_errors() || build.has_errors(),
