@@ -148,6 +148,7 @@ pub fn compile(
             return out;
         }
     };
+    module.layouts = crate::layout::carried::layout_sources(&program, &models);
     if emit == Emit::Mem && popts.layout.is_none() {
         out.diagnostics.push(
             Diagnostic::error("E0908", "`--emit=mem` needs a layout").with_note(format!(

@@ -171,6 +171,20 @@ impl AdtDef {
     }
 }
 
+/// A layout declaration carried by a `tree`-level module, so that the specializations can run
+/// on text IR (`scion-opt --layout NAME --passes=destructor-specialize`): its source in the
+/// layout language (the `layout` declaration and the `type` declarations it may read) and the
+/// type the checker decided it realizes. Printed `tree.layout @Name for @Type "source"`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LayoutSource {
+    /// The layout's name.
+    pub name: String,
+    /// The sum type it realizes, as the type checker chose it (`None`: undecided).
+    pub adt: Option<String>,
+    /// The declarations, as source text.
+    pub source: String,
+}
+
 /// A compilation unit of IR: functions, ADT declarations and every arena.
 #[derive(Clone, Debug, Default)]
 pub struct Module {
@@ -180,6 +194,8 @@ pub struct Module {
     pub func_order: Vec<FuncId>,
     /// ADT declarations in print order.
     pub adts: Vec<AdtDef>,
+    /// Layouts carried for the specializations, in print order.
+    pub layouts: Vec<LayoutSource>,
     adt_index: FxHashMap<String, usize>,
     /// All regions.
     pub regions: Arena<Region>,

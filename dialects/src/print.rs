@@ -32,8 +32,15 @@ pub fn print_module(m: &Module) -> String {
         out.push_str(&print_adt(m, &adt.name));
         out.push('\n');
     }
+    for l in &m.layouts {
+        let _ = write!(out, "tree.layout @{}", symbol_text(&l.name));
+        if let Some(a) = &l.adt {
+            let _ = write!(out, " for @{}", symbol_text(a));
+        }
+        let _ = writeln!(out, " {}", quote(&l.source));
+    }
     for (i, &f) in m.func_order.iter().enumerate() {
-        if i > 0 || !m.adts.is_empty() {
+        if i > 0 || !m.adts.is_empty() || !m.layouts.is_empty() {
             out.push('\n');
         }
         out.push_str(&print_func(m, f));

@@ -45,6 +45,11 @@ struct Args {
     /// The LLVM target of `--emit=llvm|asm`: x86_64, aarch64 or nvptx64 (default: this machine).
     #[arg(long, value_name = "TARGET")]
     target: Option<String>,
+    /// The layout `destructor-specialize` and `constructor-specialize` specialize to: one of
+    /// the module's `tree.layout` records (which `scionc --emit=tree` writes); without it, the
+    /// only one.
+    #[arg(long, value_name = "NAME")]
+    layout: Option<String>,
     /// A pass option `pass:key=value` (repeatable), e.g. `recursion-to-stack:stack-size=8`.
     #[arg(long = "pass-option", value_name = "PASS:KEY=VALUE")]
     pass_options: Vec<String>,
@@ -115,6 +120,9 @@ fn run(args: &Args) -> i32 {
         pm.options.print_after_all = args.print_after_all;
         pm.options.stop_after = args.stop_after.clone();
         let mut cx = PassCx::new();
+        if let Some(l) = &args.layout {
+            cx.insert_ext(passes::tree_to_mem::LayoutChoice(l.clone()));
+        }
         for o in &args.pass_options {
             if let Err(d) = cx.parse_option(o) {
                 eprint!("{}", d.render(&sources));

@@ -9,6 +9,7 @@
 //! declared here for now so this module compiles on its own; they belong to `sema`.
 
 pub mod adt;
+pub mod carried;
 pub mod domain;
 pub mod dump;
 pub mod logical;

@@ -205,8 +205,9 @@ impl Parser<'_> {
             match self.peek().clone() {
                 Tok::Eof => return Ok(()),
                 Tok::Ident(s) if s == "tree.type" => self.adt_decl()?,
+                Tok::Ident(s) if s == "tree.layout" => self.layout_decl()?,
                 Tok::Ident(s) if s == "func" => self.func()?,
-                _ => return Err(self.unexpected("`func` or `tree.type`")),
+                _ => return Err(self.unexpected("`func`, `tree.type` or `tree.layout`")),
             }
         }
     }
@@ -248,6 +249,37 @@ impl Parser<'_> {
         if self.m.declare_adt(def).is_err() {
             return Err(self.error("E0954", start, format!("type `{name}` declared twice")));
         }
+        Ok(())
+    }
+
+    /// `tree.layout @Name [for @Type] "source"`.
+    fn layout_decl(&mut self) -> PResult<()> {
+        let start = self.span();
+        self.bump();
+        let Tok::Sym(name) = self.peek().clone() else {
+            return Err(self.unexpected("`@Name`"));
+        };
+        self.bump();
+        let adt = if matches!(self.peek(), Tok::Ident(s) if s == "for") {
+            self.bump();
+            let Tok::Sym(a) = self.peek().clone() else {
+                return Err(self.unexpected("`@Type`"));
+            };
+            self.bump();
+            Some(a)
+        } else {
+            None
+        };
+        let Tok::Str(source) = self.peek().clone() else {
+            return Err(self.unexpected("the layout's source as a string"));
+        };
+        self.bump();
+        if self.m.layouts.iter().any(|l| l.name == name) {
+            return Err(self.error("E0954", start, format!("layout `{name}` declared twice")));
+        }
+        self.m
+            .layouts
+            .push(crate::module::LayoutSource { name, adt, source });
         Ok(())
     }
 

@@ -65,7 +65,7 @@ impl Pass for ConstructorSpecialize {
     }
 
     fn run(&mut self, m: &mut Module, cx: &mut PassCx) -> Result<bool, PassError> {
-        let spec = spec_of(cx, self.name())?;
+        let spec = spec_of(m, cx, self.name())?;
         specialize(m, spec).map_err(PassError::Diagnostics)
     }
 }

@@ -46,7 +46,7 @@ impl Pass for DestructorSpecialize {
     }
 
     fn run(&mut self, m: &mut Module, cx: &mut PassCx) -> Result<bool, PassError> {
-        let spec = spec_of(cx, self.name())?;
+        let spec = spec_of(m, cx, self.name())?;
         specialize(m, spec)
     }
 }

@@ -51,14 +51,26 @@ impl LayoutSpec {
     }
 }
 
-/// The layout spec of the pass context, or the error saying the pass needs one.
-fn spec_of<'a>(cx: &'a PassCx, pass: &str) -> Result<&'a LayoutSpec, PassError> {
-    cx.ext::<LayoutSpec>().ok_or_else(|| {
-        Diagnostic::error("E0907", format!("`{pass}` needs a layout"))
-            .with_note("choose one with `scionc --layout NAME` (a `layout` declared in the inputs)")
-            .with_note("scion-opt reads IR only and has no layouts: run this pass through scionc")
-            .into()
-    })
+/// The layout a module's `tree.layout` records are specialized to when the pass context has
+/// no [`LayoutSpec`] (`scion-opt --layout NAME`; without it, the module's only layout).
+#[derive(Clone, Debug)]
+pub struct LayoutChoice(pub String);
+
+/// The layout spec of the pass context; without one, the spec of the layout the module carries
+/// (`LayoutChoice`'s, or the only one), which it then keeps. Errors say which layout is missing.
+fn spec_of<'a>(m: &Module, cx: &'a mut PassCx, pass: &str) -> Result<&'a LayoutSpec, PassError> {
+    if cx.ext::<LayoutSpec>().is_none() {
+        let name = cx.ext::<LayoutChoice>().map(|c| c.0.clone());
+        let model = crate::layout::carried::model_of(&m.layouts, name.as_deref()).map_err(|d| {
+            let mut d = d;
+            for x in &mut d.list {
+                *x = x.clone().with_note(format!("needed by `{pass}`"));
+            }
+            PassError::Diagnostics(d)
+        })?;
+        cx.insert_ext(LayoutSpec::new(model));
+    }
+    Ok(cx.ext::<LayoutSpec>().expect("inserted above"))
 }
 
 /// A construct the specialization passes do not handle (E0380), with the span of the layout or
