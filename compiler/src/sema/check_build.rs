@@ -75,12 +75,12 @@ pub fn check_build(build: &BuildDecl, program: &Program, models: &Models) -> Dia
     let Some(adt) = model.adt.clone() else {
         return d;
     };
-    let mut resolver = Resolver::new(&model);
-    let facts = GlobalFacts::of(&model);
+    let mut resolver = Resolver::new(model);
+    let facts = GlobalFacts::of(model);
     if let Some(root) = &build.root {
-        check_root(&model, &facts, &root.body, root.span, &mut d);
+        check_root(model, &facts, &root.body, root.span, &mut d);
     } else {
-        check_root(&model, &facts, &[], build.span, &mut d);
+        check_root(model, &facts, &[], build.span, &mut d);
     }
     let mut built: FxHashMap<&str, Span> = FxHashMap::default();
     for bv in &build.variants {
@@ -130,7 +130,7 @@ pub fn check_build(build: &BuildDecl, program: &Program, models: &Models) -> Dia
                 );
             }
         }
-        let mut vc = VariantCheck::new(&model, &mut resolver, &facts, &var.fields, &bv.name.name);
+        let mut vc = VariantCheck::new(model, &mut resolver, &facts, &var.fields, &bv.name.name);
         vc.run(bv);
         d.extend(vc.d);
     }
