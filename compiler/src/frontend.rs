@@ -118,25 +118,13 @@ pub fn compile(
 
     let (typed, diags) = sema::check_program(&program);
     out.diagnostics.extend(diags);
-    // The structural checks of paper §6 overlap with sema's typing of layouts and builds on
-    // a few rules (an unknown variant, a duplicate member, ...); report each place once.
-    // One model per layout, realizing the type sema chose.
+    // One model per layout, realizing the type sema chose; the structural checks of paper §6
+    // read it.
     let models = Models::of(&program, &typed);
-    let structural = check_layout::check_layouts(&program, &models)
-        .list
-        .into_iter();
-    for d in structural.chain(check_build::check_builds(&program, &models).list) {
-        let dup = d.is_error()
-            && d.primary_span().is_some()
-            && out
-                .diagnostics
-                .list
-                .iter()
-                .any(|e| e.is_error() && e.primary_span() == d.primary_span());
-        if !dup {
-            out.diagnostics.push(d);
-        }
-    }
+    out.diagnostics
+        .extend(check_layout::check_layouts(&program, &models));
+    out.diagnostics
+        .extend(check_build::check_builds(&program, &models));
     if out.diagnostics.has_errors() || emit == Emit::Check {
         return out;
     }

@@ -9,7 +9,7 @@
 
 use crate::layout::adt::{adt_of_decl, find_adt, unknown_variants};
 use crate::layout::model::*;
-use crate::layout::types::{record_shape, round_up, Shape, TypeEnv};
+use crate::layout::types::{record_shape, round_up, Shape, ShapeError, TypeEnv};
 use crate::syntax::ast::{
     ArrayLen, Expr, ExprKind, GroupAttrKind, GroupDecl, Ident, Item, LayoutDecl, Member,
     MemberKind, Program, SplitArmBody, TypeExpr, TypeExprKind,
@@ -102,6 +102,8 @@ impl Builder<'_> {
         for p in &decl.params {
             let shape = match self.env.shape(&p.ty) {
                 Ok(s) => Some(s),
+                // An unknown name is the type checker's E0202.
+                Err(ShapeError::Unknown(_)) => None,
                 Err(e) => {
                     self.m.diagnostics.push(err(
                         "E0301",
@@ -169,6 +171,8 @@ impl Builder<'_> {
     fn shape_or_report(&mut self, ty: &TypeExpr) -> Option<Shape> {
         match self.env.shape(ty) {
             Ok(s) => Some(s),
+            // An unknown name is the type checker's E0202.
+            Err(ShapeError::Unknown(_)) => None,
             Err(e) => {
                 self.m.diagnostics.push(err(
                     "E0301",

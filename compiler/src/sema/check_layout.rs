@@ -309,7 +309,9 @@ impl Checker<'_> {
             let patterns: Vec<SplitPatternKind> =
                 sp.arms.iter().map(|a| a.pattern.kind.clone()).collect();
             let has_wild = patterns.contains(&SplitPatternKind::Wildcard);
-            let domain = match self.domain(sp.scope, &sp.discriminant) {
+            let typed = self.domain(sp.scope, &sp.discriminant);
+            let not_integer = typed.is_err();
+            let domain = match typed {
                 Ok(d) => d,
                 Err(ty) => {
                     self.d.push(
@@ -336,8 +338,9 @@ impl Checker<'_> {
                             .with_note(format!("the discriminant ranges over {lo}..={hi}; add an arm for {v} or a `_` arm")),
                     );
                 }
+                // A discriminant that is no integer was reported above.
                 Uncovered::Unknown => {
-                    if !has_wild {
+                    if !has_wild && !not_integer {
                         self.d.push(
                             Diagnostic::error("E0320", "cannot tell the range of this split's discriminant")
                                 .with_primary(sp.discriminant.span, "type unknown here")
