@@ -19,7 +19,8 @@
 //! traversal's work per ray on each, see `builders`), `--tree scion|tinybvh|obvhs` (the tree the
 //! reference, the hand-written kernel and Scion's rows traverse: Scion's binned SAH tree by
 //! default, or the one tinybvh's or obvhs's builder makes, read back as a logical tree; the
-//! peers always use their own). `tinybvh-bvh8` needs a build with the `avx2` target feature
+//! peers always use their own), `--max-leaf N` (Scion's tree with leaves of at most N
+//! primitives, for layouts with narrower counts: the hair BVH's 3 bits hold 7). `tinybvh-bvh8` needs a build with the `avx2` target feature
 //! (`RUSTFLAGS="-C target-feature=+avx2,+fma"`, see `tinybvh_peer`); without it the row is left
 //! out with a note.
 
@@ -51,6 +52,7 @@ struct Args {
     trace_only: Option<String>,
     builders: bool,
     tree: String,
+    max_leaf: Option<usize>,
 }
 
 /// The peers `--peers` can name, in the order their rows come: the hand-written kernel over
@@ -86,6 +88,7 @@ fn parse() -> Result<Args, String> {
         trace_only: None,
         builders: false,
         tree: "scion".into(),
+        max_leaf: None,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -116,6 +119,13 @@ fn parse() -> Result<Args, String> {
             "--trace-only" => a.trace_only = Some(value()?),
             "--builders" => a.builders = true,
             "--tree" => a.tree = value()?,
+            "--max-leaf" => {
+                let n = num(value()?)? as usize;
+                if n == 0 {
+                    return Err("--max-leaf: at least 1 primitive per leaf".into());
+                }
+                a.max_leaf = Some(n);
+            }
             "--peers" => {
                 let list = value()?;
                 a.peers = list
@@ -149,7 +159,15 @@ fn run(a: &Args) -> Result<(), String> {
     let mut w = Workload::load(&a.scene, a.rays, a.n, a.seed)?;
     // The tree the reference, the hand-written kernel and Scion's rows traverse.
     match a.tree.as_str() {
-        "scion" => {}
+        "scion" => {
+            if let Some(n) = a.max_leaf {
+                let o = scion_runtime::bvh::SahOptions {
+                    max_leaf: n,
+                    ..Default::default()
+                };
+                w.tree = scion_runtime::bvh::build_sah_binned(&w.triangles, &o);
+            }
+        }
         "tinybvh" => w.tree = tinybvh_peer::logical_tree(&w.triangles)?,
         "obvhs" => w.tree = obvhs_peer::logical_tree(&w.triangles)?,
         t => {
