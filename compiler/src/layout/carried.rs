@@ -27,8 +27,11 @@ pub fn layout_sources(program: &Program, models: &Models) -> Vec<LayoutSource> {
         if out.iter().any(|l| l.name == decl.name.name) {
             continue;
         }
+        // The declaration the model was built from: with the components the checker's types
+        // let the compiler declare.
+        let decl = models.decl(&decl.name.name).unwrap_or(decl);
         let mut items = types.clone();
-        items.push(item.clone());
+        items.push(Item::Layout(decl.clone()));
         let source = crate::syntax::print::print_program(&Program {
             items,
             node_count: program.node_count,

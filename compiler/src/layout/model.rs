@@ -419,29 +419,43 @@ impl LayoutModel {
 /// specializations and the C ABI all read these.
 #[derive(Clone, Debug, Default)]
 pub struct Models {
-    models: Vec<LayoutModel>,
+    /// Each layout's declaration (with the components sema's types let the compiler declare,
+    /// see [`Models::of`]) and its model.
+    models: Vec<(LayoutDecl, LayoutModel)>,
 }
 
 impl Models {
-    /// The models of `program`'s layouts, with `typed`'s choices of types.
+    /// The models of `program`'s layouts, with `typed`'s choices of types. A `parent.x` of a
+    /// derived field or let that no component carries gets a declared component typed by the
+    /// checker (`parent.bounds` adds `parent_bounds: AABB = parent.bounds` to the reference).
     pub fn of(program: &Program, typed: &crate::sema::TypedProgram) -> Models {
-        let mut models: Vec<LayoutModel> = Vec::new();
+        let mut models: Vec<(LayoutDecl, LayoutModel)> = Vec::new();
+        let mut next_id = program.node_count;
         for item in &program.items {
             let crate::syntax::ast::Item::Layout(decl) = item else {
                 continue;
             };
-            if models.iter().any(|m| m.name.name == decl.name.name) {
+            if models.iter().any(|m| m.0.name.name == decl.name.name) {
                 continue;
             }
-            let chosen = typed
-                .layouts
-                .iter()
-                .find(|l| l.name == decl.name.name)
+            let info = typed.layouts.iter().find(|l| l.name == decl.name.name);
+            let chosen = info
                 .and_then(|l| l.adt)
                 .and_then(|a| typed.adts.get(a))
                 .map(|a| a.name.as_str());
             let choice = chosen.map_or(AdtChoice::Undecided, AdtChoice::Chosen);
-            models.push(LayoutModel::of(decl, program, choice));
+            let model = LayoutModel::of(decl, program, choice);
+            let carried = info
+                .map(|l| carried_derived(decl, &model, l, &typed.adts, &mut next_id))
+                .unwrap_or_default();
+            if carried.is_empty() {
+                models.push((decl.clone(), model));
+            } else {
+                let mut d = decl.clone();
+                d.params.extend(carried);
+                let model = LayoutModel::of(&d, program, choice);
+                models.push((d, model));
+            }
         }
         Models { models }
     }
@@ -449,11 +463,11 @@ impl Models {
     /// The models of `program`'s layouts with their types found by the layout model alone
     /// (tests of the layout checks).
     pub fn inferred(program: &Program) -> Models {
-        let mut models: Vec<LayoutModel> = Vec::new();
+        let mut models: Vec<(LayoutDecl, LayoutModel)> = Vec::new();
         for item in &program.items {
             if let crate::syntax::ast::Item::Layout(decl) = item {
-                if !models.iter().any(|m| m.name.name == decl.name.name) {
-                    models.push(LayoutModel::from_ast(decl, program));
+                if !models.iter().any(|m| m.0.name.name == decl.name.name) {
+                    models.push((decl.clone(), LayoutModel::from_ast(decl, program)));
                 }
             }
         }
@@ -462,6 +476,121 @@ impl Models {
 
     /// The model of layout `name`.
     pub fn get(&self, name: &str) -> Option<&LayoutModel> {
-        self.models.iter().find(|m| m.name.name == name)
+        self.models
+            .iter()
+            .find(|m| m.0.name.name == name)
+            .map(|m| &m.1)
     }
+
+    /// The declaration of layout `name` the model was built from.
+    pub fn decl(&self, name: &str) -> Option<&LayoutDecl> {
+        self.models
+            .iter()
+            .find(|m| m.0.name.name == name)
+            .map(|m| &m.0)
+    }
+}
+
+/// Components to declare for `decl`: one per `parent.x` read by its expressions where `x` is a
+/// derived field or let that no component carries, typed by the checker (`info`).
+fn carried_derived(
+    decl: &LayoutDecl,
+    model: &LayoutModel,
+    info: &crate::sema::LayoutInfo,
+    adts: &crate::sema::AdtTable,
+    next_id: &mut u32,
+) -> Vec<crate::syntax::ast::LayoutParam> {
+    use crate::syntax::ast::{ExprKind, LayoutParam, NodeId};
+    let mut exprs: Vec<&Expr> = Vec::new();
+    for m in &model.members {
+        if let MemberModel::Derived { value, .. } | MemberModel::Let { value, .. } = &m.kind {
+            exprs.push(value);
+        }
+    }
+    exprs.extend(model.splits.iter().map(|s| &s.discriminant));
+    let mut out: Vec<LayoutParam> = Vec::new();
+    for e in exprs {
+        for id in crate::layout::resolve::names_in(e) {
+            let Some(x) = id.name.strip_prefix("parent.") else {
+                continue;
+            };
+            let carried = |c: &Option<Ident>| c.as_ref().is_some_and(|c| c.name == x);
+            if model.components.iter().any(|c| carried(&c.carried))
+                || out.iter().any(|p| {
+                    matches!(&p.default, Some(Expr { kind: ExprKind::Parent(c), .. }) if c.name == x)
+                })
+            {
+                continue;
+            }
+            let derived = model.members.iter().any(|m| {
+                matches!(&m.kind, MemberModel::Derived { name, .. } | MemberModel::Let { name, .. } if name.name == x)
+            });
+            let ty = info
+                .members
+                .iter()
+                .find(|m| m.name == x)
+                .and_then(|m| type_expr(&m.ty, adts, id.span));
+            let (true, Some(ty)) = (derived, ty) else {
+                continue;
+            };
+            let taken = |n: &str| {
+                decl.params.iter().any(|p| p.name.name == n)
+                    || out.iter().any(|p| p.name.name == n)
+                    || info.members.iter().any(|m| m.name == n)
+            };
+            let mut name = format!("parent_{x}");
+            while taken(&name) {
+                name.push('_');
+            }
+            *next_id += 1;
+            out.push(LayoutParam {
+                name: Ident {
+                    name,
+                    span: id.span,
+                },
+                ty,
+                default: Some(Expr {
+                    id: NodeId(*next_id),
+                    kind: ExprKind::Parent(Ident {
+                        name: x.to_string(),
+                        span: id.span,
+                    }),
+                    span: id.span,
+                }),
+                span: id.span,
+            });
+        }
+    }
+    out
+}
+
+/// The written form of a checked type, where it has one (scalars, vectors, declared types and
+/// fixed arrays of them).
+fn type_expr(t: &crate::sema::Ty, adts: &crate::sema::AdtTable, span: Span) -> Option<TypeExpr> {
+    use crate::sema::Ty;
+    use crate::syntax::ast::{ArrayLen, TypeExprKind};
+    let named = |n: &str| {
+        TypeExprKind::Named(Ident {
+            name: n.to_string(),
+            span,
+        })
+    };
+    let kind = match t {
+        Ty::Prim(p) => named(p.name()),
+        Ty::Ptr => named("ptr"),
+        Ty::Vector(p, lanes) => TypeExprKind::Vector {
+            elem: Ident {
+                name: p.name().to_string(),
+                span,
+            },
+            lanes: *lanes,
+        },
+        Ty::Adt(a) => named(&adts.get(*a)?.name),
+        Ty::Array(e, n) => TypeExprKind::Array {
+            elem: Box::new(type_expr(e, adts, span)?),
+            len: ArrayLen::Const(*n, span),
+        },
+        _ => return None,
+    };
+    Some(TypeExpr { kind, span })
 }

@@ -688,10 +688,11 @@ impl Builder<'_> {
     }
 
     /// Tree-carried state (language notes: "`parent.x` makes `x` part of the child's
-    /// reference"). A component `c: T = parent.x` carries `x` explicitly; a `parent.x` read
-    /// by an expression with no such component gets one, named `parent.x`, appended to the
-    /// reference (its type is the stored field's or component's; a derived `x` needs the
-    /// explicit form, E0328). The placed (first) component cannot be carried (E0328).
+    /// reference"). A component `c: T = parent.x` carries `x` explicitly (`Models::of` declares
+    /// one for a derived `x` from its checked type); a `parent.x` read by an expression with
+    /// no such component gets one, named `parent.x`, appended to the reference, when `x` is a
+    /// stored field or a component (a derived `x` whose type no component takes is E0328).
+    /// The placed (first) component cannot be carried (E0328).
     fn carry_parents(&mut self) {
         if let Some(c) = self.m.components.first().filter(|c| c.carried.is_some()) {
             self.m.diagnostics.push(
@@ -745,11 +746,11 @@ impl Builder<'_> {
                         self.m.diagnostics.push(
                             err(
                                 "E0328",
-                                format!("no reference component carries `parent.{x}`, a derived field"),
+                                format!("no reference component can carry `parent.{x}`, a derived field of a type a component cannot take"),
                                 id.span,
                                 "carried by no component",
                             )
-                            .with_note(format!("the compiler adds components only for stored fields and components, whose types are declared; declare this one: `layout {}(..., p: T = parent.{x})`, and read `p`", self.m.name.name)),
+                            .with_note(format!("a component is a scalar, a vector, a declared type or a fixed array of them; carry the parts of `{x}` (`parent.y` of fields of those types), or declare one: `layout {}(..., p: T = parent.{x})`", self.m.name.name)),
                         );
                     }
                     // An unknown `x` is E0310.

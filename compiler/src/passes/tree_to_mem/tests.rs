@@ -381,8 +381,7 @@ layout Par(I: u32, pb: AABB = parent.bounds) {
         out.contains("(u32, !tree.adt<\"AABB\">, vector<3xf32>)"),
         "{out}"
     );
-    // The placed component cannot be carried; a derived field is carried only by a declared
-    // component (its type is not written anywhere).
+    // The placed component cannot be carried.
     let first = layout.replace(
         "Par(I: u32, pb: AABB = parent.bounds)",
         "Par(I: u32 = parent.c_o)",
@@ -392,11 +391,22 @@ layout Par(I: u32, pb: AABB = parent.bounds) {
         e.contains("E0328") && e.contains("first reference component"),
         "{e}"
     );
+    // A derived field is carried in a component of its checked type, declared by the
+    // compiler; one of a type no component takes (a tuple) is E0328.
     let derived = layout
         .replace("Par(I: u32, pb: AABB = parent.bounds)", "Par(I: u32)")
         .replace("min(pb.low, parent.hi)", "parent.bounds.low");
-    let e = mem(&[COUNT, &derived], "Par").unwrap_err();
-    assert!(e.contains("E0328") && e.contains("`parent.bounds`"), "{e}");
+    let out = mem(&[COUNT, algo, &derived], "Par").unwrap();
+    assert!(
+        out.contains("layout Par(I: u32, parent_bounds: AABB = parent.bounds)"),
+        "{out}"
+    );
+    assert!(out.contains("(tuple<u32, !tree.adt<\"AABB\">>)"), "{out}");
+    let tuple = derived
+        .replace("hi: f32x3;", "hi: f32x3; pair = (hi, hi);")
+        .replace("parent.bounds.low", "parent.pair[0]");
+    let e = mem(&[COUNT, &tuple], "Par").unwrap_err();
+    assert!(e.contains("E0328") && e.contains("`parent.pair`"), "{e}");
 }
 
 #[test]
