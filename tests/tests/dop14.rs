@@ -14,25 +14,16 @@ use scion_host::mem_interp::Program;
 use scion_runtime::bvh::dop14::node_dops;
 use scion_runtime::reference::{closest_hit_dop14_stats, closest_hit_tree_stats, TraversalStats};
 use scion_tests::cases::{hard_and_real, mixed_rays, TreeKind};
-use std::path::PathBuf;
 
 fn program() -> Program {
-    let lib = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../library");
-    let read = |rel: &str| std::fs::read_to_string(lib.join(rel)).expect(rel);
-    Program {
-        files: vec![
-            (
-                "closest_hit_dop14.scion".to_string(),
-                read("algorithms/closest_hit_dop14.scion"),
-            ),
-            (
-                "dop14_split.scion".to_string(),
-                read("layouts/dop14_split.scion"),
-            ),
+    c_entries::program(
+        &[
+            "library/algorithms/closest_hit_dop14.scion",
+            "library/layouts/dop14_split.scion",
         ],
-        layout: "DopSplit".to_string(),
-        algorithm: "closest_hit_dop14".to_string(),
-    }
+        "DopSplit",
+        "closest_hit_dop14",
+    )
 }
 
 #[test]

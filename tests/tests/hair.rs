@@ -18,23 +18,16 @@ use scion_runtime::bvh::wide::collapse;
 use scion_runtime::geom::Hit;
 use scion_runtime::reference::{closest_hit_brute, closest_hit_wide};
 use scion_tests::cases::{hard_and_real, mixed_rays, TreeKind};
-use std::path::PathBuf;
 
 fn program() -> Program {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
-    let read = |rel: &str| std::fs::read_to_string(root.join(rel)).expect(rel);
-    let files = [
-        "library/algorithms/closest_hit_hair.scion",
-        "library/layouts/hair_bvh.scion",
-    ];
-    Program {
-        files: files
-            .iter()
-            .map(|f| (f.rsplit('/').next().unwrap().to_string(), read(f)))
-            .collect(),
-        layout: "HairBVH".to_string(),
-        algorithm: "closest_hit_hair".to_string(),
-    }
+    c_entries::program(
+        &[
+            "library/algorithms/closest_hit_hair.scion",
+            "library/layouts/hair_bvh.scion",
+        ],
+        "HairBVH",
+        "closest_hit_hair",
+    )
 }
 
 /// Oriented node kind in the logical nodes of `bytes` (kind 1 is `OBBNode`).

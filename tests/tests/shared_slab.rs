@@ -19,24 +19,17 @@ use scion_runtime::reference::{
     closest_hit_tree_stats, closest_hit_with, why_pruned, why_pruned_with, TraversalStats,
 };
 use scion_tests::cases::{hard_and_real, mixed_rays, TreeKind};
-use std::path::PathBuf;
 
 /// The library's closest hit with `layout` of the shared slab files.
 fn program(layout: &str) -> Program {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
-    let read = |rel: &str| std::fs::read_to_string(root.join(rel)).expect(rel);
-    let files = [
-        "library/algorithms/closest_hit.scion",
-        "lit-tests/Inputs/shared_slab.scion",
-    ];
-    Program {
-        files: files
-            .iter()
-            .map(|f| (f.rsplit('/').next().unwrap().to_string(), read(f)))
-            .collect(),
-        layout: layout.to_string(),
-        algorithm: "closest_hit".to_string(),
-    }
+    c_entries::program(
+        &[
+            "library/algorithms/closest_hit.scion",
+            "lit-tests/Inputs/shared_slab.scion",
+        ],
+        layout,
+        "closest_hit",
+    )
 }
 
 /// The boxes the layout reconstructs: the root's is its own (the scene box), a child's its

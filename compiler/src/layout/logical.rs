@@ -335,45 +335,25 @@ impl LogicalAbi {
                                 Some(r),
                             )
                         }
+                        // Child boxes of the axis-aligned interior variant, oriented child
+                        // boxes of another interior one: one per child slot.
                         Type::Array { elem, len: Some(n) }
-                            if k != interior && interiors.contains(&k) && is_obb(m, *elem) =>
+                            if (k == interior && is_aabb(m, *elem))
+                                || (k != interior
+                                    && interiors.contains(&k)
+                                    && is_obb(m, *elem)) =>
                         {
+                            let (role, size, what) = if k == interior {
+                                (Role::ChildBounds, 24, "child boxes")
+                            } else {
+                                (Role::ChildObbs, 60, "oriented child boxes")
+                            };
                             if *n != arity {
-                                return bad(
-                                    &f.name,
-                                    format!("{n} oriented child boxes for {arity} children"),
-                                );
+                                return bad(&f.name, format!("{n} {what} for {arity} children"));
                             }
                             let o = align_up(at, 4);
-                            let r = SchemaField::new(
-                                Role::ChildObbs,
-                                k as u32,
-                                o as u32,
-                                0,
-                                *n as u32,
-                                0,
-                            );
-                            (60 * n, 4, Slot::Value { offset: o }, Some(r))
-                        }
-                        Type::Array { elem, len: Some(n) }
-                            if k == interior && is_aabb(m, *elem) =>
-                        {
-                            if *n != arity {
-                                return bad(
-                                    &f.name,
-                                    format!("{n} child boxes for {arity} children"),
-                                );
-                            }
-                            let o = align_up(at, 4);
-                            let r = SchemaField::new(
-                                Role::ChildBounds,
-                                k as u32,
-                                o as u32,
-                                0,
-                                *n as u32,
-                                0,
-                            );
-                            (24 * n, 4, Slot::Value { offset: o }, Some(r))
+                            let r = SchemaField::new(role, k as u32, o as u32, 0, *n as u32, 0);
+                            (size * n, 4, Slot::Value { offset: o }, Some(r))
                         }
                         Type::Int(t) if !t.is_signed() && k == leaf => {
                             let w = u64::from(t.bits() / 8);

@@ -20,6 +20,20 @@ use scion_runtime::geom::{Hit, Ray};
 type SizesFn = unsafe extern "C" fn(*const LogicalTreeView, *mut u64);
 type BuildFn = unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) -> i32;
 
+/// The program of `files` (paths from the repository root) with `layout` and `algorithm`.
+pub fn program(files: &[&str], layout: &str, algorithm: &str) -> Program {
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+    let read = |rel: &str| std::fs::read_to_string(root.join(rel)).expect(rel);
+    Program {
+        files: files
+            .iter()
+            .map(|f| (f.rsplit('/').next().unwrap().to_string(), read(f)))
+            .collect(),
+        layout: layout.to_string(),
+        algorithm: algorithm.to_string(),
+    }
+}
+
 /// `program` compiled to `lo` with its C entries for the host, as `scionc -O3` does, with a
 /// stack of 4096 entries (the hard cases include a chain a thousand nodes deep).
 pub fn host_lo(program: &Program) -> LibraryLo {
