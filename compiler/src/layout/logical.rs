@@ -115,49 +115,43 @@ pub struct LogicalAbi {
 /// Byte size of a primitive (`Triangle`).
 pub const PRIM_STRIDE: u64 = 40;
 
-fn is_aabb(m: &Module, ty: TypeId) -> bool {
+/// The fields of record type `ty`, when it is a declared record.
+fn record_fields(m: &Module, ty: TypeId) -> Option<&[scion_ir::module::Field]> {
     let Type::Adt(name) = m.types.get(ty) else {
-        return false;
+        return None;
     };
-    let Some(def) = m.adt(name) else { return false };
-    let f3 = |t: TypeId| {
-        matches!(m.types.get(t), Type::Vector { elem, lanes: 3 }
-            if matches!(m.types.get(*elem), Type::Float(f) if f.bits() == 32))
-    };
-    def.is_record() && def.shared.len() == 2 && def.shared.iter().all(|f| f3(f.ty))
+    let def = m.adt(name)?;
+    def.is_record().then_some(def.shared.as_slice())
+}
+
+/// Whether `t` is a vector of `lanes` `f32`s.
+fn f32_vector(m: &Module, t: TypeId, lanes: u32) -> bool {
+    matches!(m.types.get(t), Type::Vector { elem, lanes: n } if *n == lanes
+        && matches!(m.types.get(*elem), Type::Float(f) if f.bits() == 32))
+}
+
+/// An axis-aligned box: two `f32x3` (low, high).
+fn is_aabb(m: &Module, ty: TypeId) -> bool {
+    record_fields(m, ty).is_some_and(|f| f.len() == 2 && f.iter().all(|x| f32_vector(m, x.ty, 3)))
 }
 
 /// A DOP-14 record: four vectors of `f32`, 3, 3, 4 and 4 lanes (axis minima and maxima, then
 /// the minima and maxima along x+y+z, x+y−z, x−y+z, x−y−z; `scion_runtime::bvh::dop14`).
 fn is_dop14(m: &Module, ty: TypeId) -> bool {
-    let Type::Adt(name) = m.types.get(ty) else {
-        return false;
-    };
-    let Some(def) = m.adt(name) else { return false };
-    let f = |t: TypeId, n: u32| {
-        matches!(m.types.get(t), Type::Vector { elem, lanes } if *lanes == n
-            && matches!(m.types.get(*elem), Type::Float(f) if f.bits() == 32))
-    };
-    def.is_record()
-        && def.shared.len() == 4
-        && def.shared.iter().zip([3, 3, 4, 4]).all(|(x, n)| f(x.ty, n))
+    record_fields(m, ty).is_some_and(|f| {
+        f.len() == 4
+            && f.iter()
+                .zip([3, 3, 4, 4])
+                .all(|(x, n)| f32_vector(m, x.ty, n))
+    })
 }
 
 /// An oriented box record: three `f32x3` columns of a matrix `M`, then an `AABB` (the box of
 /// `M·x`; `scion_runtime::bvh::oriented`).
 fn is_obb(m: &Module, ty: TypeId) -> bool {
-    let Type::Adt(name) = m.types.get(ty) else {
-        return false;
-    };
-    let Some(def) = m.adt(name) else { return false };
-    let f3 = |t: TypeId| {
-        matches!(m.types.get(t), Type::Vector { elem, lanes: 3 }
-            if matches!(m.types.get(*elem), Type::Float(f) if f.bits() == 32))
-    };
-    def.is_record()
-        && def.shared.len() == 4
-        && def.shared[..3].iter().all(|f| f3(f.ty))
-        && is_aabb(m, def.shared[3].ty)
+    record_fields(m, ty).is_some_and(|f| {
+        f.len() == 4 && f[..3].iter().all(|x| f32_vector(m, x.ty, 3)) && is_aabb(m, f[3].ty)
+    })
 }
 
 fn is_triangle(m: &Module, ty: TypeId) -> bool {
