@@ -67,7 +67,7 @@ fn run(args: &Args) -> i32 {
             "error[E0907]: --emit={}: expected `ir`, `clif`, `llvm` or `asm`",
             args.emit
         );
-        return 1;
+        return 2;
     }
     let target = match args.target.as_deref() {
         None => scion_llvm::Target::host(),
@@ -75,7 +75,7 @@ fn run(args: &Args) -> i32 {
     };
     let Some(target) = target else {
         eprintln!("error[E0907]: --target: expected x86_64, aarch64 or nvptx64");
-        return 1;
+        return 2;
     };
     if args.help_passes {
         println!("{}", registry.help().trim_end());
@@ -95,9 +95,13 @@ fn run(args: &Args) -> i32 {
     };
     let mut status = 0;
     let mut out = std::io::stdout().lock();
+    // The first failed write to standard output (a full disk, a closed pipe): an error.
+    let mut failed: Option<std::io::Error> = None;
     for (i, piece) in pieces.iter().enumerate() {
         if i > 0 {
-            let _ = writeln!(out, "// -----");
+            if let Err(e) = writeln!(out, "// -----") {
+                failed.get_or_insert(e);
+            }
         }
         let mut sources = SourceMap::new();
         let file = sources.add(name.clone(), piece.clone());
@@ -136,7 +140,9 @@ fn run(args: &Args) -> i32 {
         match result {
             Ok(_) if args.emit == "clif" => match scion_clif::print_clif(&module) {
                 Ok(text) => {
-                    let _ = write!(out, "{text}");
+                    if let Err(e) = write!(out, "{text}") {
+                        failed.get_or_insert(e);
+                    }
                 }
                 Err(e) => {
                     eprintln!("error[E0907]: {e}");
@@ -153,7 +159,9 @@ fn run(args: &Args) -> i32 {
                 };
                 match text {
                     Ok(text) => {
-                        let _ = write!(out, "{text}");
+                        if let Err(e) = write!(out, "{text}") {
+                            failed.get_or_insert(e);
+                        }
                     }
                     Err(e) => {
                         eprintln!("error[E0907]: {e}");
@@ -162,7 +170,9 @@ fn run(args: &Args) -> i32 {
                 }
             }
             Ok(_) => {
-                let _ = write!(out, "{}", scion_ir::print::print_module(&module));
+                if let Err(e) = write!(out, "{}", scion_ir::print::print_module(&module)) {
+                    failed.get_or_insert(e);
+                }
             }
             Err(PassError::Diagnostics(d)) => {
                 eprint!("{}", d.render(&sources));
@@ -173,6 +183,10 @@ fn run(args: &Args) -> i32 {
                 return 101;
             }
         }
+    }
+    if let Some(e) = failed.or_else(|| out.flush().err()) {
+        eprintln!("error[E0902]: cannot write standard output: {e}");
+        return 1;
     }
     status
 }

@@ -2,7 +2,7 @@
 //! requested output.
 //!
 //! Input: [`Options`]. Output: text on standard output (or `-o`), diagnostics on standard
-//! error, and an exit status (0 ok, 1 user errors, 101 internal error).
+//! error, and an exit status (0 ok, 1 input errors, 2 a bad command line, 101 internal error).
 
 use super::cli::{Emit, Options};
 use super::pipelines;
@@ -17,6 +17,8 @@ pub const PRELUDE_NAME: &str = "library/prelude.scion";
 
 /// Exit status for input errors.
 pub const EXIT_USER_ERROR: i32 = 1;
+/// Exit status for a bad command line (what `--help` promises, as the argument parser does).
+pub const EXIT_USAGE: i32 = 2;
 /// Exit status for internal compiler errors.
 pub const EXIT_INTERNAL_ERROR: i32 = 101;
 
@@ -24,15 +26,14 @@ pub const EXIT_INTERNAL_ERROR: i32 = 101;
 pub fn run(opts: &Options) -> i32 {
     let mut err = std::io::stderr().lock();
     if opts.help_passes {
-        let _ = write!(std::io::stdout(), "{}", pipelines::describe_passes());
-        return 0;
+        return write_output(&mut err, None, pipelines::describe_passes().as_bytes());
     }
     if let Err(ni) = opts.check_implemented() {
         let d = Diagnostic::error("E0901", format!("`{}` is not implemented yet", ni.flag))
             .with_note(format!("it comes with {}", ni.planned))
             .with_note("see `scionc --help` for what works today");
         let _ = write!(err, "{}", d.render(&SourceMap::new()));
-        return EXIT_USER_ERROR;
+        return EXIT_USAGE;
     }
     let early = super::cli::check_flags(opts).and_then(|()| {
         if opts.emit.is_llvm() {
@@ -43,30 +44,58 @@ pub fn run(opts: &Options) -> i32 {
     });
     if let Err(d) = early {
         let _ = write!(err, "{}", d.render(&SourceMap::new()));
-        return EXIT_USER_ERROR;
+        return EXIT_USAGE;
     }
     if opts.emit == Emit::Obj && opts.output.is_none() && std::io::stdout().is_terminal() {
         let d = Diagnostic::error("E0920", "`--emit=obj` writes a binary object file")
             .with_note("give the output file with -o PATH, or redirect standard output");
         let _ = write!(err, "{}", d.render(&SourceMap::new()));
-        return EXIT_USER_ERROR;
+        return EXIT_USAGE;
     }
     let pipeline = match pipelines::select(opts) {
         Ok(p) => p,
         Err(d) => {
             let _ = write!(err, "{}", d.render(&SourceMap::new()));
-            return EXIT_USER_ERROR;
+            return EXIT_USAGE;
         }
     };
     if opts.print_pipeline {
-        let _ = writeln!(std::io::stdout(), "{}", pipeline.join(","));
-        return 0;
+        return write_output(
+            &mut err,
+            None,
+            format!("{}\n", pipeline.join(",")).as_bytes(),
+        );
     }
     if opts.files.is_empty() {
         let d = Diagnostic::error("E0903", "no input files")
             .with_note("usage: scionc [OPTIONS] FILE...; try `scionc --help`");
         let _ = write!(err, "{}", d.render(&SourceMap::new()));
-        return EXIT_USER_ERROR;
+        return EXIT_USAGE;
+    }
+    if let Some(out) = &opts.output {
+        let same =
+            |p: &std::path::Path| match (std::fs::canonicalize(p), std::fs::canonicalize(out)) {
+                (Ok(a), Ok(b)) => a == b,
+                _ => false,
+            };
+        if let Some(input) = opts
+            .files
+            .iter()
+            .chain(opts.prelude.iter())
+            .find(|p| same(p))
+        {
+            let d = Diagnostic::error(
+                "E0902",
+                format!(
+                    "`-o {}` would overwrite the input `{}`",
+                    out.display(),
+                    input.display()
+                ),
+            )
+            .with_note("write the output to another file");
+            let _ = write!(err, "{}", d.render(&SourceMap::new()));
+            return EXIT_USAGE;
+        }
     }
 
     let mut sources = SourceMap::new();
@@ -132,21 +161,40 @@ pub fn run(opts: &Options) -> i32 {
         (None, text) => text.map(String::into_bytes),
     };
     if let Some(bytes) = bytes {
-        match &opts.output {
-            Some(path) => {
-                if let Err(e) = std::fs::write(path, bytes) {
-                    return write_error(&mut err, &path.display().to_string(), &e);
-                }
-            }
-            None => {
-                let _ = std::io::stdout().lock().write_all(&bytes);
-            }
+        let status = write_output(&mut err, opts.output.as_deref(), &bytes);
+        if status != 0 {
+            return status;
         }
     }
     if !result.dumps.is_empty() {
         let _ = err.write_all(result.dumps.as_bytes());
     }
     0
+}
+
+/// Writes `bytes` to `path` or, without one, to standard output; reports a failure (E0902,
+/// exit status 1). A file is written whole or not at all: to a temporary file beside it, then
+/// renamed over it, so a failed or interrupted write leaves the previous file as it was.
+fn write_output(err: &mut impl Write, path: Option<&std::path::Path>, bytes: &[u8]) -> i32 {
+    let Some(path) = path else {
+        let mut out = std::io::stdout().lock();
+        return match out.write_all(bytes).and_then(|()| out.flush()) {
+            Ok(()) => 0,
+            Err(e) => write_error(err, "standard output", &e),
+        };
+    };
+    let name = path
+        .file_name()
+        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+    let tmp = path.with_file_name(format!(".{name}.scionc-{}.tmp", std::process::id()));
+    let written = std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path));
+    match written {
+        Ok(()) => 0,
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            write_error(err, &format!("`{}`", path.display()), &e)
+        }
+    }
 }
 
 fn io_error(err: &mut impl Write, path: &str, e: &std::io::Error) -> i32 {
@@ -156,7 +204,7 @@ fn io_error(err: &mut impl Write, path: &str, e: &std::io::Error) -> i32 {
 }
 
 fn write_error(err: &mut impl Write, path: &str, e: &std::io::Error) -> i32 {
-    let d = Diagnostic::error("E0902", format!("cannot write `{path}`: {e}"));
+    let d = Diagnostic::error("E0902", format!("cannot write {path}: {e}"));
     let _ = write!(err, "{}", d.render(&SourceMap::new()));
     EXIT_USER_ERROR
 }
