@@ -36,6 +36,11 @@ pub fn run(opts: &Options) -> i32 {
         return EXIT_USAGE;
     }
     let early = super::cli::check_flags(opts).and_then(|()| {
+        // Cranelift's text needs the code generators too (E0922 in a build without them).
+        #[cfg(not(feature = "backends"))]
+        if opts.emit == Emit::Clif {
+            return Err(super::codegen::missing(Emit::Clif));
+        }
         if opts.emit.is_llvm() {
             super::codegen::select_target(opts).map(|_| ())
         } else {
