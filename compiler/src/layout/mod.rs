@@ -14,6 +14,7 @@ pub mod domain;
 pub mod dump;
 pub mod logical;
 pub mod model;
+mod parents;
 mod place;
 pub mod plan;
 pub mod resolve;

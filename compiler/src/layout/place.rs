@@ -66,7 +66,7 @@ pub(crate) fn build(decl: &LayoutDecl, program: &Program, adt: Option<AdtChoice>
     }
     b.top(&decl.members);
     b.link_from_arms();
-    b.carry_parents();
+    crate::layout::parents::carry_parents(&mut b.m, &b.env);
     b.m
 }
 
@@ -685,107 +685,6 @@ impl Builder<'_> {
         self.m.components.iter().any(|c| {
             c.name.name == x.name && matches!(&c.ty.kind, TypeExprKind::Named(t) if t.name == "ptr")
         })
-    }
-
-    /// Tree-carried state (language notes: "`parent.x` makes `x` part of the child's
-    /// reference"). A component `c: T = parent.x` carries `x` explicitly (`Models::of` declares
-    /// one for a derived `x` from its checked type); a `parent.x` read by an expression with
-    /// no such component gets one, named `parent.x`, appended to the reference, when `x` is a
-    /// stored field or a component (a derived `x` whose type no component takes is E0328).
-    /// The placed (first) component cannot be carried (E0328).
-    fn carry_parents(&mut self) {
-        if let Some(c) = self.m.components.first().filter(|c| c.carried.is_some()) {
-            self.m.diagnostics.push(
-                err(
-                    "E0328",
-                    format!("the first reference component `{}` is tree-carried", c.name.name),
-                    c.name.span,
-                    "a build places this component",
-                )
-                .with_note("put the carried components after the one a build places: `layout L(I: u32, b: AABB = parent.bounds)`"),
-            );
-        }
-        let mut exprs: Vec<Expr> = Vec::new();
-        for info in &self.m.members {
-            if let MemberModel::Derived { value, .. } | MemberModel::Let { value, .. } = &info.kind
-            {
-                exprs.push(value.clone());
-            }
-        }
-        for s in &self.m.splits {
-            exprs.push(s.discriminant.clone());
-        }
-        let mut added: Vec<String> = Vec::new();
-        for e in &exprs {
-            for id in crate::layout::resolve::names_in(e) {
-                let Some(x) = id.name.strip_prefix("parent.") else {
-                    continue;
-                };
-                if added.iter().any(|a| a == x)
-                    || self
-                        .m
-                        .components
-                        .iter()
-                        .any(|c| c.carried.as_ref().is_some_and(|c| c.name == x))
-                {
-                    continue;
-                }
-                let ty = if let Some(i) = self.m.component(x) {
-                    Some(self.m.components[i].ty.clone())
-                } else {
-                    self.m.members.iter().find_map(|mi| match &mi.kind {
-                        MemberModel::Stored(s) if s.name.name == x => Some(s.ty.clone()),
-                        _ => None,
-                    })
-                };
-                let derived = self.m.members.iter().any(|mi| {
-                    matches!(&mi.kind, MemberModel::Derived { name, .. } | MemberModel::Let { name, .. } if name.name == x)
-                });
-                let Some(ty) = ty.filter(|_| !derived) else {
-                    if derived {
-                        self.m.diagnostics.push(
-                            err(
-                                "E0328",
-                                format!("no reference component can carry `parent.{x}`, a derived field of a type a component cannot take"),
-                                id.span,
-                                "carried by no component",
-                            )
-                            .with_note(format!("a component is a scalar, a vector, a declared type or a fixed array of them; carry the parts of `{x}` (`parent.y` of fields of those types), or declare one: `layout {}(..., p: T = parent.{x})`", self.m.name.name)),
-                        );
-                    }
-                    // An unknown `x` is E0310.
-                    continue;
-                };
-                let shape = self.env.shape(&ty).ok();
-                added.push(x.to_string());
-                self.m.components.push(Component {
-                    name: Ident {
-                        name: id.name.clone(),
-                        span: id.span,
-                    },
-                    ty,
-                    shape,
-                    default: None,
-                    carried: Some(Ident {
-                        name: x.to_string(),
-                        span: id.span,
-                    }),
-                    offset: 0,
-                });
-            }
-        }
-        if added.is_empty() {
-            return;
-        }
-        let mut end = 0u64;
-        let mut shapes = Vec::new();
-        for c in &mut self.m.components {
-            let sh = c.shape.unwrap_or(Shape { size: 0, align: 1 });
-            c.offset = round_up(end, sh.align);
-            end = c.offset.saturating_add(sh.size);
-            shapes.push(sh);
-        }
-        self.m.reference = record_shape(&shapes);
     }
 
     fn link_from_arms(&mut self) {

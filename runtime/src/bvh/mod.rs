@@ -12,6 +12,7 @@
 
 pub mod chain;
 pub mod dop14;
+pub mod fill;
 pub mod logical;
 pub mod median;
 pub mod oriented;

@@ -24,9 +24,10 @@
 //! not fit. Build functions of other layouts are removed. The logical tree is a binary BVH; an
 //! ADT of another shape is reported (E0380).
 
+use super::logical_nodes::{dispatch, load, Arm, Dispatch};
 use super::reader::Reader;
 use super::{spec_of, unsupported, LayoutSpec};
-use crate::layout::logical::{LogicalAbi, LogicalField, Slot, PRIM_STRIDE};
+use crate::layout::logical::{LogicalAbi, LogicalField, Slot};
 use crate::layout::model::GroupKind;
 use crate::layout::plan::BufferKind;
 use crate::layout::plan::Count;
@@ -239,181 +240,6 @@ fn generate(m: &mut Module, spec: &LayoutSpec, ours: &[FuncId]) -> Result<(), Di
     Ok(())
 }
 
-/// One variant's arm of `@L.node`: its kind, build function and logical fields.
-struct Arm {
-    kind: u32,
-    name: String,
-    params: Vec<TypeId>,
-    fields: Vec<LogicalField>,
-}
-
-/// What every arm of `@L.node` reads.
-struct Dispatch {
-    /// `%tree, %out, %next, %count, %status` passed on to the build functions.
-    pass: [ValueId; 5],
-    nodes: ValueId,
-    prims: ValueId,
-    i: ValueId,
-    kind: ValueId,
-    stride: u64,
-    ref_ty: TypeId,
-}
-
-/// `if kind == k0 { build k0 } else if ... else { build the last }`: the call of the build
-/// function of node `i`'s variant with its logical fields.
-fn dispatch(bd: &mut Builder<'_>, cx: &Dispatch, arms: &[Arm]) -> Result<ValueId, String> {
-    let call = |bd: &mut Builder<'_>, a: &Arm| -> Result<ValueId, String> {
-        let vals = logical_fields(
-            bd, &a.params, &a.fields, cx.nodes, cx.prims, cx.i, cx.stride,
-        )?;
-        let all: Vec<ValueId> = cx.pass.iter().copied().chain(vals).collect();
-        let c = bd.call(&a.name, &all, &[cx.ref_ty]);
-        Ok(bd.result(c, 0))
-    };
-    let [first, rest @ ..] = arms else {
-        return Err("a tree type without variants".into());
-    };
-    if rest.is_empty() {
-        return call(bd, first);
-    }
-    let u32t = bd.m.types.u32();
-    let want = bd.const_int(u32t, i128::from(first.kind));
-    let test = bd.cmp(CmpPred::Eq, cx.kind, want);
-    let failed = std::cell::RefCell::new(None);
-    let arm = |bd: &mut Builder<'_>, r: Result<ValueId, String>| match r {
-        Ok(v) => {
-            bd.yield_(&[v]);
-        }
-        Err(e) => {
-            *failed.borrow_mut() = Some(e);
-            let z = bd.const_int(u32t, 0);
-            bd.yield_(&[z]);
-        }
-    };
-    let if_op = bd.if_(
-        test,
-        &[cx.ref_ty],
-        |bd| {
-            let r = call(bd, first);
-            arm(bd, r)
-        },
-        |bd| {
-            let r = dispatch(bd, cx, rest);
-            arm(bd, r)
-        },
-    );
-    if let Some(e) = failed.into_inner() {
-        return Err(e);
-    }
-    Ok(bd.result(if_op, 0))
-}
-
-pub(super) fn load(
-    bd: &mut Builder<'_>,
-    base: ValueId,
-    index: Option<ValueId>,
-    offset: u64,
-    stride: u64,
-    t: TypeId,
-) -> ValueId {
-    let mut spec = OpSpec::new(mem::Op::Load)
-        .results(&[t])
-        .attr("offset", Attr::Int(offset as i128));
-    spec = match index {
-        Some(i) => spec
-            .operands(&[base, i])
-            .attr("stride", Attr::Int(stride as i128)),
-        None => spec.operands(&[base]),
-    };
-    let op = bd.insert(spec);
-    bd.result(op, 0)
-}
-
-pub(super) fn store(bd: &mut Builder<'_>, base: ValueId, offset: u64, v: ValueId) {
-    bd.insert(
-        OpSpec::new(mem::Op::Store)
-            .operands(&[base, v])
-            .attr("offset", Attr::Int(offset as i128)),
-    );
-}
-
-/// The logical fields of node `i` for a build function's parameter types (after `%tree`..):
-/// `fields` says where each sits in the node (`layout::logical`).
-pub(super) fn logical_fields(
-    bd: &mut Builder<'_>,
-    params: &[TypeId],
-    fields: &[LogicalField],
-    nodes: ValueId,
-    prims: ValueId,
-    i: ValueId,
-    stride: u64,
-) -> Result<Vec<ValueId>, String> {
-    let u32t = bd.m.types.u32();
-    let mut out = Vec::new();
-    for (&p, f) in params.iter().zip(fields) {
-        let v = match &f.slot {
-            Slot::Value { offset } => {
-                let v = load(bd, nodes, Some(i), *offset, stride, f.ty);
-                if p == f.ty {
-                    v
-                } else if matches!(bd.m.types.get(p), Type::Int(_)) {
-                    bd.cast(v, p)
-                } else {
-                    return Err(format!(
-                        "`{}` as {} (the logical tree holds {})",
-                        f.name,
-                        bd.m.types.display(p),
-                        bd.m.types.display(f.ty)
-                    ));
-                }
-            }
-            Slot::Children { offset, count: 1 } if p == u32t => {
-                load(bd, nodes, Some(i), *offset, stride, u32t)
-            }
-            Slot::Children { offset, count } => match bd.m.types.get(p).clone() {
-                Type::Array { elem, len: Some(n) } if elem == u32t && n == *count => {
-                    load(bd, nodes, Some(i), *offset, stride, p)
-                }
-                _ => {
-                    return Err(format!(
-                        "the children `{}` as {} ({count} logical node indices)",
-                        f.name,
-                        bd.m.types.display(p)
-                    ))
-                }
-            },
-            Slot::Prims { offset, count } => {
-                let start = load(bd, nodes, Some(i), *offset, stride, u32t);
-                let (Some(cf), Type::View(_)) = (fields.get(*count), bd.m.types.get(p)) else {
-                    return Err(format!(
-                        "the primitives `{}` as {}",
-                        f.name,
-                        bd.m.types.display(p)
-                    ));
-                };
-                let Slot::Value { offset: co } = cf.slot else {
-                    return Err(format!("the length of `{}`", f.name));
-                };
-                let len = load(bd, nodes, Some(i), co, stride, cf.ty);
-                let len = if cf.ty == u32t {
-                    len
-                } else {
-                    bd.cast(len, u32t)
-                };
-                let op = bd.insert(
-                    OpSpec::new(mem::Op::View)
-                        .operands(&[prims, start, len])
-                        .results(&[p])
-                        .attr("stride", Attr::Int(PRIM_STRIDE as i128)),
-                );
-                bd.result(op, 0)
-            }
-        };
-        out.push(v);
-    }
-    Ok(out)
-}
-
 /// Whether build function `f` (of variant `variant`) places its node, taking the next index of
 /// the counter: its variant has a record (every variant does in a layout with a group indexed
 /// by the reference; in one with indirect groups, the variants whose split arms reach one), or
@@ -483,12 +309,7 @@ fn rewrite_build(
     };
     let is_root = variant == "root";
     let variant = if is_root {
-        spec.model
-            .adt
-            .as_ref()
-            .and_then(|a| a.variants.first())
-            .map(|v| v.name.name.clone())
-            .unwrap_or_default()
+        spec.first_variant()
     } else {
         variant.to_string()
     };

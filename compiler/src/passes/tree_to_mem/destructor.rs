@@ -314,11 +314,8 @@ fn read_op(
 }
 
 fn first_variant(spec: &LayoutSpec) -> Result<String, Diagnostic> {
-    spec.model
-        .adt
-        .as_ref()
-        .and_then(|a| a.variants.first())
-        .map(|v| v.name.name.clone())
+    Some(spec.first_variant())
+        .filter(|v| !v.is_empty())
         .ok_or_else(|| {
             unsupported(
                 Some(spec.model.span),

@@ -3,7 +3,8 @@
 //! (globals, `build root`, then the tree from its root). See `constructor.rs` for the whole
 //! contract and `docs/design/specialization.md` §3.1 for the C ABI.
 
-use super::constructor::{load, logical_fields, store, view};
+use super::constructor::view;
+use super::logical_nodes::{load, logical_fields, store};
 use super::reader::Reader;
 use super::{unsupported, LayoutSpec};
 use crate::layout::logical::{LogicalAbi, LogicalField};
@@ -158,7 +159,7 @@ pub(super) fn build_fn(
     // The globals that size arrays: node and primitive counts.
     let first = bd.ret(&[szero]);
     let mut rd = Reader::new(spec, b, vec![], InsertPoint::Before(first));
-    let variant = first_variant(spec);
+    let variant = spec.first_variant();
     for buf in &spec.plan.buffers {
         let (global, v) = match &buf.count {
             Count::Nodes {
@@ -252,7 +253,7 @@ pub(super) fn root_ref_fn(
     let args = m.blocks[entry].args.to_vec();
     // A placeholder to insert before; the tuple's return replaces it.
     let first = Builder::at_end(m, entry).ret(&[]);
-    let variant = first_variant(spec);
+    let variant = spec.first_variant();
     let mut rd = Reader::new(spec, args[0], vec![args[1]], InsertPoint::Before(first));
     let mut vals = vec![args[1]];
     for (k, c) in comps.iter().enumerate().skip(1) {
@@ -335,14 +336,4 @@ fn zero(bd: &mut Builder<'_>, ty: TypeId) -> Option<ValueId> {
         }
         _ => return None,
     })
-}
-
-/// The name of the tree type's first variant: what the reader resolves global names in.
-fn first_variant(spec: &LayoutSpec) -> String {
-    spec.model
-        .adt
-        .as_ref()
-        .and_then(|a| a.variants.first())
-        .map(|v| v.name.name.clone())
-        .unwrap_or_default()
 }

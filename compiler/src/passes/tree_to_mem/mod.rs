@@ -18,6 +18,7 @@
 pub mod constructor;
 pub mod destructor;
 mod entries;
+mod logical_nodes;
 mod predicates;
 mod reader;
 
@@ -43,6 +44,17 @@ impl LayoutSpec {
     pub fn new(model: LayoutModel) -> LayoutSpec {
         let plan = BufferPlan::of(&model);
         LayoutSpec { model, plan }
+    }
+
+    /// The name of the tree type's first variant: what the reader resolves global names in
+    /// (empty when the type is unknown or has none).
+    pub fn first_variant(&self) -> String {
+        self.model
+            .adt
+            .as_ref()
+            .and_then(|a| a.variants.first())
+            .map(|v| v.name.name.clone())
+            .unwrap_or_default()
     }
 
     /// The index in the buffer table of the buffer holding `kind`.
