@@ -8,12 +8,18 @@
 # optimizations must not change a bit). Writes a markdown table to standard output.
 #
 # Usage: scripts/bench-dslopt.sh [SCENES_DIR] [SCENE_NAME...]
-#   SCENES_DIR defaults to $SCION_SCENES or ../shared/scenes; the default scenes are bunny and
+#   SCENES_DIR defaults to $SCION_SCENES or the repository's scenes/; the default scenes are bunny and
 #   engine. BACKENDS (default "jit llvm") picks the code generators. Builds the release `scion`
 #   first.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scenes=${1:-${SCION_SCENES:-../shared/scenes}}
+scenes=${1:-${SCION_SCENES:-scenes}}
+# NAME -> its file in $scenes (NAME.obj, else NAME.obj.gz); fails when neither exists.
+scene_file() {
+  for f in "$scenes/$1.obj" "$scenes/$1.obj.gz"; do [ -f "$f" ] && { echo "$f"; return 0; }; done
+  echo "$(basename "$0"): no scene $1 in $scenes (NAME.obj or NAME.obj.gz)" >&2
+  return 1
+}
 shift || true
 cargo build --release -q -p scion-cli
 scion=target/release/scion
@@ -39,8 +45,7 @@ echo
 echo "| scene | rays | layout | backend | -O3 --no-dsl-opt Mrays/s | -O3 Mrays/s | speedup | hits identical |"
 echo "|---|---|---|---|---:|---:|---:|---|"
 for name in "${names[@]}"; do
-  obj="$scenes/$name.obj"
-  [ -f "$obj" ] || { echo "bench-dslopt: no scene $obj" >&2; exit 1; }
+  obj=$(scene_file "$name") || exit 1
   for rays in primary secondary; do
     for layout in pbrt ptr; do
       for backend in "${backends[@]}"; do

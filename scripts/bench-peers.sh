@@ -12,12 +12,18 @@
 # get it too (tinybvh's BVH8_CPU needs AVX2 to exist at all).
 #
 # Usage: scripts/bench-peers.sh [SCENE_NAME...]
-#   Environment: SCION_SCENES (default ../shared/scenes), BENCH_N (rays per run, default 65536),
+#   Environment: SCION_SCENES (default: the repository's scenes/), BENCH_N (rays per run, default 65536),
 #   BENCH_THREADS (default "1 all"), BENCH_NO_DOC=1 (do not touch docs/benchmarks.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh >/dev/null
-scenes=$(cd "${SCION_SCENES:-../shared/scenes}" && pwd)
+scenes=$(cd "${SCION_SCENES:-scenes}" && pwd)
+# NAME -> its file in $scenes (NAME.obj, else NAME.obj.gz); fails when neither exists.
+scene_file() {
+  for f in "$scenes/$1.obj" "$scenes/$1.obj.gz"; do [ -f "$f" ] && { echo "$f"; return 0; }; done
+  echo "$(basename "$0"): no scene $1 in $scenes (NAME.obj or NAME.obj.gz)" >&2
+  return 1
+}
 n=${BENCH_N:-65536}
 all=$(nproc)
 threads=${BENCH_THREADS:-1 all}
@@ -33,7 +39,7 @@ else
   names=(teapot pine suzanne balloon fzk_haus sponza_dabrovic bunny engine cruiser_cg57 dragon)
 fi
 for s in "${names[@]}"; do
-  [ -f "$scenes/$s.obj" ] || { echo "bench-peers: no scene $scenes/$s.obj" >&2; exit 2; }
+  scene_file "$s" > /dev/null || exit 2
 done
 
 export CARGO_TARGET_DIR=target/bench-native
@@ -51,7 +57,7 @@ for s in "${names[@]}"; do
       [ "$t" = all ] && t=$all
       k=$((k + 1))
       echo "bench-peers: [$k/$total] $s, $rays rays, $t thread(s)" >&2
-      "$bench" --scene "$scenes/$s.obj" --rays "$rays" \
+      "$bench" --scene "$(scene_file "$s")" --rays "$rays" \
         --n "$n" --threads "$t" --layouts pbrt --interp-rays 0 --tsv "$rows" \
         > "$out/$s-$rays-$t.md" 2> "$out/$s-$rays-$t.log"
     done

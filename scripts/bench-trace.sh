@@ -5,11 +5,17 @@
 # and 2 threads. Writes a markdown table (with the date, machine and commit) to standard output.
 #
 # Usage: scripts/bench-trace.sh [SCENES_DIR] [SCENE_NAME...]
-#   SCENES_DIR defaults to $SCION_SCENES or ../shared/scenes; with names, only those scenes
+#   SCENES_DIR defaults to $SCION_SCENES or the repository's scenes/; with names, only those scenes
 #   (file stems) are measured, in that order. Builds the release `scion` first.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scenes=${1:-${SCION_SCENES:-../shared/scenes}}
+scenes=${1:-${SCION_SCENES:-scenes}}
+# NAME -> its file in $scenes (NAME.obj, else NAME.obj.gz); fails when neither exists.
+scene_file() {
+  for f in "$scenes/$1.obj" "$scenes/$1.obj.gz"; do [ -f "$f" ] && { echo "$f"; return 0; }; done
+  echo "$(basename "$0"): no scene $1 in $scenes (NAME.obj or NAME.obj.gz)" >&2
+  return 1
+}
 shift || true
 cargo build --release -q -p scion-cli
 scion=target/release/scion
@@ -20,7 +26,10 @@ if [ $# -gt 0 ]; then
   names=("$@")
 else
   names=()
-  for f in "$scenes"/*.obj; do names+=("$(basename "$f" .obj)"); done
+  for f in "$scenes"/*.obj "$scenes"/*.obj.gz; do
+    [ -f "$f" ] || continue
+    name=$(basename "$f"); name=${name%.gz}; names+=("${name%.obj}")
+  done
 fi
 
 # Mrays/s of one `scion trace` run.
@@ -37,8 +46,7 @@ echo
 echo "| scene | triangles | rays | threads | reference Mrays/s | jit pbrt Mrays/s | pbrt / ref | jit ptr Mrays/s | ptr / ref |"
 echo "|---|---:|---|---:|---:|---:|---:|---:|---:|"
 for name in "${names[@]}"; do
-  obj="$scenes/$name.obj"
-  [ -f "$obj" ] || { echo "bench-trace: no scene $obj" >&2; exit 1; }
+  obj=$(scene_file "$name") || exit 1
   tris=$("$scion" trace --scene "$obj" --n 1 --runs 1 2>/dev/null | awk '/^triangles/ { print $2 }')
   for rays in primary secondary; do
     for threads in 1 2; do

@@ -11,8 +11,8 @@
 # Runs from the kit made by scripts/gpu-kit.sh (no Rust toolchain needed):
 #   gpu-kit/gpu-check.sh                   # or: GPU_KIT=gpu-kit scripts/gpu-check.sh
 # Environment:
-#   SCION_SCENES       the scenes folder (default: shared/scenes or ../shared/scenes, else the
-#                      kit's gzipped copies, unpacked into a temporary folder)
+#   SCION_SCENES       a folder of NAME.obj scenes (default: the kit's gzipped copies of the
+#                      repository's scenes/, unpacked into a temporary folder)
 #   GPU_CHECK_N        rays per run (default 1048576)
 #   GPU_CHECK_RUNS     timed runs after the warm-up (default 9)
 #   GPU_CHECK_MODE     scion (compile PTX in-process: needs libLLVM 22), kit (run the prebuilt
@@ -48,11 +48,6 @@ SUMMARY=$RESULTS/summary.txt
 say() { echo "$@" | tee -a "$SUMMARY"; }
 
 scenes=${SCION_SCENES:-}
-if [ -z "$scenes" ]; then
-  for d in "$PWD/shared/scenes" "$PWD/../shared/scenes" "$KIT/../shared/scenes" "$KIT/../../shared/scenes"; do
-    if [ -f "$d/teapot.obj" ]; then scenes=$d; break; fi
-  done
-fi
 if [ -z "$scenes" ] && ls "$KIT"/scenes/*.obj.gz >/dev/null 2>&1; then
   scenes=$(mktemp -d "${TMPDIR:-/tmp}/scion-scenes.XXXXXX")
   trap 'rm -rf "$scenes"' EXIT

@@ -37,18 +37,10 @@ for layout in pbrt ptr pbrt-q16 sg-eq; do
 done
 cp scripts/gpu-check.sh "$KIT/"
 
-# The scenes, gzipped (51 MB of OBJ become 13 MB); gpu-check.sh unpacks them when it finds no
-# scenes folder.
-scenes=${SCION_SCENES:-}
-for d in shared/scenes ../shared/scenes; do
-  if [ -z "$scenes" ] && [ -f "$d/teapot.obj" ]; then scenes=$d; fi
-done
-if [ -n "$scenes" ]; then
-  mkdir -p "$KIT/scenes"
-  for f in "$scenes"/*.obj; do gzip -6 -c "$f" > "$KIT/scenes/$(basename "$f").gz"; done
-else
-  echo "gpu-kit: no scenes found (set SCION_SCENES); the kit has none" >&2
-fi
+# The repository's scenes, gzipped as they are (13 MB); gpu-check.sh unpacks them when
+# SCION_SCENES names no folder.
+mkdir -p "$KIT/scenes"
+cp scenes/*.obj.gz "$KIT/scenes/"
 git rev-parse HEAD > "$KIT/COMMIT" 2>/dev/null || true
 du -sh "$KIT"
 echo "gpu-kit ready: carry $KIT, then run: $KIT/gpu-check.sh"

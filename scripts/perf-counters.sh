@@ -11,7 +11,7 @@
 # simple branch predictor model, so read them as relative, not as this CPU's.
 #
 # Usage: scripts/perf-counters.sh [SCENE_NAME [RAYS]]   (default: bunny, primary and secondary)
-#   Environment: SCION_SCENES (default ../shared/scenes), PERF_N1 / PERF_N2 (ray counts,
+#   Environment: SCION_SCENES (default: the repository's scenes/), PERF_N1 / PERF_N2 (ray counts,
 #   default 4096 and 20480). Prints a markdown table.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -22,7 +22,13 @@ command -v valgrind >/dev/null || {
   $SUDO apt-get update -q >/dev/null
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q valgrind >/dev/null
 }
-scenes=$(cd "${SCION_SCENES:-../shared/scenes}" && pwd)
+scenes=$(cd "${SCION_SCENES:-scenes}" && pwd)
+# NAME -> its file in $scenes (NAME.obj, else NAME.obj.gz); fails when neither exists.
+scene_file() {
+  for f in "$scenes/$1.obj" "$scenes/$1.obj.gz"; do [ -f "$f" ] && { echo "$f"; return 0; }; done
+  echo "$(basename "$0"): no scene $1 in $scenes (NAME.obj or NAME.obj.gz)" >&2
+  return 1
+}
 scene=${1:-bunny}
 kinds=${2:-primary secondary}
 n1=${PERF_N1:-4096}
@@ -65,7 +71,7 @@ for kind in $kinds; do
     tag=$(echo "$name" | tr ' ' '_')-$kind
     for n in "$n1" "$n2"; do
       valgrind --tool=cachegrind --cache-sim=yes --branch-sim=yes --cachegrind-out-file=/dev/null \
-        "$bench" --scene "$scenes/$scene.obj" --rays "$kind" --n "$n" --threads 1 \
+        "$bench" --scene "$(scene_file "$scene")" --rays "$kind" --n "$n" --threads 1 \
         --peers "$peers" --layouts "$layouts" --interp-rays 0 --trace-only "$name" \
         > "$out/$tag-$n.out" 2> "$out/$tag-$n.err"
     done

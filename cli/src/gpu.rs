@@ -8,6 +8,7 @@
 //! report of `scion trace` with the kernel's Mrays/s and a `check` line, or the PTX kit
 //! (`scion_cuda::kit`) that `scion-gpu` runs on machines without LLVM.
 
+use crate::io::outln;
 use crate::trace::{build, progress, rays, secs, significant, LAYOUTS};
 use crate::{BackendArg, CliError, DeviceArg, PtxArgs, TraceArgs};
 use scion_compiler::abi::EntryTarget;
@@ -86,9 +87,9 @@ pub fn run_ptx(args: &PtxArgs) -> Result<(), CliError> {
 }
 
 fn write_kit(kit: &PtxKit, path: &Path) -> Result<(), CliError> {
-    std::fs::write(path, &kit.ptx)
+    crate::io::write_whole(path, kit.ptx.as_bytes())
         .map_err(|e| CliError::new(format!("cannot write {}: {e}", path.display())))?;
-    println!(
+    outln!(
         "ptx          {} ({} bytes, {} {}, buffers {})",
         path.display(),
         kit.ptx.len(),
@@ -261,7 +262,7 @@ fn library_layout(layout: &str) -> Result<(&'static str, &'static str, Boxes), C
         .copied()
         .ok_or_else(|| {
             let names: Vec<&str> = LAYOUTS.iter().map(|(n, _)| *n).collect();
-            CliError::new(format!("unknown layout `{layout}` for the GPU"))
+            CliError::usage(format!("unknown layout `{layout}` for the GPU"))
                 .note(format!("library layouts: {}", names.join(", ")))
         })
 }
@@ -341,30 +342,34 @@ fn trace_and_report<L: Launcher>(
         .zip(&packed.sizes)
         .map(|(n, s)| format!("{n} {s} B"))
         .collect();
-    println!("scene        {}", args.scene.display());
-    println!("triangles    {}", scene.len());
-    println!(
+    outln!("scene        {}", args.scene.display());
+    outln!("triangles    {}", scene.len());
+    outln!(
         "nodes        {} ({} interior, {} leaves, depth {}, SAH cost {:.2})",
-        stats.nodes, stats.interior, stats.leaves, stats.depth, stats.sah_cost
+        stats.nodes,
+        stats.interior,
+        stats.leaves,
+        stats.depth,
+        stats.sah_cost
     );
-    println!("device       {}", r.device);
-    println!("compile time {}", r.compile);
+    outln!("device       {}", r.device);
+    outln!("compile time {}", r.compile);
     if let Some(load) = &r.load {
-        println!("module load  {load}");
+        outln!("module load  {load}");
     }
-    println!(
+    outln!(
         "pack time    {} ({}: upload, sizes, allocation, build, root)",
         secs(packed.pack_time),
         r.place
     );
-    println!("layout       {}: {}", r.layout, parts.join(", "));
-    println!(
+    outln!("layout       {}: {}", r.layout, parts.join(", "));
+    outln!(
         "structure    {bytes} bytes, {:.1} bytes/node",
         bytes as f64 / stats.nodes.max(1) as f64
     );
-    println!("rays         {}", rays.len());
-    println!("backend      {}", r.backend);
-    println!(
+    outln!("rays         {}", rays.len());
+    outln!("backend      {}", r.backend);
+    outln!(
         "trace time   {} ({}; mean of the middle {} of {} runs after 1 warm-up)",
         secs(kernel),
         r.timing,
@@ -376,22 +381,22 @@ fn trace_and_report<L: Launcher>(
     } else {
         rays.len() as f64 / kernel.as_secs_f64() / 1e6
     };
-    println!("throughput   {} Mrays/s", significant(mrays));
-    println!(
+    outln!("throughput   {} Mrays/s", significant(mrays));
+    outln!(
         "hits         {} of {} rays",
         hits.iter().filter(|h| h.is_hit()).count(),
         rays.len()
     );
     // The same number as `scion trace` on the CPU and the C library print.
-    println!(
+    outln!(
         "checksum: {:016x}",
         scion_runtime::query::hits_checksum(&hits)
     );
-    println!("check        {check}");
+    outln!("check        {check}");
     if let Some(path) = &args.output {
         scion_runtime::query::write_hits(path, &hits)
             .map_err(|e| CliError::new(format!("cannot write the hits: {e}")))?;
-        println!("output       {} ({} bytes)", path.display(), hits.len() * 8);
+        outln!("output       {} ({} bytes)", path.display(), hits.len() * 8);
     }
     if !check.identical() {
         return Err(CliError::new(format!(

@@ -4,19 +4,35 @@
 //! or reads rays, traces them with a backend (the runtime's Rust reference, the `tree`
 //! interpreter over the logical tree, brute force, or the JIT of a layout), times the trace by
 //! the paper's method, prints sizes and throughput on standard output and writes the hits file
-//! (docs/formats.md). Progress goes to standard error. User errors (a missing scene, a NaN in an
-//! OBJ file, a bad flag) are `error:` lines and exit status 1; clap's usage errors exit 2.
+//! (docs/formats.md). Progress goes to standard error. Failures (a missing scene, a NaN in an
+//! OBJ file, an unwritable output, standard output closed) are `error:` lines and exit status
+//! 1; a bad command line (clap's usage errors, an unknown layout or GPU architecture, `-o` onto
+//! an input, too many threads) exits 2. Outputs are checked before the scene is loaded and
+//! written whole or not at all (`io`).
 
 mod gpu;
+mod io;
 mod trace;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-/// Scion: layout-specialized tree traversals.
+/// Scion runs ray traversals compiled for a BVH layout on real scenes: it loads an OBJ scene
+/// (a path, or a library scene's name such as `bunny`), builds its tree, packs it into the
+/// layout, traces rays and reports sizes, times and hits, checked against the reference.
+///
+/// Exit status: 0 success, 1 a failure (files, scene, compilation, hits that differ), 2 a bad
+/// command line.
 #[derive(Parser, Debug)]
-#[command(name = "scion", version, about)]
+#[command(
+    name = "scion",
+    version,
+    after_help = "Examples:\n  scion trace --scene bunny --backend llvm\n  scion trace --scene \
+                  scenes/fzk_haus.obj.gz --layout pbrt-q16 --backend jit --rays secondary --stats\n  \
+                  scion ptx --layout pbrt -o pbrt.ptx\n\nDocs: README.md, docs/runtime.md \
+                  (scenes, rays, timing), docs/formats.md (files), docs/gpu.md."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -107,8 +123,10 @@ pub enum BuilderArg {
 /// Arguments of `scion trace`.
 #[derive(clap::Args, Debug)]
 pub struct TraceArgs {
-    /// The scene: an OBJ file.
-    #[arg(long, value_name = "PATH.obj")]
+    /// The scene: an OBJ file (plain or gzip-compressed, `.obj.gz`), or the name of a scene of
+    /// the repository's scenes/ folder (teapot, pine, suzanne, balloon, fzk_haus,
+    /// sponza_dabrovic, bunny, engine, cruiser_cg57, dragon).
+    #[arg(long, value_name = "PATH.obj|NAME")]
     pub scene: PathBuf,
     /// The layout for `--backend jit|llvm|mem-interp` (a name from library/layouts, e.g. pbrt,
     /// ptr, pbrt-align16, pbrt-soaos, pbrt-q16, sg-eq; default pbrt). Layout-free
@@ -130,7 +148,7 @@ pub struct TraceArgs {
     /// How to trace.
     #[arg(long, value_enum, default_value = "reference")]
     pub backend: BackendArg,
-    /// Threads (0 = one per core).
+    /// Threads (0 = one per core; at most 8 per core).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
     /// Write the hits here (docs/formats.md).
@@ -187,11 +205,14 @@ pub struct TraceArgs {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
-    let result = match &cli.command {
-        Command::Trace(args) => trace::run(args),
-        Command::Ptx(args) => gpu::run_ptx(args),
-    };
+    let mut cli = Cli::parse();
+    let result = match &mut cli.command {
+        Command::Trace(args) => preflight(args).and_then(|()| trace::run(args)),
+        Command::Ptx(args) => {
+            io::check_output("-o", &args.output, &[]).and_then(|()| gpu::run_ptx(args))
+        }
+    }
+    .and_then(|()| io::finish_stdout());
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -199,9 +220,43 @@ fn main() -> ExitCode {
             for note in &e.notes {
                 eprintln!("  note: {note}");
             }
-            ExitCode::from(1)
+            ExitCode::from(if e.usage { 2 } else { 1 })
         }
     }
+}
+
+/// What `scion trace` checks before the long work: the scene (a path or a library scene's
+/// name, resolved here), the threads, the outputs (not an input, writable), and the memory
+/// the rays and hits need.
+fn preflight(args: &mut TraceArgs) -> Result<(), CliError> {
+    args.scene = scion_runtime::scene::manifest::resolve(&args.scene)
+        .map_err(|e| CliError::new(format!("--scene {}: {e}", args.scene.display())))?;
+    io::check_threads(args.threads)?;
+    let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--scene", &args.scene)];
+    if let Some(rays) = &args.rays_file {
+        inputs.push(("--rays-file", rays));
+    }
+    if let Some(ptx) = &args.ptx {
+        inputs.push(("--ptx", ptx));
+    }
+    for (flag, out) in [("-o", &args.output), ("--emit-ptx", &args.emit_ptx)] {
+        if let Some(out) = out {
+            io::check_output(flag, out, &inputs)?;
+        }
+    }
+    if let (Some(o), Some(e)) = (&args.output, &args.emit_ptx) {
+        if o == e {
+            return Err(CliError::usage("-o and --emit-ptx name the same file"));
+        }
+    }
+    // The rays, the hits of the checked trace, of a timed run and of the reference.
+    let per_ray = std::mem::size_of::<scion_runtime::geom::Ray>() as u64
+        + 3 * std::mem::size_of::<scion_runtime::geom::Hit>() as u64;
+    let rays = match &args.rays_file {
+        Some(path) => std::fs::metadata(path).map_or(0, |m| m.len() / 32),
+        None => args.n,
+    };
+    io::check_memory(&format!("{rays} rays and their hits"), rays * per_ray)
 }
 
 /// A user-facing failure: one message and optional notes.
@@ -211,14 +266,25 @@ pub struct CliError {
     pub message: String,
     /// What to do about it.
     pub notes: Vec<String>,
+    /// A bad command line (exit status 2) rather than a failure (1).
+    pub usage: bool,
 }
 
 impl CliError {
-    /// An error without notes.
+    /// A failure without notes (exit status 1).
     pub fn new(message: impl Into<String>) -> CliError {
         CliError {
             message: message.into(),
             notes: Vec::new(),
+            usage: false,
+        }
+    }
+
+    /// A bad command line (exit status 2).
+    pub fn usage(message: impl Into<String>) -> CliError {
+        CliError {
+            usage: true,
+            ..CliError::new(message)
         }
     }
 

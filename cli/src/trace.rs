@@ -11,6 +11,7 @@
 //! layout, lowered to `lo` at `-O2` and compiled by Cranelift; the compile time is printed).
 //! `--backend llvm` is the same with the machine code from LLVM's JIT at `-O3` (`scion-llvm`).
 
+use crate::io::outln;
 use crate::{BackendArg, BuilderArg, CliError, DeviceArg, RaysArg, TraceArgs};
 use scion_host::backend::{Backend, BackendKind};
 use scion_host::contract::{LayoutCode, Packed};
@@ -221,34 +222,38 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         Some(p) => format!("from {}", p.display()),
         None => format!("{:?} (seed {})", args.rays, args.seed).to_lowercase(),
     };
-    println!("scene        {}", args.scene.display());
-    println!("triangles    {}", scene.len());
-    println!(
+    outln!("scene        {}", args.scene.display());
+    outln!("triangles    {}", scene.len());
+    outln!(
         "nodes        {} ({} interior, {} leaves, depth {}, SAH cost {:.2})",
-        stats.nodes, stats.interior, stats.leaves, stats.depth, stats.sah_cost
+        stats.nodes,
+        stats.interior,
+        stats.leaves,
+        stats.depth,
+        stats.sah_cost
     );
-    println!("builder      {builder}");
-    println!("load time    {}", secs(load_time));
-    println!("build time   {}", secs(build_time));
-    println!("pack time    {pack_line}");
-    println!("layout       {layout_line}");
-    println!(
+    outln!("builder      {builder}");
+    outln!("load time    {}", secs(load_time));
+    outln!("build time   {}", secs(build_time));
+    outln!("pack time    {pack_line}");
+    outln!("layout       {layout_line}");
+    outln!(
         "structure    {bytes} bytes, {:.1} bytes/node",
         bytes as f64 / stats.nodes.max(1) as f64
     );
-    println!("rays         {} {source}", rays.len());
-    println!("backend      {} on {threads} threads", engine.name());
-    println!(
+    outln!("rays         {} {source}", rays.len());
+    outln!("backend      {} on {threads} threads", engine.name());
+    outln!(
         "trace time   {} ({})",
         secs(timing.mean),
         plan_text(args.runs)
     );
-    println!(
+    outln!(
         "throughput   {} Mrays/s ({:.1} ns/ray)",
         significant(timing.queries_per_second(rays.len()) / 1e6),
         timing.ns_per_query(rays.len())
     );
-    println!("hits         {hit_count} of {} rays", rays.len());
+    outln!("hits         {hit_count} of {} rays", rays.len());
     if args.stats {
         let boxes = match args.backend {
             BackendArg::Jit | BackendArg::Llvm | BackendArg::MemInterp => {
@@ -260,7 +265,7 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         let driver = BatchDriver::new(threads).map_err(CliError::new)?;
         let s = closest_hits_tree_stats(&traversed, &rays, &driver);
         let per = |x: u64| x as f64 / rays.len().max(1) as f64;
-        println!(
+        outln!(
             "work/ray     {:.2} box tests, {:.2} nodes visited, {:.2} skipped, {:.2} triangle tests; deepest stack {} (reference traversal{})",
             per(s.boxes_tested),
             per(s.nodes_visited),
@@ -276,7 +281,7 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         let s4 = closest_hits_wide_stats(&w4, &traversed.primitives, &rays, &driver);
         let s8 = closest_hits_wide_stats(&w8, &traversed.primitives, &rays, &driver);
         for (w, n, s) in [(4, w4.nodes.len(), s4), (8, w8.nodes.len(), s8)] {
-            println!(
+            outln!(
                 "{w}-wide       {:.2} box tests, {:.2} nodes visited, {:.2} triangle tests per ray; {n} nodes (the tree collapsed, reference traversal)",
                 per(s.boxes_tested),
                 per(s.nodes_visited),
@@ -285,11 +290,11 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         }
     }
     // The same number as the C library's `scion_hits_checksum` (examples/cpp prints it too).
-    println!("checksum: {:016x}", hits_checksum(&hits));
+    outln!("checksum: {:016x}", hits_checksum(&hits));
     if let Some(path) = &args.output {
         write_hits(path, &hits)
             .map_err(|e| CliError::new(format!("cannot write the hits: {e}")))?;
-        println!("output       {} ({} bytes)", path.display(), hits.len() * 8);
+        outln!("output       {} ({} bytes)", path.display(), hits.len() * 8);
     }
     Ok(())
 }
@@ -330,7 +335,7 @@ fn mem_backend(layout: &str, threads: usize) -> Result<MemInterpBackend, CliErro
     let stem = layout.replace('-', "_");
     let Some(&(stem, name, _)) = LIBRARY_LAYOUTS.iter().find(|l| l.0 == stem) else {
         let names: Vec<&str> = LAYOUTS.iter().map(|(n, _)| *n).collect();
-        return Err(CliError::new(format!(
+        return Err(CliError::usage(format!(
             "unknown layout `{layout}` for --backend mem-interp"
         ))
         .note(format!("library layouts: {}", names.join(", "))));
@@ -359,7 +364,7 @@ fn jit_code(
     let stem = layout.replace('-', "_");
     let Some(&(stem, name, _)) = LIBRARY_LAYOUTS.iter().find(|l| l.0 == stem) else {
         let names: Vec<&str> = LAYOUTS.iter().map(|(n, _)| *n).collect();
-        let err = CliError::new(format!("unknown layout `{layout}` for --backend jit|llvm"))
+        let err = CliError::usage(format!("unknown layout `{layout}` for --backend jit|llvm"))
             .note(format!("library layouts: {}", names.join(", ")));
         return Err(if layout.ends_with(".scion") {
             err.note("--backend jit|llvm compile the library's layouts only")

@@ -2,8 +2,9 @@
 //! interpreter and the JITs of pbrt, ptr and pbrt-q16 write the same hits file; rays files are read; a
 //! JIT stack too small names the overflowing ray), and the user errors (a missing
 //! scene, a NaN coordinate reported with file and line, bad flags, an
-//! unknown layout, an empty scene) as clear messages with exit status 1 (2 for clap's usage
-//! errors), never a panic.
+//! unknown layout, an empty scene, outputs onto inputs or into missing folders, too many threads
+//! or rays, standard output that cannot be written) as clear messages with exit status 1 (2 for
+//! a bad command line), never a panic.
 
 mod common;
 
@@ -296,16 +297,18 @@ fn a_small_jit_stack_reports_the_overflowing_ray() {
 
 #[test]
 fn the_jit_backend_rejects_unknown_layouts() {
+    let dir = scratch("unknown_layout");
+    let scene = write(&dir, "cube.obj", CUBE);
     let o = scion(&[
         "trace",
         "--scene",
-        "x.obj",
+        &scene,
         "--backend",
         "jit",
         "--layout",
         "btree",
     ]);
-    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(o.status.code(), Some(2), "a bad command line");
     let e = text(&o.stderr);
     assert!(e.contains("unknown layout `btree`"), "{e}");
     assert!(e.contains("pbrt-soaos"), "{e}");
@@ -405,4 +408,155 @@ fn stats_report_the_work_per_ray_of_the_binary_and_the_wide_trees() {
     };
     assert!((2..=11).contains(&nodes(&w4)), "{w4}");
     assert!((1..=nodes(&w4)).contains(&nodes(&w8)), "{w4} / {w8}");
+}
+
+#[test]
+fn outputs_are_checked_before_the_work_and_never_overwrite_an_input() {
+    let dir = scratch("outputs");
+    let scene = write(&dir, "cube.obj", CUBE);
+    let before = std::fs::read(&scene).unwrap();
+    // -o onto the scene: a bad command line, and the scene is untouched.
+    let o = scion(&[
+        "trace", "--scene", &scene, "--n", "16", "--runs", "1", "-o", &scene,
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        text(&o.stderr).contains("is the --scene file"),
+        "{}",
+        text(&o.stderr)
+    );
+    assert_eq!(std::fs::read(&scene).unwrap(), before);
+    // -o onto the rays file, also through another spelling of its path.
+    let rays = dir.join("in.rays");
+    write_rays(
+        &rays,
+        &[Ray::new(
+            Vec3::new(0.5, 0.5, -1.0),
+            Vec3::new(0.0, 0.0, 1.0),
+        )],
+    )
+    .unwrap();
+    let other = format!("{}/./in.rays", dir.display());
+    let o = scion(&[
+        "trace",
+        "--scene",
+        &scene,
+        "--rays-file",
+        &rays.display().to_string(),
+        "--runs",
+        "1",
+        "-o",
+        &other,
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stderr).contains("--rays-file"),
+        "{}",
+        text(&o.stderr)
+    );
+    // An output in a missing folder fails before loading (no "loading" progress line).
+    let missing = dir.join("no/such/folder/hits.bin").display().to_string();
+    let o = scion(&[
+        "trace", "--scene", &scene, "--n", "16", "--runs", "1", "-o", &missing,
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = text(&o.stderr);
+    assert!(
+        e.contains("cannot write -o") && !e.contains("scion: loading"),
+        "{e}"
+    );
+    // A good output is written whole and leaves no temporary file.
+    let out = dir.join("hits.bin").display().to_string();
+    let o = scion(&[
+        "trace", "--scene", &scene, "--n", "16", "--runs", "1", "-o", &out,
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert_eq!(read_hits(&out).unwrap().len(), 16);
+    let names: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert!(
+        names.iter().all(|n| !n.to_string_lossy().starts_with('.')),
+        "{names:?}"
+    );
+}
+
+#[test]
+fn resources_and_standard_output_are_checked() {
+    let dir = scratch("resources");
+    let scene = write(&dir, "cube.obj", CUBE);
+    let o = scion(&[
+        "trace",
+        "--scene",
+        &scene,
+        "--threads",
+        "100000",
+        "--runs",
+        "1",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        text(&o.stderr).contains("--threads 100000"),
+        "{}",
+        text(&o.stderr)
+    );
+    // More rays than any test machine's memory: refused before allocating.
+    let o = scion(&[
+        "trace",
+        "--scene",
+        &scene,
+        "--n",
+        "4294967296",
+        "--runs",
+        "1",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(text(&o.stderr).contains("GiB"), "{}", text(&o.stderr));
+    // Standard output that cannot be written: an error, not a panic.
+    if let Ok(full) = std::fs::OpenOptions::new().write(true).open("/dev/full") {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_scion"))
+            .args(["trace", "--scene", &scene, "--n", "16", "--runs", "1"])
+            .stdout(full)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(1));
+        let e = text(&o.stderr);
+        assert!(
+            e.contains("cannot write the report to standard output") && !e.contains("panicked"),
+            "{e}"
+        );
+    }
+}
+
+#[test]
+fn library_scenes_by_name_and_compressed_scenes_load() {
+    let o = scion(&["trace", "--scene", "teapot", "--n", "64", "--runs", "1"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stdout).contains("triangles    992"),
+        "{}",
+        text(&o.stdout)
+    );
+    let o = scion(&["trace", "--scene", "teapott", "--runs", "1"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        text(&o.stderr).contains("not a library scene (teapot, pine"),
+        "{}",
+        text(&o.stderr)
+    );
+    // A face of two vertices names its line.
+    let dir = scratch("short_face");
+    let scene = write(
+        &dir,
+        "short.obj",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2\n",
+    );
+    let o = scion(&["trace", "--scene", &scene, "--runs", "1"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        text(&o.stderr).contains("short.obj:5: a face needs at least 3 vertices"),
+        "{}",
+        text(&o.stderr)
+    );
 }

@@ -152,7 +152,7 @@ fn unknown_layouts_are_errors() {
         "-o",
         dir.join("x.ptx").to_str().unwrap(),
     ]);
-    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(o.status.code(), Some(2), "a bad command line");
     let err = text(&o.stderr);
     assert!(
         err.contains("error: unknown layout `nope` for the GPU"),
@@ -323,7 +323,7 @@ fn device_gpu_emulated_traces_like_the_cpu() {
         ]
         .concat(),
     );
-    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(o.status.code(), Some(2), "a bad command line");
     assert!(text(&o.stderr).contains("error: unknown layout `nope` for the GPU"));
 }
 

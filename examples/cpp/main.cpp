@@ -6,17 +6,20 @@
 // SCION_L_BUFFER_ALIGN), traces the primary rays of `scion trace` with scion_closest_hit_L
 // split into ranges over std::threads, prints `checksum: ...` (the number `scion trace`
 // prints) and checks every hit against the runtime's reference. Exit status: 0 when every hit
-// matches, 1 on a mismatch or an error.
+// matches, 1 on a mismatch or an error (also out of memory), 2 for bad arguments.
 //
-// Usage: trace SCENE.obj [N rays = 65536] [SEED = 1] [THREADS = 4]
+// Usage: trace SCENE.obj [N rays = 65536, 1..2^32] [SEED = 1] [THREADS = 4, 1..1024]
 // Built by the Makefile next to this file, which passes -DSCION_LAYOUT=<layout name> and
 // -DSCION_HEADER="<header of scionc --emit=header>".
 
+#include <cerrno>
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
+#include <new>
 #include <string>
 #include <thread>
 #include <vector>
@@ -49,15 +52,22 @@ int fail(const char *what, const char *detail) {
     return 1;
 }
 
-std::uint64_t parse(const char *s, const char *what) {
+// A decimal number in [lo, hi]; anything else (a sign, other characters, overflow) ends the
+// program with status 2 and a message naming the argument.
+std::uint64_t parse(const char *s, const char *what, std::uint64_t lo, std::uint64_t hi) {
     char *end = nullptr;
+    errno = 0;
     unsigned long long v = std::strtoull(s, &end, 10);
-    if (end == s || *end != '\0') {
-        std::fprintf(stderr, "trace: %s: `%s` is not a number\n", what, s);
+    if (end == s || *end != '\0' || s[0] == '-' || s[0] == '+' || errno == ERANGE || v < lo ||
+        v > hi) {
+        std::fprintf(stderr, "trace: %s: `%s` is not a number from %" PRIu64 " to %" PRIu64 "\n",
+                     what, s, lo, hi);
         std::exit(2);
     }
     return v;
 }
+
+int run(int argc, char **argv);
 
 }  // namespace
 
@@ -66,9 +76,24 @@ int main(int argc, char **argv) {
         std::fprintf(stderr, "usage: %s SCENE.obj [N] [SEED] [THREADS]\n", argv[0]);
         return 2;
     }
-    const std::uint64_t n = argc > 2 ? parse(argv[2], "N") : 65536;
-    const std::uint64_t seed = argc > 3 ? parse(argv[3], "SEED") : 1;
-    const unsigned threads = argc > 4 ? static_cast<unsigned>(parse(argv[4], "THREADS")) : 4;
+    // Nothing escapes as an uncaught exception: memory for the rays and results, and threads,
+    // are the standard library's to refuse.
+    try {
+        return run(argc, argv);
+    } catch (const std::bad_alloc &) {
+        return fail("out of memory", "the rays and results do not fit; trace fewer rays (N)");
+    } catch (const std::exception &e) {
+        return fail("error", e.what());
+    }
+}
+
+namespace {
+
+int run(int argc, char **argv) {
+    const std::uint64_t n = argc > 2 ? parse(argv[2], "N", 1, std::uint64_t{1} << 32) : 65536;
+    const std::uint64_t seed = argc > 3 ? parse(argv[3], "SEED", 0, UINT64_MAX) : 1;
+    const unsigned threads =
+        argc > 4 ? static_cast<unsigned>(parse(argv[4], "THREADS", 1, 1024)) : 4;
     char err[512];
 
     ScionScene *scene = nullptr;
@@ -175,3 +200,5 @@ int main(int argc, char **argv) {
     scion_scene_free(scene);
     return mismatches == 0 ? 0 : 1;
 }
+
+}  // namespace

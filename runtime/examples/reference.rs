@@ -6,7 +6,7 @@
 //!     [primary W H | secondary N] [--seed S] [--threads T] [--max-leaf L]
 //! ```
 //!
-//! `SCENE` is an OBJ path or the name of a real scene (`bunny`: shared/scenes/bunny.obj).
+//! `SCENE` is an OBJ path or the name of a real scene (`bunny`: scenes/bunny.obj.gz).
 //! Writes `OUT_PREFIX.rays` and `OUT_PREFIX.hits` (docs/formats.md) and prints the tree's
 //! statistics and the timing (mean of the middle 5 of 9 runs, per ray and per second).
 
@@ -48,11 +48,8 @@ fn run(args: &[String]) -> Result<(), String> {
                 .into(),
         );
     };
-    // A bare name (`bunny`) means that real scene from shared/scenes.
-    let scene_path = match (manifest::find(scene_path), manifest::scenes_dir()) {
-        (Some(info), Some(dir)) => info.path(&dir),
-        _ => std::path::PathBuf::from(scene_path),
-    };
+    // A bare name (`bunny`) means that real scene from the repository's scenes/.
+    let scene_path = manifest::resolve(std::path::Path::new(scene_path))?;
     let scene = load_obj(&scene_path).map_err(|e| e.to_string())?;
     let bounds = scene.bounds();
     let rays = match kind.as_str() {

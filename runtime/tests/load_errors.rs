@@ -169,3 +169,31 @@ fn valid_edge_cases_load() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn gzip_compressed_files_load_like_plain_ones() {
+    use std::io::Write;
+    let dir = common::scratch("load_gz");
+    let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3 4\n";
+    let plain = dir.join("quad.obj");
+    std::fs::write(&plain, text).unwrap();
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
+    gz.write_all(text.as_bytes()).unwrap();
+    let packed = gz.finish().unwrap();
+    let gz_path = dir.join("quad.obj.gz");
+    std::fs::write(&gz_path, &packed).unwrap();
+    let a = load_obj(&plain).unwrap();
+    let b = load_obj(&gz_path).unwrap();
+    assert_eq!(a, b, "same triangles and the same name");
+    assert_eq!(b.name, "quad");
+    // Errors inside a compressed file name the file and the unpacked text's line.
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    gz.write_all(b"v 0 0 0\nv 1 0 0\nf 1 2\n").unwrap();
+    let (msg, line) = load_err(&dir, "short.obj.gz", &gz.finish().unwrap());
+    assert_eq!(line, Some(3), "{msg}");
+    // A truncated archive is an error, not a shorter scene.
+    let (msg, line) = load_err(&dir, "cut.obj.gz", &packed[..packed.len() / 2]);
+    assert_eq!(line, None, "{msg}");
+    assert!(msg.contains("does not unpack"), "{msg}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,4 +1,4 @@
-//! Real scenes (shared/scenes): every file loads with the documented triangle count, both
+//! Real scenes (the repository's scenes/): every file loads with the documented triangle count, both
 //! builders give valid trees, and the reference traversal agrees with brute force bit for bit
 //! on primary, secondary and axis-parallel rays. Scenes above 100 k triangles (engine,
 //! cruiser, dragon) run only in optimized builds (`cargo test --release`), to keep debug test
@@ -40,7 +40,8 @@ fn check_real_scene(name: &str) {
     let driver = BatchDriver::new(0).unwrap();
     {
         let start = Instant::now();
-        let scene = load_obj(dir.join(format!("{name}.obj"))).unwrap_or_else(|e| panic!("{e}"));
+        let scene = load_obj(manifest::find(name).expect("listed scene").path(&dir))
+            .unwrap_or_else(|e| panic!("{e}"));
         let load = start.elapsed();
         assert_eq!(scene.len(), expected, "{name}: triangle count");
         assert!(scene

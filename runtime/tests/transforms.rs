@@ -16,7 +16,12 @@ fn rotated_scene_and_rotated_rays_see_the_same_triangles() {
     let Some(dir) = common::scenes_dir() else {
         return;
     };
-    let scene = load_obj(dir.join("teapot.obj")).unwrap();
+    let scene = load_obj(
+        scion_runtime::scene::manifest::find("teapot")
+            .unwrap()
+            .path(&dir),
+    )
+    .unwrap();
     let rot = Transform {
         rotate_deg: [35.0, 22.0, 47.0],
         scale: 2.0,
@@ -64,7 +69,12 @@ fn instances_build_valid_trees() {
     let Some(dir) = common::scenes_dir() else {
         return;
     };
-    let scene = load_obj(dir.join("pine.obj")).unwrap();
+    let scene = load_obj(
+        scion_runtime::scene::manifest::find("pine")
+            .unwrap()
+            .path(&dir),
+    )
+    .unwrap();
     let many = grid_instances(&scene, 8).unwrap();
     assert_eq!(many.len(), 8 * scene.len());
     let tree = build_sah_binned(&many.triangles, &SahOptions::default());

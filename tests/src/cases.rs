@@ -1,4 +1,4 @@
-//! What the differential rows run on: scenes (the real ones of `shared/scenes` and the
+//! What the differential rows run on: scenes (the real ones of the repository's `scenes/` and the
 //! runtime's generated hard cases), trees (binned SAH with leaves of 15 and 4, median), ray
 //! sets (primary, secondary, axis-parallel with signed zeros, and feature rays that graze
 //! vertices and edges or start on surfaces), and [`compare`], the bit-for-bit check.
@@ -14,7 +14,9 @@ pub use scion_runtime::scene::manifest::{scenes_dir, REAL_SCENES};
 /// Loads the real scene `name` (`teapot`, ...) from [`scenes_dir`].
 pub fn real_scene(name: &str) -> Result<Scene, String> {
     let dir = scenes_dir().ok_or("no real scenes (set SCION_SCENES)")?;
-    load_obj(dir.join(format!("{name}.obj"))).map_err(|e| e.to_string())
+    let info = scion_runtime::scene::manifest::find(name)
+        .ok_or_else(|| format!("`{name}` is not a library scene"))?;
+    load_obj(info.path(&dir)).map_err(|e| e.to_string())
 }
 
 /// The trees a row can use.

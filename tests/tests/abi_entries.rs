@@ -3,7 +3,7 @@
 //! `scion_L_sizes`, one aligned allocation per buffer, `scion_L_build`, `scion_L_root`, then
 //! `scion_closest_hit_L` over a few ranges of the rays. The hits must equal the runtime's
 //! reference bit for bit, for pbrt (`u32` references) and ptr (`ptr` references), on a real
-//! scene (`teapot` from `shared/scenes`; a generated scene when they are absent).
+//! scene (`teapot` from the repository's `scenes/`).
 
 #![allow(unsafe_code)]
 
@@ -164,13 +164,7 @@ fn trace_with_entries(stem: &str, layout: &str, tree: &LogicalTree, rays: &[Ray]
 }
 
 fn scene() -> Scene {
-    match real_scene("teapot") {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!("skip: the real scene teapot ({e}); using a generated scene instead");
-            gen::random_soup(2000, 0.05, 3)
-        }
-    }
+    real_scene("teapot").unwrap_or_else(|e| panic!("the real scene teapot: {e}"))
 }
 
 #[test]

@@ -11,8 +11,8 @@
 //! layouts, scenes and hard cases as the Cranelift rows, and so do the rows of the GPU pipeline
 //! emulated on the CPU (`BackendKind::GpuEmulated`: pbrt, ptr, pbrt_q16, sg_eq). Scenes: the generated hard cases
 //! (always) and the real scenes of
-//! `shared/scenes` (skipped with a printed line when missing; those over 20 k triangles only
-//! in release builds). The interpreter is slow, so real scenes get few rays (release: 128
+//! the repository's `scenes/` (or `SCION_SCENES`; a missing folder fails; those over 20 k
+//! triangles only in release builds). The interpreter is slow, so real scenes get few rays (release: 128
 //! primary and 64 secondary, plus 64 axis and 64 feature rays on scenes under 50 k triangles;
 //! debug builds a quarter of that).
 
@@ -125,7 +125,7 @@ const JIT_STACK: u32 = 256;
 /// Where a row's scene comes from.
 #[derive(Clone, Copy, Debug)]
 enum SceneSource {
-    /// `shared/scenes/NAME.obj`.
+    /// The repository's `scenes/NAME.obj.gz`.
     Real(&'static str),
     /// Position in `scene::gen::hard_cases()`.
     Hard(usize),
@@ -171,10 +171,11 @@ fn rows() -> Vec<Row> {
             }
         }
     }
-    if scenes_dir().is_none() {
-        println!("SKIPPED: real scenes (no shared/scenes; set SCION_SCENES)");
-        return rows;
-    }
+    assert!(
+        scenes_dir().is_some(),
+        "no real scenes: the repository's scenes/ folder is missing, or SCION_SCENES names a \
+         folder without them"
+    );
     for info in REAL_SCENES {
         let (name, tris) = (info.name, info.triangles);
         if tris > 20_000 && !release() {

@@ -129,13 +129,9 @@ fn program(file: &str, layout: &str, algorithm: &str) -> Program {
 fn wide_layouts_match_the_wide_reference() {
     let driver = BatchDriver::new(2).unwrap();
     let mut scenes = gen::hard_cases();
-    // Real scenes when present (as the differential rows: the repository's `scenes/` or
-    // `SCION_SCENES`).
+    // Real scenes (as the differential rows: the repository's `scenes/` or `SCION_SCENES`).
     for name in ["teapot", "pine"] {
-        match real_scene(name) {
-            Ok(s) => scenes.push(s),
-            Err(e) => eprintln!("wide: no real scene {name}: {e}"),
-        }
+        scenes.push(real_scene(name).unwrap_or_else(|e| panic!("real scene {name}: {e}")));
     }
     for (file, layout, algorithm, node_bytes, width, every_node) in PROGRAMS {
         for codegen in [Codegen::Cranelift, Codegen::Llvm(3)] {

@@ -6,7 +6,8 @@
 //! traces the same triangles and rays on the same threads (the batch driver's). Prints a
 //! markdown table; every ratio is to the reference row, measured in the same rounds.
 //!
-//! Options: `--scene PATH` (default: `bunny.obj` of `$SCION_SCENES` or `../shared/scenes`),
+//! Options: `--scene PATH|NAME` (an OBJ file, or a scene of the repository's `scenes/` by name;
+//! default `bunny`),
 //! `--rays primary|secondary` (default primary), `--n N` (65536), `--seed S` (1),
 //! `--threads T` (1), `--layouts a,b` (pbrt,ptr), `--interp-rays N` (1024: the interpreter traces
 //! only the first N rays; 0 leaves it out), `--peers a,b` (which peers run, in this order after
@@ -67,11 +68,8 @@ const PEERS: [&str; 6] = [
 ];
 
 fn default_scene() -> PathBuf {
-    let dir = std::env::var_os("SCION_SCENES").map_or_else(
-        || PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/scenes")),
-        PathBuf::from,
-    );
-    dir.join("bunny.obj")
+    scion_runtime::scene::manifest::resolve(std::path::Path::new("bunny"))
+        .unwrap_or_else(|_| PathBuf::from("scenes/bunny.obj.gz"))
 }
 
 fn parse() -> Result<Args, String> {
@@ -102,7 +100,10 @@ fn parse() -> Result<Args, String> {
                 .map_err(|_| format!("{flag}: `{s}` is not a number"))
         };
         match flag.as_str() {
-            "--scene" => a.scene = PathBuf::from(value()?),
+            "--scene" => {
+                a.scene = scion_runtime::scene::manifest::resolve(&PathBuf::from(value()?))
+                    .map_err(|e| format!("--scene: {e}"))?
+            }
             "--rays" => a.rays = RayKind::parse(&value()?)?,
             "--n" => a.n = num(value()?)? as usize,
             "--seed" => a.seed = num(value()?)?,

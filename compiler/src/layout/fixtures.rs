@@ -1,4 +1,4 @@
-//! Test fixtures: layouts of layout-catalog.md written in the layout language, faithfully to
+//! Test fixtures: layouts of docs/design/layout-catalog.md written in the layout language, faithfully to
 //! the catalog's §8 sources (with `build root` as a top-level entry of the build, as
 //! `docs/language.md` places it). Used by the tests of `layout` and of the checks.
 

@@ -1,5 +1,5 @@
 //! The physical layout model: a `layout` declaration with every byte placed (paper §4.2,
-//! layout-catalog §2.3).
+//! docs/design/layout-catalog.md §2.3).
 //!
 //! Input: a [`LayoutDecl`] and the [`Program`] it belongs to (for `type` sizes and for the ADT
 //! the layout realizes). Output: a [`LayoutModel`] holding the reference's components, the

@@ -1,4 +1,4 @@
-//! Byte placement: builds a [`LayoutModel`] from a `layout` declaration (layout-catalog §2.3).
+//! Byte placement: builds a [`LayoutModel`] from a `layout` declaration (docs/design/layout-catalog.md §2.3).
 //!
 //! Input: a [`LayoutDecl`] and its [`Program`]; output: the model with every member's scope,
 //! array and byte offset, each group's arrays (size, alignment, stride), each split's overlay,

@@ -1,4 +1,4 @@
-//! Tests of the layout model, field resolution and buffer plans against layout-catalog.md.
+//! Tests of the layout model, field resolution and buffer plans against docs/design/layout-catalog.md.
 
 use crate::layout::fixtures::*;
 use crate::layout::model::{GroupKind, LayoutModel, Storage};

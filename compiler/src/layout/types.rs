@@ -1,4 +1,4 @@
-//! Sizes and alignments of physical types (layout-catalog §2.3, rule 1).
+//! Sizes and alignments of physical types (docs/design/layout-catalog.md §2.3, rule 1).
 //!
 //! Input: a written [`TypeExpr`] and the program's `type` declarations; output: its byte size
 //! and natural alignment. Primitives have their own size as alignment (`u8` 1, `u16` 2,

@@ -8,7 +8,7 @@
 //!
 //! ```text
 //! scion-gpu --info [--device 0]
-//! scion-gpu --ptx pbrt.ptx --scene ../shared/scenes/bunny.obj [--rays primary|secondary]
+//! scion-gpu --ptx pbrt.ptx --scene scenes/bunny.obj.gz [--rays primary|secondary]
 //!           [--n 65536] [--seed 1] [--runs 9] [--device 0]
 //! ```
 

@@ -1,5 +1,5 @@
 //! The C functions called as C calls them, on a real scene (`teapot`; a generated OBJ file
-//! when `shared/scenes` is absent): the results equal the Rust runtime's, and every error is a
+//! when the scenes folder is not found): the results equal the Rust runtime's, and every error is a
 //! status with a message.
 
 use super::*;
@@ -13,9 +13,9 @@ use std::path::PathBuf;
 
 fn scene_path() -> PathBuf {
     if let Some(d) = scenes_dir() {
-        return d.join("teapot.obj");
+        return rt::scene::manifest::find("teapot").unwrap().path(&d);
     }
-    eprintln!("skip: no shared/scenes; using a generated OBJ file");
+    eprintln!("no scenes/ folder (SCION_SCENES points elsewhere?); using a generated OBJ file");
     let p = std::env::temp_dir().join(format!("scion-capi-{}.obj", std::process::id()));
     let mut text = String::new();
     for i in 0..50 {

@@ -175,13 +175,34 @@ fn read(path: &Path) -> Result<Vec<u8>, QueryFileError> {
 }
 
 fn write(path: &Path, bytes: &[u8]) -> Result<(), QueryFileError> {
-    std::fs::write(path, bytes).map_err(|source| QueryFileError::Io {
+    write_whole(path, bytes).map_err(|source| QueryFileError::Io {
         path: path.to_path_buf(),
         source,
     })
 }
 
-/// Writes a rays file.
+/// Writes `bytes` to `path` whole or not at all: into a temporary file beside it (hidden, named
+/// with this process's id), synced, then renamed over it. An interrupted or failed write leaves
+/// the previous file as it was and no truncated file that would still read as valid records.
+pub fn write_whole(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    use std::io::Write;
+    let name = path
+        .file_name()
+        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+    let tmp = path.with_file_name(format!(".{name}.scion-{}.tmp", std::process::id()));
+    let written = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if written.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    written
+}
+
+/// Writes a rays file (whole or not at all, [`write_whole`]).
 pub fn write_rays(path: impl AsRef<Path>, rays: &[Ray]) -> Result<(), QueryFileError> {
     write(path.as_ref(), &rays_to_bytes(rays))
 }
@@ -192,7 +213,7 @@ pub fn read_rays(path: impl AsRef<Path>) -> Result<Vec<Ray>, QueryFileError> {
     rays_from_bytes(path, &read(path)?)
 }
 
-/// Writes a hits file.
+/// Writes a hits file (whole or not at all, [`write_whole`]).
 pub fn write_hits(path: impl AsRef<Path>, hits: &[Hit]) -> Result<(), QueryFileError> {
     write(path.as_ref(), &hits_to_bytes(hits))
 }

@@ -6,5 +6,7 @@
 pub mod io;
 pub mod rays;
 
-pub use io::{hits_checksum, read_hits, read_rays, write_hits, write_rays, QueryFileError};
+pub use io::{
+    hits_checksum, read_hits, read_rays, write_hits, write_rays, write_whole, QueryFileError,
+};
 pub use rays::{axis_rays, primary_rays, primary_rays_n, secondary_rays, Camera};

@@ -4,8 +4,9 @@
 //! coordinates, as `tobj` does; three extra values are vertex colors and are ignored) and `f`
 //! lines. Everything else (normals, texture coordinates, groups, objects, materials, `l` lines)
 //! is read by `tobj` but does not change the triangles. A polygon face `f a b c d ...` is
-//! triangulated as a fan around its first vertex: `(a, b, c)`, `(a, c, d)`, ... Faces with fewer
-//! than three vertices are skipped.
+//! triangulated as a fan around its first vertex: `(a, b, c)`, `(a, c, d)`, ... A face with
+//! fewer than three vertices is an error naming its line. A file that starts with gzip's magic
+//! number is unpacked first (the repository's `scenes/NAME.obj.gz`).
 //!
 //! Ids: triangle `i` of the file (counting the triangles of fans in order) gets `id == i`, so
 //! the scene keeps file order. An empty scene (no faces) is valid.
@@ -14,21 +15,21 @@
 //! reports what went wrong but not where; `locate` finds the first line that shows the
 //! reported problem by re-checking lines with the same rules. Coordinates that are NaN or
 //! infinite (including values like `1e39` that overflow `f32`) are rejected: `tobj` accepts
-//! them, so every `v` line is checked here, whether or not a face uses it.
+//! them, so every `v` line is checked here, whether or not a face uses it. So are coordinates
+//! beyond [`MAX_COORDINATE`] and scenes smaller than [`MIN_EXTENT`], where the triangle test
+//! loses hits (docs/runtime.md, "Supported coordinate range").
 
-use std::io::Cursor;
+use std::io::{Cursor, Read};
 use std::path::{Path, PathBuf};
 
-use super::{check_count, Scene, SceneError};
+use super::{check_count, Scene, SceneError, MAX_COORDINATE, MIN_EXTENT};
 use crate::geom::{Triangle, Vec3};
 
-/// Loads an OBJ file (see the module documentation for what is read and rejected).
+/// Loads an OBJ file, plain or gzip-compressed (`NAME.obj.gz`, recognized by its first bytes,
+/// whatever its name), see the module documentation for what is read and rejected.
 pub fn load_obj(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = read_unpacked(path)?;
     let text = std::str::from_utf8(&bytes).map_err(|e| SceneError::NotText {
         path: path.to_path_buf(),
         line: 1 + bytes[..e.valid_up_to()]
@@ -36,11 +37,37 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
             .filter(|&&b| b == b'\n')
             .count(),
     })?;
-    let name = path
-        .file_stem()
+    parse_obj(path, &scene_name(path), text)
+}
+
+/// The file's bytes, unpacked when they start with gzip's magic number.
+fn read_unpacked(path: &Path) -> Result<Vec<u8>, SceneError> {
+    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    if !bytes.starts_with(&[0x1f, 0x8b]) {
+        return Ok(bytes);
+    }
+    let mut unpacked = Vec::with_capacity(bytes.len() * 4);
+    flate2::read::MultiGzDecoder::new(bytes.as_slice())
+        .read_to_end(&mut unpacked)
+        .map_err(|source| SceneError::Compressed {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    Ok(unpacked)
+}
+
+/// A scene's name: the file name without `.gz` and `.obj` (`scenes/bunny.obj.gz` -> `bunny`).
+pub fn scene_name(path: &Path) -> String {
+    let file = path
+        .file_name()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    parse_obj(path, &name, text)
+    let file = file.strip_suffix(".gz").unwrap_or(&file);
+    let file = file.strip_suffix(".obj").unwrap_or(file);
+    file.to_string()
 }
 
 /// Parses OBJ text already in memory; `path` is used only in error messages.
@@ -51,6 +78,7 @@ pub fn parse_obj(path: &Path, name: &str, text: &str) -> Result<Scene, SceneErro
         ignore_points: true,
         ignore_lines: true,
     };
+    check_faces(path, text)?;
     let (models, _materials) = tobj::load_obj_buf(
         &mut Cursor::new(text.as_bytes()),
         &options,
@@ -80,7 +108,31 @@ pub fn parse_obj(path: &Path, name: &str, text: &str) -> Result<Scene, SceneErro
             ));
         }
     }
-    Ok(Scene::new(name, triangles))
+    let scene = Scene::new(name, triangles);
+    check_extent(path, &scene)?;
+    Ok(scene)
+}
+
+/// Refuses a scene whose box is smaller than [`MIN_EXTENT`] (and not a single point).
+fn check_extent(path: &Path, scene: &Scene) -> Result<(), SceneError> {
+    if scene.is_empty() {
+        return Ok(());
+    }
+    let b = scene.bounds();
+    let extent = (b.high.x - b.low.x)
+        .max(b.high.y - b.low.y)
+        .max(b.high.z - b.low.z);
+    if extent > 0.0 && extent < MIN_EXTENT {
+        return Err(SceneError::OutOfRange {
+            path: path.to_path_buf(),
+            line: None,
+            what: format!(
+                "the scene's box is only {extent:e} across (from ({}, {}, {}) to ({}, {}, {}))",
+                b.low.x, b.low.y, b.low.z, b.high.x, b.high.y, b.high.z
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// The lines of `text` as `tobj` sees them: split on `\n`, a trailing `\r` dropped, numbered
@@ -91,7 +143,29 @@ fn lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
         .map(|(i, l)| (i + 1, l.strip_suffix('\r').unwrap_or(l)))
 }
 
-/// Rejects NaN and infinite coordinates on every `v` line (after the `w` division).
+/// Rejects faces of fewer than three vertices (before `tobj`, which drops two-vertex faces
+/// and refuses shorter ones without a line).
+fn check_faces(path: &Path, text: &str) -> Result<(), SceneError> {
+    for (line_no, line) in lines(text) {
+        let mut words = line.split_whitespace();
+        if words.next() != Some("f") {
+            continue;
+        }
+        let vertices = words.count();
+        if vertices < 3 {
+            return Err(SceneError::ShortFace {
+                path: path.to_path_buf(),
+                line: line_no,
+                vertices,
+                text: line.trim().to_string(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Rejects NaN, infinite and out-of-range coordinates on every `v` line (after the `w`
+/// division).
 fn check_vertices(path: &Path, text: &str) -> Result<(), SceneError> {
     let mut vertex = 0usize;
     for (line_no, line) in lines(text) {
@@ -121,6 +195,16 @@ fn check_vertices(path: &Path, text: &str) -> Result<(), SceneError> {
                 line: line_no,
                 vertex,
                 text: line.trim().to_string(),
+            });
+        }
+        if let Some(c) = xyz.iter().find(|c| c.abs() > MAX_COORDINATE) {
+            return Err(SceneError::OutOfRange {
+                path: path.to_path_buf(),
+                line: Some(line_no),
+                what: format!(
+                    "vertex {vertex} has the coordinate {c:e}: `{}`",
+                    line.trim()
+                ),
             });
         }
     }
@@ -392,5 +476,60 @@ mod tests {
         // A tiny w overflows the division.
         let e = parse("v 0 0 0\nv 1e30 0 0 1e-30\nv 0 1 0\nf 1 2 3\n").unwrap_err();
         assert_eq!(e.line(), Some(2), "{e}");
+    }
+
+    #[test]
+    fn short_faces_are_errors_with_their_line() {
+        for (face, n) in [("f 1 2", 2), ("f 3", 1), ("f", 0)] {
+            let text = format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n{face}\n");
+            let e = parse(&text).unwrap_err();
+            match &e {
+                SceneError::ShortFace { line, vertices, .. } => {
+                    assert_eq!((*line, *vertices), (5, n), "{e}")
+                }
+                other => panic!("expected ShortFace, got {other}"),
+            }
+            assert!(
+                e.to_string()
+                    .starts_with("mem.obj:5: a face needs at least 3"),
+                "{e}"
+            );
+        }
+    }
+
+    #[test]
+    fn coordinates_outside_the_supported_range_are_refused() {
+        let e = parse("v 0 0 0\nv 1 0 0\nv 0 -2e19 0\nf 1 2 3\n").unwrap_err();
+        assert!(
+            matches!(e, SceneError::OutOfRange { line: Some(3), .. }),
+            "{e}"
+        );
+        assert!(e.to_string().contains("-2e19"), "{e}");
+        // At the limit it loads.
+        assert_eq!(
+            parse("v 0 0 0\nv 1e12 0 0\nv 0 1 0\nf 1 2 3\n")
+                .unwrap()
+                .len(),
+            1
+        );
+        // A scene smaller than the smallest extent, with its box in the message.
+        let e = parse("v 1 1 1\nv 1.0000001 1 1\nv 1 1 1\nf 1 2 3\n");
+        assert!(e.is_ok(), "1e-7 across is in range");
+        let e = parse("v 0 0 0\nv 1e-13 0 0\nv 0 1e-13 0\nf 1 2 3\n").unwrap_err();
+        assert!(
+            matches!(e, SceneError::OutOfRange { line: None, .. }),
+            "{e}"
+        );
+        assert!(e.to_string().contains("across"), "{e}");
+        // A single point (extent 0) and an empty scene are not out of range.
+        assert!(parse("v 5 5 5\nf 1 1 1\n").is_ok());
+        assert!(parse("").is_ok());
+    }
+
+    #[test]
+    fn names_drop_obj_and_gz() {
+        assert_eq!(scene_name(Path::new("scenes/bunny.obj.gz")), "bunny");
+        assert_eq!(scene_name(Path::new("a/b.obj")), "b");
+        assert_eq!(scene_name(Path::new("mesh")), "mesh");
     }
 }

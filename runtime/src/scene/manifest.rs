@@ -1,9 +1,11 @@
-//! The real scenes of `shared/scenes` (its README describes them) and where to find them:
-//! names and triangle counts -> paths.
+//! The real scenes of the repository's `scenes/` folder (its README describes them, with their
+//! sources and licences) and where to find them: names and triangle counts -> paths.
 //!
-//! The meshes live beside the repository (`../shared/scenes` from its root) and are never
-//! copied into it. [`scenes_dir`] looks in `SCION_SCENES` first, then for `shared/scenes` in
-//! every ancestor of the current directory and of this crate's source folder.
+//! The repository carries them gzip-compressed (`scenes/NAME.obj.gz`; [`super::load_obj`]
+//! reads them as they are). [`scenes_dir`] looks in `SCION_SCENES` first (a folder of
+//! `NAME.obj` or `NAME.obj.gz` files), then for `scenes/` in every ancestor of the current
+//! directory and of this crate's source folder. [`resolve`] turns a command line's `--scene`
+//! (a path, or a real scene's name) into a path.
 
 use std::path::{Path, PathBuf};
 
@@ -16,7 +18,7 @@ pub struct SceneInfo {
     pub triangles: usize,
 }
 
-/// The real scenes, smallest first, with their triangle counts (shared/scenes/README.md).
+/// The real scenes, smallest first, with their triangle counts (scenes/README.md).
 pub const REAL_SCENES: &[SceneInfo] = &[
     SceneInfo {
         name: "teapot",
@@ -66,7 +68,7 @@ pub fn find(name: &str) -> Option<&'static SceneInfo> {
 }
 
 fn looks_like_scenes(dir: &Path) -> bool {
-    dir.join("teapot.obj").is_file()
+    REAL_SCENES[0].file_in(dir).is_some()
 }
 
 /// The folder of the real scenes, or `None` when it cannot be found.
@@ -85,16 +87,59 @@ pub fn scenes_dir() -> Option<PathBuf> {
         .flat_map(|start| {
             start
                 .ancestors()
-                .map(|a| a.join("shared").join("scenes"))
+                .map(|a| a.join("scenes"))
                 .collect::<Vec<_>>()
         })
         .find(|d| looks_like_scenes(d))
 }
 
 impl SceneInfo {
-    /// The scene's path inside `dir`.
+    /// The scene's file inside `dir`: `NAME.obj` when there is one (an unpacked copy), else
+    /// `NAME.obj.gz`; `None` when neither exists.
+    pub fn file_in(&self, dir: &Path) -> Option<PathBuf> {
+        [
+            dir.join(format!("{}.obj", self.name)),
+            dir.join(format!("{}.obj.gz", self.name)),
+        ]
+        .into_iter()
+        .find(|p| p.is_file())
+    }
+
+    /// The scene's path inside `dir` ([`Self::file_in`], or `NAME.obj.gz` when neither file
+    /// exists, so that loading it names the missing file).
     pub fn path(&self, dir: &Path) -> PathBuf {
-        dir.join(format!("{}.obj", self.name))
+        self.file_in(dir)
+            .unwrap_or_else(|| dir.join(format!("{}.obj.gz", self.name)))
+    }
+}
+
+/// What a `--scene` argument names: an existing file, or anything that looks like a path (a
+/// folder separator or an extension; loading it names what is wrong), as given; else a real
+/// scene's name (`bunny`) as its file in [`scenes_dir`]. `Err` says why a bare name is neither.
+pub fn resolve(arg: &Path) -> Result<PathBuf, String> {
+    if arg.exists() || arg.components().count() > 1 || arg.extension().is_some() {
+        return Ok(arg.to_path_buf());
+    }
+    let names = || {
+        REAL_SCENES
+            .iter()
+            .map(|s| s.name)
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    match arg.to_str().and_then(find) {
+        Some(info) => match scenes_dir() {
+            Some(dir) => Ok(info.path(&dir)),
+            None => Err(format!(
+                "`{}` is a library scene, but its folder was not found (the repository's \
+                 scenes/, or SCION_SCENES)",
+                info.name
+            )),
+        },
+        None => Err(format!(
+            "no such file, and not a library scene ({})",
+            names()
+        )),
     }
 }
 
@@ -110,8 +155,29 @@ mod tests {
         assert_eq!(find("dragon").unwrap().triangles, 871_306);
         assert!(find("lucy").is_none());
         assert_eq!(
-            find("pine").unwrap().path(Path::new("/s")),
-            PathBuf::from("/s/pine.obj")
+            find("pine").unwrap().path(Path::new("/nonexistent")),
+            PathBuf::from("/nonexistent/pine.obj.gz")
         );
+    }
+}
+
+#[cfg(test)]
+mod repo_tests {
+    use super::*;
+
+    /// The repository carries every listed scene (what makes a clone self-contained).
+    #[test]
+    fn the_repository_has_every_scene() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+        for s in REAL_SCENES {
+            assert!(
+                dir.join(format!("{}.obj.gz", s.name)).is_file(),
+                "scenes/{}.obj.gz is missing",
+                s.name
+            );
+        }
+        assert!(resolve(Path::new("teapot")).is_ok());
+        let e = resolve(Path::new("no-such-scene")).unwrap_err();
+        assert!(e.contains("teapot, pine"), "{e}");
     }
 }

@@ -55,6 +55,14 @@ impl Scene {
     }
 }
 
+/// The largest coordinate magnitude a loaded scene may have: Moller-Trumbore's `t` multiplies
+/// three coordinate differences, which overflow `f32` from about `1e13` (docs/runtime.md).
+pub const MAX_COORDINATE: f32 = 1e12;
+
+/// The smallest extent (longest side of the scene's box) a loaded scene with any extent may
+/// have: below it those products underflow and hits are lost (docs/runtime.md).
+pub const MIN_EXTENT: f32 = 1e-12;
+
 /// Why a scene could not be loaded or composed.
 ///
 /// Display names the file and, where one applies, the 1-based line, as `path:line: message`.
@@ -107,6 +115,35 @@ pub enum SceneError {
         /// The line's text.
         text: String,
     },
+    /// A gzip-compressed scene file (`NAME.obj.gz`) that does not unpack.
+    Compressed {
+        /// The file.
+        path: PathBuf,
+        /// What the decompressor reported.
+        source: std::io::Error,
+    },
+    /// A face (`f` line) with fewer than three vertices: it has no triangle, and dropping it
+    /// would lose geometry without a word.
+    ShortFace {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line of the face.
+        line: usize,
+        /// How many vertices it lists.
+        vertices: usize,
+        /// The line's text.
+        text: String,
+    },
+    /// Coordinates outside the range where the triangle test is exact enough to find every hit
+    /// ([`MAX_COORDINATE`], [`MIN_EXTENT`]; docs/runtime.md, "Supported coordinate range").
+    OutOfRange {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line of the first `v` line beyond [`MAX_COORDINATE`], when that is the cause.
+        line: Option<usize>,
+        /// What is out of range, with its value.
+        what: String,
+    },
     /// More triangles than ids: `u32::MAX` is reserved for "no primitive".
     TooManyTriangles {
         /// Where the triangles came from (file or composition).
@@ -125,6 +162,9 @@ impl SceneError {
             | SceneError::Malformed { path, .. }
             | SceneError::FaceIndexOutOfRange { path, .. }
             | SceneError::NonFiniteCoordinate { path, .. }
+            | SceneError::Compressed { path, .. }
+            | SceneError::ShortFace { path, .. }
+            | SceneError::OutOfRange { path, .. }
             | SceneError::TooManyTriangles { path, .. } => path,
         }
     }
@@ -132,13 +172,15 @@ impl SceneError {
     /// The 1-based line the error is about, when there is one.
     pub fn line(&self) -> Option<usize> {
         match self {
-            SceneError::NotText { line, .. } | SceneError::NonFiniteCoordinate { line, .. } => {
-                Some(*line)
-            }
-            SceneError::Malformed { line, .. } | SceneError::FaceIndexOutOfRange { line, .. } => {
-                *line
-            }
-            SceneError::Io { .. } | SceneError::TooManyTriangles { .. } => None,
+            SceneError::NotText { line, .. }
+            | SceneError::NonFiniteCoordinate { line, .. }
+            | SceneError::ShortFace { line, .. } => Some(*line),
+            SceneError::Malformed { line, .. }
+            | SceneError::FaceIndexOutOfRange { line, .. }
+            | SceneError::OutOfRange { line, .. } => *line,
+            SceneError::Io { .. }
+            | SceneError::Compressed { .. }
+            | SceneError::TooManyTriangles { .. } => None,
         }
     }
 }
@@ -174,6 +216,21 @@ impl fmt::Display for SceneError {
                 "vertex {vertex} has a NaN or infinite coordinate: `{text}` \
                  (coordinates must be finite f32 values)"
             ),
+            SceneError::Compressed { source, .. } => write!(
+                f,
+                "the gzip-compressed scene file does not unpack: {source}"
+            ),
+            SceneError::ShortFace { vertices, text, .. } => write!(
+                f,
+                "a face needs at least 3 vertices, this one lists {vertices}: `{text}` \
+                 (a line of two vertices is an `l` line)"
+            ),
+            SceneError::OutOfRange { what, .. } => write!(
+                f,
+                "{what}; the supported range is coordinates of magnitude at most {MAX_COORDINATE:e} \
+                 and a scene extent of at least {MIN_EXTENT:e} (beyond it the f32 triangle test \
+                 overflows or underflows and hits are lost); scale the scene into that range"
+            ),
             SceneError::TooManyTriangles { count, .. } => write!(
                 f,
                 "{count} triangles is too many: ids are u32 and u32::MAX means \"no primitive\""
@@ -185,7 +242,7 @@ impl fmt::Display for SceneError {
 impl std::error::Error for SceneError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
-            SceneError::Io { source, .. } => Some(source),
+            SceneError::Io { source, .. } | SceneError::Compressed { source, .. } => Some(source),
             _ => None,
         }
     }

@@ -8,15 +8,15 @@ use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Hit, Ray};
 use scion_runtime::reference::why_pruned;
 
-/// The real scenes' folder (`scene::manifest::scenes_dir`), or `None` with a printed line.
+/// The real scenes' folder (`scene::manifest::scenes_dir`: the repository's `scenes/`, or
+/// `SCION_SCENES`). The repository carries them, so a missing folder fails the test.
 pub fn scenes_dir() -> Option<PathBuf> {
     let dir = scion_runtime::scene::manifest::scenes_dir();
-    if dir.is_none() {
-        println!(
-            "SKIPPED: no real scenes found (set SCION_SCENES to the shared/scenes folder, or \
-             keep shared/scenes beside the repository)"
-        );
-    }
+    assert!(
+        dir.is_some(),
+        "no real scenes found: the repository's scenes/ folder is missing, or SCION_SCENES \
+         names a folder without NAME.obj or NAME.obj.gz files"
+    );
     dir
 }
 
