@@ -19,8 +19,9 @@
 #                      PTX kits with scion-gpu), or auto (scion when it starts, else kit)
 #   GPU_CHECK_TIMEOUT  seconds per run (default 60)
 #   GPU_CHECK_BUDGET   seconds for all the traces (default 300): later ones are not started
-#   GPU_CHECK_LAYOUTS  the layouts, in order (default "pbrt ptr pbrt-q16 sg-eq"); pbrt and ptr
-#                      must run on every scene, the others as the budget allows
+#   GPU_CHECK_LAYOUTS  the layouts, in order (default: the kit's LAYOUTS, every library layout
+#                      the GPU path runs, pbrt ptr pbrt-q16 sg-eq first); pbrt and ptr must
+#                      run on every scene, the others as the budget allows
 #   GPU_CHECK_DEVICE   gpu (default), or gpu-emulated to check this script without a GPU:
 #                      `scion trace --device gpu-emulated` (the GPU kernels compiled for the
 #                      CPU, docs/gpu.md), no device probe, no test binaries (mode scion only)
@@ -34,7 +35,8 @@ N=${GPU_CHECK_N:-1048576}
 RUNS=${GPU_CHECK_RUNS:-9}
 TIMEOUT=${GPU_CHECK_TIMEOUT:-60}
 BUDGET=${GPU_CHECK_BUDGET:-300}
-LAYOUTS=${GPU_CHECK_LAYOUTS:-pbrt ptr pbrt-q16 sg-eq}
+LAYOUTS=${GPU_CHECK_LAYOUTS:-$(cat "$KIT/LAYOUTS" 2>/dev/null || echo pbrt ptr pbrt-q16 sg-eq)}
+LAYOUTS=$(echo $LAYOUTS)
 DEVICE=${GPU_CHECK_DEVICE:-gpu}
 case $DEVICE in
   gpu|gpu-emulated) ;;

@@ -9,7 +9,7 @@
 //! (`scion_cuda::kit`) that `scion-gpu` runs on machines without LLVM.
 
 use crate::io::outln;
-use crate::trace::{build, progress, rays, secs, significant, LAYOUTS};
+use crate::trace::{build, closest_hit_layout_names, progress, rays, secs, significant};
 use crate::{BackendArg, CliError, DeviceArg, PtxArgs, TraceArgs};
 use scion_compiler::abi::EntryTarget;
 use scion_cuda::compare::Comparison;
@@ -18,7 +18,7 @@ use scion_cuda::trace::GpuPipeline;
 use scion_cuda::{Device, Launcher};
 use scion_host::gpu_emu::EmulatedGpu;
 use scion_host::jit::{library_lo, Codegen, LoOptions, ALGORITHM};
-use scion_host::mem_interp::LIBRARY_LAYOUTS;
+use scion_host::mem_interp::library_layouts;
 use scion_host::quantized::{Boxes, DecodedTree};
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::LogicalTree;
@@ -256,14 +256,13 @@ fn run_emulated(args: &TraceArgs) -> Result<(), CliError> {
 /// The library layout `--layout` names: file stem, source name and boxes.
 fn library_layout(layout: &str) -> Result<(&'static str, &'static str, Boxes), CliError> {
     let stem = layout.replace('-', "_");
-    LIBRARY_LAYOUTS
+    library_layouts()
         .iter()
         .find(|l| l.0 == stem)
         .copied()
         .ok_or_else(|| {
-            let names: Vec<&str> = LAYOUTS.iter().map(|(n, _)| *n).collect();
             CliError::usage(format!("unknown layout `{layout}` for the GPU"))
-                .note(format!("library layouts: {}", names.join(", ")))
+                .note(format!("library layouts: {}", closest_hit_layout_names()))
         })
 }
 

@@ -33,12 +33,14 @@ pub fn out_line(args: fmt::Arguments<'_>) {
     }
 }
 
-/// Flushes standard output; `Err` when any line of the report could not be written.
+/// Flushes standard output; `Err` when any line of the report could not be written. A reader
+/// that closed the pipe early (`scion layouts | head -3`) is not an error.
 pub fn finish_stdout() -> Result<(), CliError> {
     let flushed = std::io::stdout().flush();
     let mut failed = STDOUT_ERROR.lock().unwrap_or_else(|e| e.into_inner());
     match failed.take().map_or(flushed, Err) {
         Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
         Err(e) => Err(CliError::new(format!(
             "cannot write the report to standard output: {e}"
         ))),

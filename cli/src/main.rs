@@ -12,6 +12,7 @@
 
 mod gpu;
 mod io;
+mod list;
 mod trace;
 
 use clap::{Parser, Subcommand, ValueEnum};
@@ -46,6 +47,21 @@ enum Command {
     /// comment lines naming the layout and its buffers), to run with `scion trace --device gpu
     /// --ptx` or `scion-gpu` (docs/gpu.md).
     Ptx(PtxArgs),
+    /// List the library's layouts (library/layouts/*.scion): the name --layout takes, the
+    /// layout, the sum type it realizes, the closest hit compiled for it, how it stores boxes.
+    Layouts(LayoutsArgs),
+}
+
+/// Arguments of `scion layouts`.
+#[derive(clap::Args, Debug)]
+pub struct LayoutsArgs {
+    /// Print only the names, one per line.
+    #[arg(long)]
+    pub names: bool,
+    /// Only the layouts the GPU path (`scion ptx`, `--device gpu`) runs: the prelude's
+    /// closest hit over `BVH`.
+    #[arg(long)]
+    pub gpu: bool,
 }
 
 /// Where `scion trace` runs the traversal.
@@ -128,11 +144,19 @@ pub struct TraceArgs {
     /// sponza_dabrovic, bunny, engine, cruiser_cg57, dragon).
     #[arg(long, value_name = "PATH.obj|NAME")]
     pub scene: PathBuf,
-    /// The layout for `--backend jit|llvm|mem-interp` (a name from library/layouts, e.g. pbrt,
-    /// ptr, pbrt-align16, pbrt-soaos, pbrt-q16, sg-eq; default pbrt). Layout-free
-    /// backends trace the logical tree and ignore it.
-    #[arg(long)]
+    /// The layout for `--backend jit|llvm|mem-interp`: a library layout's name (a file of
+    /// library/layouts with `-` for `_`: pbrt, ptr, pbrt-align16, pbrt-soaos, pbrt-q16, sg-eq,
+    /// dop14-split, hair-bvh; default pbrt), or any layout file, `PATH.scion` (`PATH.scion:NAME`
+    /// when it declares several). `--backend jit|llvm` take either; mem-interp and the GPU the
+    /// library's closest-hit layouts. Layout-free backends trace the logical tree and ignore it.
+    #[arg(long, value_name = "NAME|PATH.scion")]
     pub layout: Option<String>,
+    /// The closest hit to compile for the layout (`--backend jit|llvm`): a library algorithm
+    /// (a file stem of library/algorithms, e.g. closest_hit, or a closest-hit function's name)
+    /// or a file, `PATH.scion[:FUNCTION]`. Default: the library's closest hit over the sum type
+    /// the layout realizes (closest_hit for BVH, closest_hit_dop14, closest_hit_hair).
+    #[arg(long, value_name = "NAME|PATH.scion")]
+    pub algorithm: Option<String>,
     /// Which rays to generate (ignored with --rays-file).
     #[arg(long, value_enum, default_value = "primary")]
     pub rays: RaysArg,
@@ -208,6 +232,7 @@ fn main() -> ExitCode {
     let mut cli = Cli::parse();
     let result = match &mut cli.command {
         Command::Trace(args) => preflight(args).and_then(|()| trace::run(args)),
+        Command::Layouts(args) => list::run(args),
         Command::Ptx(args) => {
             io::check_output("-o", &args.output, &[]).and_then(|()| gpu::run_ptx(args))
         }

@@ -16,7 +16,7 @@ use crate::{BackendArg, BuilderArg, CliError, DeviceArg, RaysArg, TraceArgs};
 use scion_host::backend::{Backend, BackendKind};
 use scion_host::contract::{LayoutCode, Packed};
 use scion_host::jit::{Codegen, JitClosestHit};
-use scion_host::mem_interp::{layout_boxes, MemInterpBackend, LIBRARY_LAYOUTS};
+use scion_host::mem_interp::{layout_boxes, library_layouts, MemInterpBackend};
 use scion_host::quantized::{Boxes, DecodedTree};
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::wide::collapse;
@@ -30,15 +30,14 @@ use scion_runtime::scene::{load_obj, Scene};
 use scion_runtime::timing::{measure_with, Timing, TimingPlan};
 use std::time::{Duration, Instant};
 
-/// The layouts of library/layouts, by the name `--layout` takes.
-pub const LAYOUTS: &[(&str, &str)] = &[
-    ("pbrt", "library/layouts/pbrt.scion"),
-    ("ptr", "library/layouts/ptr.scion"),
-    ("pbrt-align16", "library/layouts/pbrt_align16.scion"),
-    ("pbrt-soaos", "library/layouts/pbrt_soaos.scion"),
-    ("pbrt-q16", "library/layouts/pbrt_q16.scion"),
-    ("sg-eq", "library/layouts/sg_eq.scion"),
-];
+/// The library's closest-hit layouts by the names `--layout` takes (`pbrt-q16`), for messages.
+pub fn closest_hit_layout_names() -> String {
+    library_layouts()
+        .iter()
+        .map(|l| scion_host::library::layout_name(l.0))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
 
 /// Runs `scion trace`.
 pub fn run(args: &TraceArgs) -> Result<(), CliError> {
@@ -68,18 +67,42 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     if args.layout.is_some() && !uses_layout {
         eprintln!("scion: note: --layout is used by --backend jit|llvm|mem-interp only; this backend traces the logical tree");
     }
+    if args.algorithm.is_some() && !compiled {
+        eprintln!("scion: note: --algorithm is used by --backend jit|llvm only");
+    }
+    // What --layout and --algorithm name (a library name or a file), for the compiled backends.
+    let resolved = match compiled {
+        true => Some(
+            scion_host::library::resolve(layout, args.algorithm.as_deref())
+                .map_err(|e| CliError::usage(e).note("scion trace --help says what they take"))?,
+        ),
+        false => None,
+    };
+    let boxes = match (&resolved, args.backend) {
+        (Some(r), _) => r.boxes,
+        (None, BackendArg::MemInterp) => layout_boxes(&layout.replace('-', "_")),
+        _ => Boxes::Exact,
+    };
     let engine = match args.backend {
         BackendArg::Reference => Engine::Free(instantiate(BackendKind::Reference, args)?),
         BackendArg::Brute => Engine::Free(instantiate(BackendKind::Brute, args)?),
         BackendArg::Interp => Engine::Free(instantiate(BackendKind::Interp(1), args)?),
         BackendArg::MemInterp => Engine::Mem(Box::new(mem_backend(layout, args.threads)?)),
         BackendArg::Jit => Engine::Layout {
-            code: jit_code(layout, args, Codegen::Cranelift)?,
+            code: jit_code(
+                resolved.as_ref().expect("resolved for jit"),
+                args,
+                Codegen::Cranelift,
+            )?,
             driver: BatchDriver::new(args.threads).map_err(CliError::new)?,
             engine: "jit",
         },
         BackendArg::Llvm => Engine::Layout {
-            code: jit_code(layout, args, Codegen::Llvm(3))?,
+            code: jit_code(
+                resolved.as_ref().expect("resolved for llvm"),
+                args,
+                Codegen::Llvm(3),
+            )?,
             driver: BatchDriver::new(args.threads).map_err(CliError::new)?,
             engine: "llvm -O3",
         },
@@ -255,12 +278,6 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     );
     outln!("hits         {hit_count} of {} rays", rays.len());
     if args.stats {
-        let boxes = match args.backend {
-            BackendArg::Jit | BackendArg::Llvm | BackendArg::MemInterp => {
-                layout_boxes(&layout.replace('-', "_"))
-            }
-            _ => Boxes::Exact,
-        };
         let traversed = boxes.decoded_tree(&tree);
         let driver = BatchDriver::new(threads).map_err(CliError::new)?;
         let s = closest_hits_tree_stats(&traversed, &rays, &driver);
@@ -333,12 +350,14 @@ struct PackInfo {
 /// at the mem level.
 fn mem_backend(layout: &str, threads: usize) -> Result<MemInterpBackend, CliError> {
     let stem = layout.replace('-', "_");
-    let Some(&(stem, name, _)) = LIBRARY_LAYOUTS.iter().find(|l| l.0 == stem) else {
-        let names: Vec<&str> = LAYOUTS.iter().map(|(n, _)| *n).collect();
+    let Some(&(stem, name, _)) = library_layouts().iter().find(|l| l.0 == stem) else {
         return Err(CliError::usage(format!(
             "unknown layout `{layout}` for --backend mem-interp"
         ))
-        .note(format!("library layouts: {}", names.join(", "))));
+        .note(format!(
+            "it runs the library's closest-hit layouts: {}",
+            closest_hit_layout_names()
+        )));
     };
     let threads = match threads {
         0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
@@ -352,36 +371,32 @@ fn instantiate(kind: BackendKind, args: &TraceArgs) -> Result<Box<dyn Backend>, 
     kind.instantiate(args.threads).map_err(CliError::new)
 }
 
-/// The closest-hit code specialized to the library layout `layout` (a `--layout` name) and
-/// compiled by `codegen`, after the tree/mem passes of `args.opt_level` (without the DSL
-/// optimizations with `--no-dsl-opt`), with a traversal stack of `args.stack_size` entries.
-/// The layout name is checked first, so a typo is reported as such.
+/// The closest-hit program `resolved` (`--layout`, `--algorithm`) compiled by `codegen`, after
+/// the tree/mem passes of `args.opt_level` (without the DSL optimizations with `--no-dsl-opt`),
+/// with a traversal stack of `args.stack_size` entries.
 fn jit_code(
-    layout: &str,
+    resolved: &scion_host::library::Resolved,
     args: &TraceArgs,
     codegen: Codegen,
 ) -> Result<Box<dyn LayoutCode>, CliError> {
-    let stem = layout.replace('-', "_");
-    let Some(&(stem, name, _)) = LIBRARY_LAYOUTS.iter().find(|l| l.0 == stem) else {
-        let names: Vec<&str> = LAYOUTS.iter().map(|(n, _)| *n).collect();
-        let err = CliError::usage(format!("unknown layout `{layout}` for --backend jit|llvm"))
-            .note(format!("library layouts: {}", names.join(", ")));
-        return Err(if layout.ends_with(".scion") {
-            err.note("--backend jit|llvm compile the library's layouts only")
-        } else {
-            err
-        });
-    };
-    progress(&format!("compiling closest hit for layout `{name}`"));
-    let code = JitClosestHit::compile_full(
-        stem,
-        name,
+    let p = &resolved.program;
+    progress(&format!(
+        "compiling {} for layout `{}`",
+        p.algorithm, p.layout
+    ));
+    let code = JitClosestHit::compile_program(
+        p,
         args.stack_size,
         args.opt_level,
         !args.no_dsl_opt,
         codegen,
     )
-    .map_err(|e| CliError::new(format!("cannot compile closest hit for `{layout}`: {e}")))?;
+    .map_err(|e| {
+        CliError::new(format!(
+            "cannot compile {} for `{}`: {e}",
+            p.algorithm, p.layout
+        ))
+    })?;
     eprintln!(
         "scion: compiled in {:.3} s",
         code.compile_time.as_secs_f64()

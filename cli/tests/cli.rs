@@ -560,3 +560,124 @@ fn library_scenes_by_name_and_compressed_scenes_load() {
         text(&o.stderr)
     );
 }
+
+/// A layout the library does not have, written by a user: PBRT's fields in another order
+/// (count first, then the overlay, then the box), 64-byte aligned nodes.
+const USER_LAYOUT: &str = "
+layout Mine(I: u32) {
+  P: u32; N: u32; primitives: Triangle[P];
+  group nodes[size=N, align=64] by I {
+    nprims: u16;
+    2;
+    split nprims {
+      > 0 -> Leaf { p_o: u32; data = primitives[p_o : p_o + nprims]; };
+      0 -> Interior { c_o: u32; left = I + 1; right = I + c_o; };
+    };
+    bounds: AABB;
+  };
+};
+build Mine[order=pre] {
+  build Interior(bounds: AABB, left: BVH, right: BVH) {
+    build bounds; build nprims = 0; build left;
+    let R: u32 = build right;
+    build c_o = R - this;
+    return this;
+  };
+  build Leaf(bounds: AABB, nprims: u16, data: Triangle[nprims]) {
+    build bounds; build nprims; build p_o = append(data, nprims);
+    return this;
+  };
+};
+";
+
+#[test]
+fn any_layout_file_traces_to_the_reference_hits() {
+    let dir = scratch("user_layout");
+    let scene = write(&dir, "soup.obj", &soup(300));
+    let layout = write(&dir, "mine.scion", USER_LAYOUT);
+    let reference = dir.join("ref.hits").display().to_string();
+    let o = scion(&[
+        "trace", "--scene", &scene, "--n", "4096", "--runs", "1", "-o", &reference,
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    for backend in ["jit", "llvm"] {
+        let out = dir.join(format!("{backend}.hits")).display().to_string();
+        let o = scion(&[
+            "trace",
+            "--scene",
+            &scene,
+            "--n",
+            "4096",
+            "--runs",
+            "1",
+            "--backend",
+            backend,
+            "--layout",
+            &layout,
+            "-o",
+            &out,
+        ]);
+        assert!(o.status.success(), "{backend}: {}", text(&o.stderr));
+        assert!(text(&o.stdout).contains("Mine"), "{}", text(&o.stdout));
+        assert_eq!(
+            read_hits(&out).unwrap(),
+            read_hits(&reference).unwrap(),
+            "{backend}"
+        );
+    }
+    // The library's algorithms by name, a layout and algorithm that do not fit, a missing
+    // layout in a file.
+    let o = scion(&[
+        "trace",
+        "--scene",
+        &scene,
+        "--n",
+        "64",
+        "--runs",
+        "1",
+        "--backend",
+        "jit",
+        "--layout",
+        &layout,
+        "--algorithm",
+        "closest_hit",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let o = scion(&[
+        "trace",
+        "--scene",
+        &scene,
+        "--runs",
+        "1",
+        "--backend",
+        "jit",
+        "--layout",
+        &layout,
+        "--algorithm",
+        "closest_hit_dop14",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        text(&o.stderr).contains("realizes `BVH`"),
+        "{}",
+        text(&o.stderr)
+    );
+    let pick = format!("{layout}:Yours");
+    let o = scion(&[
+        "trace",
+        "--scene",
+        &scene,
+        "--runs",
+        "1",
+        "--backend",
+        "jit",
+        "--layout",
+        &pick,
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        text(&o.stderr).contains("declares no layout `Yours`"),
+        "{}",
+        text(&o.stderr)
+    );
+}

@@ -9,7 +9,7 @@
 use crate::contract::LayoutBackend;
 use crate::gpu_emu::EmulatedBackend;
 use crate::jit::{Codegen, JitClosestHit, JIT_OPT_LEVEL};
-use crate::mem_interp::LIBRARY_LAYOUTS;
+use crate::mem_interp::library_layouts;
 use crate::oracle::ClosestHit;
 use crate::quantized::Boxes;
 use scion_runtime::batch::BatchDriver;
@@ -96,7 +96,7 @@ impl BackendKind {
                 },
             }),
             BackendKind::Llvm { stem, stack } => {
-                let &(_, layout, _) = LIBRARY_LAYOUTS
+                let &(_, layout, _) = library_layouts()
                     .iter()
                     .find(|l| l.0 == stem)
                     .ok_or_else(|| format!("no library layout `{stem}`"))?;
@@ -113,7 +113,7 @@ impl BackendKind {
                 })
             }
             BackendKind::GpuEmulated { stem, stack } => {
-                let &(_, layout, boxes) = LIBRARY_LAYOUTS
+                let &(_, layout, boxes) = library_layouts()
                     .iter()
                     .find(|l| l.0 == stem)
                     .ok_or_else(|| format!("no library layout `{stem}`"))?;

@@ -10,9 +10,12 @@
 //! - [`contract`]: the host side of the runtime contract (`@L.sizes`, aligned buffers,
 //!   `@L.build`, batch entries over blocks of 64, statuses with the failing ray's index) for
 //!   code specialized to a layout.
-//! - [`mem_interp`]: the library layouts' sources ([`mem_interp::LIBRARY_LAYOUTS`]) and closest
+//! - [`mem_interp`]: the library layouts' sources ([`mem_interp::library_layouts`]) and closest
 //!   hit specialized to each of them (`tree`+`mem` level), run by the interpreter over its byte
 //!   memory through that contract.
+//! - [`library`]: the library's layouts and algorithms as a registry (found by `build.rs`,
+//!   described by the front end), and what `--layout` / `--algorithm` name: a library name or
+//!   any `.scion` file.
 //! - [`jit`]: closest hit specialized to each library layout, lowered to `lo` and compiled by
 //!   Cranelift or LLVM, as a [`contract::LayoutCode`].
 //! - [`gpu_emu`]: the GPU pipeline of `scion-cuda` emulated on the CPU: the GPU kernels
@@ -23,6 +26,7 @@ pub mod backend;
 pub mod contract;
 pub mod gpu_emu;
 pub mod jit;
+pub mod library;
 pub mod mem_interp;
 pub mod oracle;
 pub mod quantized;

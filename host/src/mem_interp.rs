@@ -11,9 +11,9 @@
 //! buffers (fresh counters) places every node at the same place again and returns it (index 0
 //! for `by I` layouts in pre-order, an address for `ptr` layouts).
 //!
-//! It also holds the library's layouts ([`LIBRARY_LAYOUTS`], [`layout_source`],
-//! [`layout_boxes`]), which the JIT ([`crate::jit`]) and the GPU path of `scion trace` compile
-//! too.
+//! It also gives the library's closest-hit layouts ([`library_layouts`], [`layout_source`],
+//! [`layout_boxes`], derived from `library/layouts` by [`crate::library`]), which the JIT
+//! ([`crate::jit`]) and the GPU path of `scion trace` compile too.
 
 use crate::backend::Backend;
 use crate::oracle::{closest_hits_in, in_threads, tree_depth, CLOSEST_HIT, CLOSEST_HIT_NAME};
@@ -32,21 +32,32 @@ use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Hit, Ray, Triangle};
 use std::time::{Duration, Instant};
 
-/// The library's layouts: file stem, layout name, and how the layout stores boxes (a
-/// quantized layout's bit-for-bit reference is the traversal of [`DecodedTree::decoded_tree`](crate::quantized::DecodedTree::decoded_tree)).
-pub const LIBRARY_LAYOUTS: &[(&str, &str, Boxes)] = &[
-    ("pbrt", "LinearBVH", Boxes::Exact),
-    ("ptr", "PtrBVH", Boxes::Exact),
-    ("pbrt_align16", "PbrtAlign16", Boxes::Exact),
-    ("pbrt_soaos", "PbrtSoAoS", Boxes::Exact),
-    ("pbrt_q16", "PbrtQ16", Boxes::GlobalQ16),
-    ("sg_eq", "SgEq", Boxes::SnappedQ10),
-];
+/// The library's layouts that the prelude's `closest_hit` traverses (those realizing `BVH`):
+/// file stem, layout name, and how the layout stores boxes (a quantized layout's bit-for-bit
+/// reference is the traversal of [`DecodedTree::decoded_tree`](crate::quantized::DecodedTree::decoded_tree)).
+/// Derived from `library/layouts` by [`crate::library`], sorted by stem; a new file there is a
+/// new entry.
+pub fn library_layouts() -> &'static [(&'static str, &'static str, Boxes)] {
+    static LAYOUTS: std::sync::OnceLock<Vec<(&'static str, &'static str, Boxes)>> =
+        std::sync::OnceLock::new();
+    LAYOUTS.get_or_init(|| {
+        crate::library::LAYOUT_FILES
+            .iter()
+            .filter_map(|&(stem, _)| {
+                let r = crate::library::resolve(stem, None).ok()?;
+                (r.program.algorithm == crate::jit::ALGORITHM).then(|| {
+                    let name: &'static str = Box::leak(r.program.layout.into_boxed_str());
+                    (stem, name, r.boxes)
+                })
+            })
+            .collect()
+    })
+}
 
 /// How the library layout named `layout` (or with file stem `layout`) stores boxes;
 /// [`Boxes::Exact`] for any other layout.
 pub fn layout_boxes(layout: &str) -> Boxes {
-    LIBRARY_LAYOUTS
+    library_layouts()
         .iter()
         .find(|l| l.0 == layout || l.1 == layout)
         .map_or(Boxes::Exact, |l| l.2)
@@ -54,15 +65,7 @@ pub fn layout_boxes(layout: &str) -> Boxes {
 
 /// The source of a library layout by file stem.
 pub fn layout_source(stem: &str) -> Option<&'static str> {
-    Some(match stem {
-        "pbrt" => include_str!("../../library/layouts/pbrt.scion"),
-        "ptr" => include_str!("../../library/layouts/ptr.scion"),
-        "pbrt_align16" => include_str!("../../library/layouts/pbrt_align16.scion"),
-        "pbrt_soaos" => include_str!("../../library/layouts/pbrt_soaos.scion"),
-        "pbrt_q16" => include_str!("../../library/layouts/pbrt_q16.scion"),
-        "sg_eq" => include_str!("../../library/layouts/sg_eq.scion"),
-        _ => return None,
-    })
+    crate::library::layout_file(stem).map(|(_, text)| text)
 }
 
 /// Closest hit specialized to one layout, at the `mem` level.

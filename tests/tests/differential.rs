@@ -21,7 +21,7 @@ mod common;
 use scion_host::backend::{Backend, BackendKind};
 use scion_host::contract::LayoutBackend;
 use scion_host::jit::JitClosestHit;
-use scion_host::mem_interp::{MemInterpBackend, LIBRARY_LAYOUTS};
+use scion_host::mem_interp::{library_layouts, MemInterpBackend};
 use scion_host::oracle::tree_depth;
 use scion_host::quantized::{Boxes, DecodedTree};
 use scion_runtime::batch::BatchDriver;
@@ -99,7 +99,7 @@ fn backends() -> Vec<Box<dyn Backend>> {
         LayoutBackend::new(Box::new(common::Flat32), 2).expect("threads"),
     ));
     // Closest hit specialized to each library layout, interpreted at the mem level.
-    for &(stem, name, _) in LIBRARY_LAYOUTS {
+    for &(stem, name, _) in library_layouts() {
         // Debug builds interpret slowly: pbrt only.
         if release() || stem == "pbrt" {
             let b = MemInterpBackend::new(stem, name, 2).unwrap_or_else(|e| panic!("{stem}: {e}"));
@@ -109,7 +109,7 @@ fn backends() -> Vec<Box<dyn Backend>> {
     // The same, lowered to `lo` and compiled by Cranelift: every layout, every row, with
     // a stack of 256 entries so that the deepest hard case (depth 69) is compared too (the
     // default 64 and its overflow status are tested in tests/jit.rs and the CLI tests).
-    for &(stem, name, _) in LIBRARY_LAYOUTS {
+    for &(stem, name, _) in library_layouts() {
         let code = JitClosestHit::compile(stem, name, Some(JIT_STACK))
             .unwrap_or_else(|e| panic!("jit {stem}: {e}"));
         all.push(Box::new(

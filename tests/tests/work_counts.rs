@@ -7,7 +7,7 @@
 //! layout). So `scion trace --stats`, which reports the reference's counters, reports what the
 //! generated code does, node for node.
 
-use scion_host::mem_interp::{MemClosestHit, LIBRARY_LAYOUTS};
+use scion_host::mem_interp::{library_layouts, MemClosestHit};
 use scion_host::quantized::DecodedTree;
 use scion_runtime::reference::{closest_hit_tree_stats, TraversalStats};
 use scion_runtime::scene::gen;
@@ -20,7 +20,7 @@ fn generated_code_visits_what_the_reference_counts() {
     let mut rays = RayKind::Primary.rays(&scene, 100, 3);
     rays.extend(RayKind::Secondary.rays(&scene, 100, 4));
     rays.extend(RayKind::Axis.rays(&scene, 50, 5));
-    for &(stem, name, boxes) in LIBRARY_LAYOUTS
+    for &(stem, name, boxes) in library_layouts()
         .iter()
         .filter(|l| ["pbrt", "ptr", "pbrt_q16"].contains(&l.0))
     {

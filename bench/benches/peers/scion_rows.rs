@@ -8,7 +8,7 @@ use scion_bench::pbrt_kernel::PbrtKernel;
 use scion_bench::{Contender, Workload};
 use scion_host::contract::{LayoutCode, Packed};
 use scion_host::jit::{Codegen, JitClosestHit};
-use scion_host::mem_interp::{Program, LIBRARY_LAYOUTS};
+use scion_host::mem_interp::{library_layouts, Program};
 use scion_runtime::batch::BatchDriver;
 use std::time::Instant;
 
@@ -19,15 +19,17 @@ fn progress(s: &str) {
 /// The library layout called `layout` (`pbrt`, `pbrt-q16`, ...): file stem and layout name.
 fn library_layout(layout: &str) -> Result<(&'static str, &'static str), String> {
     let stem = layout.replace('-', "_");
-    LIBRARY_LAYOUTS
+    library_layouts()
         .iter()
         .find(|l| l.0 == stem)
         .map(|l| (l.0, l.1))
         .ok_or_else(|| format!("unknown library layout `{layout}`"))
 }
 
-/// What `--layouts` names: a library layout (`pbrt`, `pbrt-q16`, ...), or a closest hit in
-/// files as `PATH.scion[+PATH.scion...]:LAYOUT:ENTRY`
+/// What `--layouts` names: a library layout (`pbrt`, `pbrt-q16`, `hair-bvh`, ...) or a layout
+/// file (`PATH.scion[:LAYOUT]`), each with the closest hit over its type
+/// (`scion_host::library::resolve`), or a closest hit in files as
+/// `PATH.scion[+PATH.scion...]:LAYOUT:ENTRY`
 /// (`lit-tests/Inputs/bvh8_layout.scion:Bvh8:closest_hit8`,
 /// `library/algorithms/closest_hit_dop14.scion+library/layouts/dop14_split.scion:DopSplit:closest_hit_dop14`).
 fn program_of(layout: &str) -> Result<Program, String> {
@@ -43,8 +45,7 @@ fn program_of(layout: &str) -> Result<Program, String> {
             algorithm: entry.to_string(),
         });
     }
-    let (stem, lname) = library_layout(layout)?;
-    Program::library(stem, lname)
+    Ok(scion_host::library::resolve(layout, None)?.program)
 }
 
 /// A layout's generated code as a contender: packed once (the pack time is its setup), then

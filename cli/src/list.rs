@@ -1,0 +1,51 @@
+//! `scion layouts`: the library's layouts as the registry (`scion_host::library`) finds them,
+//! one line each: the name `--layout` takes, the layout's name in its source, the sum type it
+//! realizes, the closest hit `scion trace` compiles for it, and how it stores boxes. `--names`
+//! prints only the names (for scripts), `--gpu` only the layouts the GPU path runs.
+
+use crate::io::outln;
+use crate::CliError;
+use scion_host::library;
+
+/// Runs `scion layouts`.
+pub fn run(args: &crate::LayoutsArgs) -> Result<(), CliError> {
+    let gpu: Vec<&str> = scion_host::mem_interp::library_layouts()
+        .iter()
+        .map(|l| l.0)
+        .collect();
+    if !args.names {
+        outln!(
+            "{:<20} {:<18} {:<8} {:<18} boxes",
+            "name",
+            "layout",
+            "type",
+            "closest hit"
+        );
+    }
+    for &(stem, _) in library::LAYOUT_FILES {
+        if args.gpu && !gpu.contains(&stem) {
+            continue;
+        }
+        let name = library::layout_name(stem);
+        if args.names {
+            outln!("{name}");
+            continue;
+        }
+        match library::resolve(stem, None) {
+            Ok(r) => {
+                outln!(
+                    "{name:<20} {:<18} {:<8} {:<18} {}",
+                    r.program.layout,
+                    r.tree_type,
+                    r.program.algorithm,
+                    r.boxes.name()
+                );
+            }
+            Err(e) => outln!(
+                "{name:<20} (does not compile: {})",
+                e.lines().next().unwrap_or("")
+            ),
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,411 @@
+//! The library as a registry: every `library/layouts/*.scion` and `library/algorithms/*.scion`
+//! (found by `build.rs`, so a new layout or algorithm is one file and no Rust), and what a
+//! command line's `--layout` and `--algorithm` name: a library name or any `.scion` file.
+//!
+//! What the files declare is read by the front end, not kept in lists: [`declared`] compiles
+//! files with the prelude to the `tree` level and reads the module's layout records (each
+//! layout with the sum type the type checker chose for it), the closest-hit functions
+//! (`(ray: Ray, tree: T, best: mut (f32, u32))`, by the tree type `T` they traverse) and, from
+//! a layout's build functions, how it stores boxes (a build that quantizes with
+//! `quant_lo`/`quant_hi` is [`Boxes::GlobalQ16`], with `sg_code_up`/`sg_code_down`
+//! [`Boxes::SnappedQ10`]; the decoded tree is then the bit-for-bit reference). [`resolve`]
+//! pairs a layout with the closest hit over its type.
+//!
+//! Names: a library layout's name is its file stem with `-` for `_` (`pbrt_q16.scion` is
+//! `pbrt-q16`); an algorithm's is its file stem (`closest_hit_dop14`) or a closest-hit
+//! function's name. A file is `PATH.scion`, optionally `PATH.scion:NAME` to pick one of several
+//! layouts (or closest hits) it declares.
+
+use crate::mem_interp::{compile_program, Program};
+use crate::quantized::Boxes;
+use scion_compiler::driver::cli::Emit;
+use scion_compiler::frontend::PassOptions;
+use scion_ir::op::OpKind;
+use scion_ir::types::Type;
+use scion_ir::Module;
+
+include!(concat!(env!("OUT_DIR"), "/library_files.rs"));
+
+/// A library layout's command-line name: its file stem with `-` for `_`.
+pub fn layout_name(stem: &str) -> String {
+    stem.replace('_', "-")
+}
+
+/// The library layouts' command-line names, sorted by file stem.
+pub fn layout_names() -> Vec<String> {
+    LAYOUT_FILES.iter().map(|(s, _)| layout_name(s)).collect()
+}
+
+/// The library algorithms' names (file stems), sorted.
+pub fn algorithm_names() -> Vec<&'static str> {
+    ALGORITHM_FILES.iter().map(|(s, _)| *s).collect()
+}
+
+/// The library layout file called `name` (`pbrt-q16` or its stem `pbrt_q16`): stem and text.
+pub fn layout_file(name: &str) -> Option<(&'static str, &'static str)> {
+    let stem = name.replace('-', "_");
+    LAYOUT_FILES.iter().find(|(s, _)| *s == stem).copied()
+}
+
+/// The library algorithm file with stem `stem`: stem and text.
+pub fn algorithm_file(stem: &str) -> Option<(&'static str, &'static str)> {
+    ALGORITHM_FILES.iter().find(|(s, _)| *s == stem).copied()
+}
+
+/// A layout declared in a set of files.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DeclaredLayout {
+    /// The layout's name in the source (`LinearBVH`).
+    pub name: String,
+    /// The sum type it realizes (`BVH`), as the type checker chose it.
+    pub tree_type: Option<String>,
+    /// How its build stores boxes.
+    pub boxes: Boxes,
+}
+
+/// What a set of files declares (with the prelude).
+#[derive(Clone, Debug, Default)]
+pub struct Declared {
+    /// Layouts, in declaration order.
+    pub layouts: Vec<DeclaredLayout>,
+    /// Closest-hit functions `(ray: Ray, tree: T, best: mut (f32, u32))`: name and `T`.
+    pub closest_hits: Vec<(String, String)>,
+}
+
+/// Reads what `files` (name, text) declare, through the front end; errors are rendered
+/// diagnostics.
+pub fn declared(files: &[(String, String)]) -> Result<Declared, String> {
+    let program = Program {
+        files: files.to_vec(),
+        layout: String::new(),
+        algorithm: String::new(),
+    };
+    let (module, _, _) = compile_program(&program, Emit::Tree, &[], &PassOptions::default())?;
+    Ok(Declared {
+        layouts: module
+            .layouts
+            .iter()
+            .map(|l| DeclaredLayout {
+                name: l.name.clone(),
+                tree_type: l.adt.clone(),
+                boxes: build_boxes(&module, &l.name),
+            })
+            .collect(),
+        closest_hits: closest_hits(&module),
+    })
+}
+
+/// How layout `layout`'s build functions (attribute `build_of`) store boxes, by the quantizing
+/// intrinsics they call.
+fn build_boxes(module: &Module, layout: &str) -> Boxes {
+    let mut boxes = Boxes::Exact;
+    for &f in &module.func_order {
+        let func = &module.funcs[f];
+        if func.attrs.get("build_of").and_then(|a| a.as_str()) != Some(layout) {
+            continue;
+        }
+        for op in scion_ir::walk::region_ops(module, func.body) {
+            let op = &module.ops[op];
+            if !matches!(op.kind, OpKind::Tree(scion_ir::tree::Op::Intrinsic)) {
+                continue;
+            }
+            match op.str_attr("name") {
+                Some("quant_lo" | "quant_hi") => boxes = Boxes::GlobalQ16,
+                Some("sg_code_up" | "sg_code_down") => boxes = Boxes::SnappedQ10,
+                _ => {}
+            }
+        }
+    }
+    boxes
+}
+
+/// The module's closest-hit functions: name and the tree type they traverse.
+fn closest_hits(module: &Module) -> Vec<(String, String)> {
+    let best = "!tree.ref<tuple<f32, u32>>";
+    module
+        .func_order
+        .iter()
+        .filter_map(|&f| {
+            let func = &module.funcs[f];
+            let [ray, tree, out] = func.params[..] else {
+                return None;
+            };
+            let ray_ok = matches!(module.types.get(ray), Type::Adt(n) if n == "Ray");
+            let out_ok = module.types.display(out).to_string() == best;
+            match module.types.get(tree) {
+                Type::Adt(t) if ray_ok && out_ok && func.results.is_empty() => {
+                    Some((func.name.clone(), t.clone()))
+                }
+                _ => None,
+            }
+        })
+        .collect()
+}
+
+/// A closest-hit program `--layout` and `--algorithm` name.
+#[derive(Clone, Debug)]
+pub struct Resolved {
+    /// The files, the layout's name and the closest hit's name.
+    pub program: Program,
+    /// How the layout stores boxes (its reference is the decoded tree when quantized).
+    pub boxes: Boxes,
+    /// The sum type the layout realizes and the closest hit traverses.
+    pub tree_type: String,
+    /// The library layout's file stem, `None` for a layout from a file.
+    pub library_stem: Option<&'static str>,
+}
+
+/// True when `arg` names a file rather than a library entry.
+fn is_file(arg: &str) -> bool {
+    arg.ends_with(".scion") || arg.contains('/') || arg.contains(".scion:")
+}
+
+/// `PATH.scion[:NAME]` -> (path, name).
+fn split_file(arg: &str) -> (&str, Option<&str>) {
+    match arg.rsplit_once(".scion:") {
+        Some((path, name)) => (&arg[..path.len() + ".scion".len()], Some(name)),
+        None => (arg, None),
+    }
+}
+
+fn read(path: &str) -> Result<(String, String), String> {
+    std::fs::read_to_string(path)
+        .map(|text| (path.to_string(), text))
+        .map_err(|e| format!("cannot read {path}: {e}"))
+}
+
+/// Resolves `--layout layout` and `--algorithm algorithm` (`None`: the closest hit over the
+/// layout's tree type, from the library) to a program. Errors say what was looked for and
+/// what exists.
+pub fn resolve(layout: &str, algorithm: Option<&str>) -> Result<Resolved, String> {
+    // The layout's file.
+    let (layout_file, layout_pick, library_stem) = if is_file(layout) {
+        let (path, pick) = split_file(layout);
+        (read(path)?, pick, None)
+    } else {
+        let (stem, text) = layout_file(layout).ok_or_else(|| {
+            format!(
+                "unknown layout `{layout}`: the library's are {}; or give a .scion file",
+                layout_names().join(", ")
+            )
+        })?;
+        (
+            (format!("library/layouts/{stem}.scion"), text.to_string()),
+            None,
+            Some(stem),
+        )
+    };
+    // The algorithm files.
+    let (algorithm_files, entry_pick): (Vec<(String, String)>, Option<String>) = match algorithm {
+        Some(a) if is_file(a) => {
+            let (path, pick) = split_file(a);
+            (vec![read(path)?], pick.map(String::from))
+        }
+        Some(a) => match algorithm_file(a) {
+            Some((stem, text)) => (
+                vec![(format!("library/algorithms/{stem}.scion"), text.to_string())],
+                None,
+            ),
+            // A closest-hit function of some library file.
+            None => (library_algorithms(), Some(a.to_string())),
+        },
+        None => (library_algorithms(), None),
+    };
+    let mut files = algorithm_files;
+    if !files.iter().any(|(n, _)| *n == layout_file.0) {
+        files.push(layout_file.clone());
+    }
+    let found = declared(&files)?;
+    // The layout: the one the layout file declares (or the one picked).
+    let own = declared_in(&layout_file.1, &found.layouts);
+    let chosen = match layout_pick {
+        Some(name) => found
+            .layouts
+            .iter()
+            .find(|l| l.name == name)
+            .ok_or_else(|| format!("{} declares no layout `{name}`", layout_file.0))?,
+        None => match own[..] {
+            [one] => one,
+            [] => return Err(format!("{} declares no layout", layout_file.0)),
+            _ => {
+                let names: Vec<&str> = own.iter().map(|l| l.name.as_str()).collect();
+                return Err(format!(
+                    "{} declares several layouts ({}); pick one as {}:NAME",
+                    layout_file.0,
+                    names.join(", "),
+                    layout_file.0
+                ));
+            }
+        },
+    };
+    let tree_type = chosen.tree_type.clone().ok_or_else(|| {
+        format!(
+            "layout `{}`: the type checker could not decide which sum type it realizes",
+            chosen.name
+        )
+    })?;
+    // The closest hit over that type.
+    let over: Vec<&(String, String)> = found
+        .closest_hits
+        .iter()
+        .filter(|(_, t)| *t == tree_type)
+        .collect();
+    // With an algorithm file of a single closest hit, that one (checked against the type).
+    let entry_pick = match (&entry_pick, algorithm, &found.closest_hits[..]) {
+        (None, Some(_), [(only, _)]) => Some(only.clone()),
+        _ => entry_pick,
+    };
+    let entry = match &entry_pick {
+        Some(name) => {
+            let (_, t) = found
+                .closest_hits
+                .iter()
+                .find(|(f, _)| f == name)
+                .ok_or_else(|| {
+                    format!(
+                        "no closest hit `{name}` (a function (ray: Ray, tree: T, best: mut (f32, \
+                         u32))); the library's algorithms are {}",
+                        algorithm_names().join(", ")
+                    )
+                })?;
+            if *t != tree_type {
+                return Err(format!(
+                    "closest hit `{name}` traverses `{t}`, but layout `{}` realizes `{tree_type}`",
+                    chosen.name
+                ));
+            }
+            name.clone()
+        }
+        None => match over[..] {
+            [(one, _)] => one.clone(),
+            [] => {
+                return Err(format!(
+                    "no closest hit traverses `{tree_type}`, the type layout `{}` realizes; give \
+                     one with --algorithm FILE.scion",
+                    chosen.name
+                ))
+            }
+            _ => match over.iter().find(|(f, _)| f == "closest_hit") {
+                Some((f, _)) => f.clone(),
+                None => {
+                    let names: Vec<&str> = over.iter().map(|(f, _)| f.as_str()).collect();
+                    return Err(format!(
+                        "several closest hits traverse `{tree_type}` ({}); pick one with \
+                         --algorithm",
+                        names.join(", ")
+                    ));
+                }
+            },
+        },
+    };
+    // Compile only the file that defines the entry, the layout's file and the files the
+    // layout's type comes from (kept whole when the entry's file cannot be told by its text).
+    let defines = |text: &str, what: &str| {
+        text.lines().any(|l| {
+            let l = l.trim_start();
+            l.strip_prefix(what).is_some_and(|rest| {
+                rest.starts_with('(') || rest.starts_with(' ') || rest.starts_with('=')
+            })
+        })
+    };
+    let needed: Vec<(String, String)> = files
+        .iter()
+        .filter(|(n, text)| {
+            *n == layout_file.0
+                || defines(text, &format!("func {entry}"))
+                || defines(text, &format!("type {tree_type}"))
+        })
+        .cloned()
+        .collect();
+    let program = Program {
+        files: needed,
+        layout: chosen.name.clone(),
+        algorithm: entry,
+    };
+    Ok(Resolved {
+        program,
+        boxes: chosen.boxes,
+        tree_type,
+        library_stem,
+    })
+}
+
+/// The library's algorithm files, as (name, text).
+fn library_algorithms() -> Vec<(String, String)> {
+    ALGORITHM_FILES
+        .iter()
+        .map(|(s, t)| (format!("library/algorithms/{s}.scion"), t.to_string()))
+        .collect()
+}
+
+/// The layouts of `all` whose declaration is in `text`.
+fn declared_in<'a>(text: &str, all: &'a [DeclaredLayout]) -> Vec<&'a DeclaredLayout> {
+    all.iter()
+        .filter(|l| {
+            text.lines().any(|line| {
+                line.trim_start()
+                    .starts_with(&format!("layout {}(", l.name))
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_library_files_are_found() {
+        let names = layout_names();
+        for n in [
+            "pbrt",
+            "ptr",
+            "pbrt-q16",
+            "sg-eq",
+            "hair-bvh",
+            "dop14-split",
+        ] {
+            assert!(names.contains(&n.to_string()), "{n} in {names:?}");
+        }
+        assert!(algorithm_names().contains(&"closest_hit"));
+    }
+
+    #[test]
+    fn every_library_layout_pairs_with_the_closest_hit_over_its_type() {
+        let want = [
+            ("pbrt", "LinearBVH", "closest_hit", Boxes::Exact),
+            ("pbrt-q16", "PbrtQ16", "closest_hit", Boxes::GlobalQ16),
+            ("sg-eq", "SgEq", "closest_hit", Boxes::SnappedQ10),
+            ("dop14-split", "DopSplit", "closest_hit_dop14", Boxes::Exact),
+            ("hair-bvh", "HairBVH", "closest_hit_hair", Boxes::Exact),
+        ];
+        for (name, layout, entry, boxes) in want {
+            let r = resolve(name, None).unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert_eq!(r.program.layout, layout);
+            assert_eq!(r.program.algorithm, entry);
+            assert_eq!(r.boxes, boxes, "{name}");
+            assert!(r.library_stem.is_some());
+        }
+        for stem in LAYOUT_FILES.iter().map(|(s, _)| s) {
+            resolve(stem, None).unwrap_or_else(|e| panic!("{stem}: {e}"));
+        }
+    }
+
+    #[test]
+    fn bad_names_and_mismatches_are_explained() {
+        let e = resolve("btree", None).unwrap_err();
+        assert!(
+            e.contains("unknown layout `btree`") && e.contains("pbrt-q16"),
+            "{e}"
+        );
+        let e = resolve("pbrt", Some("closest_hit_hair")).unwrap_err();
+        assert!(
+            e.contains("traverses `Hair`") && e.contains("realizes `BVH`"),
+            "{e}"
+        );
+        let e = resolve("pbrt", Some("nope")).unwrap_err();
+        assert!(e.contains("no closest hit `nope`"), "{e}");
+        let e = resolve("/nonexistent/x.scion", None).unwrap_err();
+        assert!(e.contains("cannot read /nonexistent/x.scion"), "{e}");
+    }
+}
