@@ -13,6 +13,7 @@
 mod gpu;
 mod io;
 mod list;
+mod run;
 mod trace;
 
 use clap::{Parser, Subcommand, ValueEnum};
@@ -47,9 +48,72 @@ enum Command {
     /// comment lines naming the layout and its buffers), to run with `scion trace --device gpu
     /// --ptx` or `scion-gpu` (docs/gpu.md).
     Ptx(PtxArgs),
+    /// Run any algorithm of a known query kind (closest hit, any hit, closest point) compiled
+    /// for a layout on a scene, timed by the paper's method and checked against its reference.
+    Run(RunArgs),
     /// List the library's layouts (library/layouts/*.scion): the name --layout takes, the
     /// layout, the sum type it realizes, the closest hit compiled for it, how it stores boxes.
     Layouts(LayoutsArgs),
+}
+
+/// The code generators of `scion run`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum RunBackend {
+    /// Cranelift.
+    Jit,
+    /// LLVM's JIT at -O3 for this machine's CPU.
+    Llvm,
+}
+
+/// Arguments of `scion run`.
+#[derive(clap::Args, Debug)]
+pub struct RunArgs {
+    /// What to run: a query kind (closest-hit, any-hit, closest-point: the library's entry of
+    /// that kind over the layout's tree type: closest_hit, occluded, closest_point_query), a
+    /// library function of a known kind (closest_point_best_first), or `PATH.scion[:FUNCTION]`.
+    #[arg(long, value_name = "KIND|FUNCTION|PATH.scion")]
+    pub algorithm: String,
+    /// The scene: an OBJ file (plain or `.obj.gz`) or a library scene's name.
+    #[arg(long, value_name = "PATH.obj|NAME")]
+    pub scene: PathBuf,
+    /// The layout: a library layout's name (scion layouts) or `PATH.scion[:NAME]`.
+    #[arg(long, value_name = "NAME|PATH.scion")]
+    pub layout: Option<String>,
+    /// The code generator.
+    #[arg(long, value_enum, default_value = "llvm")]
+    pub backend: RunBackend,
+    /// Read the queries from this file instead of generating them: rays (32-byte records) for
+    /// hits, points (12-byte records: f32 x, y, z) for closest points (docs/formats.md).
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["n", "seed", "rays"])]
+    pub queries_file: Option<PathBuf>,
+    /// How many queries to generate (points uniform in the scene's box, or rays).
+    #[arg(long, default_value_t = 1 << 16, value_parser = clap::value_parser!(u64).range(1..=1 << 32))]
+    pub n: u64,
+    /// Seed of the query generator.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Which rays to generate for hit queries.
+    #[arg(long, value_enum, default_value = "primary")]
+    pub rays: RaysArg,
+    /// Threads (0 = one per core; at most 8 per core).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Timed runs (9: the paper's method; 1: one run).
+    #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub runs: u32,
+    /// Tree builder.
+    #[arg(long, value_enum, default_value = "sah")]
+    pub builder: BuilderArg,
+    /// Largest leaf of the SAH builder (1..=15).
+    #[arg(long, default_value_t = 15, value_parser = clap::value_parser!(u32).range(1..=15))]
+    pub leaf_size: u32,
+    /// Entries of the traversal's explicit stack (default 64).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
+    pub stack_size: Option<u32>,
+    /// Write the result records here: 8 bytes per closest hit (f32 t, u32 id), 4 per any hit
+    /// (u32, nonzero when occluded), 20 per closest point (f32 distance, u32 id, f32 x, y, z).
+    #[arg(short = 'o', long = "output", value_name = "FILE")]
+    pub output: Option<PathBuf>,
 }
 
 /// Arguments of `scion layouts`.
@@ -124,6 +188,17 @@ pub enum RaysArg {
     Secondary,
     /// Origins in the box, axis-parallel directions with signed-zero lanes.
     Axis,
+}
+
+impl RaysArg {
+    /// The name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            RaysArg::Primary => "primary",
+            RaysArg::Secondary => "secondary",
+            RaysArg::Axis => "axis",
+        }
+    }
 }
 
 /// Tree builders.
@@ -233,6 +308,7 @@ fn main() -> ExitCode {
     let result = match &mut cli.command {
         Command::Trace(args) => preflight(args).and_then(|()| trace::run(args)),
         Command::Layouts(args) => list::run(args),
+        Command::Run(args) => preflight_run(args).and_then(|()| run::run(args)),
         Command::Ptx(args) => {
             io::check_output("-o", &args.output, &[]).and_then(|()| gpu::run_ptx(args))
         }
@@ -248,6 +324,26 @@ fn main() -> ExitCode {
             ExitCode::from(if e.usage { 2 } else { 1 })
         }
     }
+}
+
+/// What `scion run` checks before the long work: the scene, the threads, the output.
+fn preflight_run(args: &mut RunArgs) -> Result<(), CliError> {
+    args.scene = scion_runtime::scene::manifest::resolve(&args.scene)
+        .map_err(|e| CliError::new(format!("--scene {}: {e}", args.scene.display())))?;
+    io::check_threads(args.threads)?;
+    let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--scene", &args.scene)];
+    if let Some(q) = &args.queries_file {
+        inputs.push(("--queries-file", q));
+    }
+    if let Some(out) = &args.output {
+        io::check_output("-o", out, &inputs)?;
+    }
+    // Queries (at most a ray's 32 bytes), results (at most 20) and the reference's answers.
+    let n = match &args.queries_file {
+        Some(path) => std::fs::metadata(path).map_or(0, |m| m.len() / 12),
+        None => args.n,
+    };
+    io::check_memory(&format!("{n} queries and their answers"), n * (32 + 2 * 20))
 }
 
 /// What `scion trace` checks before the long work: the scene (a path or a library scene's

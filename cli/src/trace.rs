@@ -21,7 +21,7 @@ use scion_host::quantized::{Boxes, DecodedTree};
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::wide::collapse;
 use scion_runtime::bvh::{build_median, build_sah_binned, LogicalNode, LogicalTree, SahOptions};
-use scion_runtime::geom::{Hit, Ray, Triangle};
+use scion_runtime::geom::{Ray, Triangle};
 use scion_runtime::query::{
     axis_rays, hits_checksum, primary_rays_n, read_rays, secondary_rays, write_hits,
 };
@@ -119,10 +119,6 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     })?;
     let load_time = t.elapsed();
 
-    progress(&format!(
-        "building the logical tree of {} triangles",
-        scene.len()
-    ));
     let t = Instant::now();
     let tree = build(&scene, args);
     let build_time = t.elapsed();
@@ -405,11 +401,20 @@ fn jit_code(
 }
 
 pub(crate) fn build(scene: &Scene, args: &TraceArgs) -> LogicalTree {
-    match args.builder {
+    build_with(scene, args.builder, args.leaf_size)
+}
+
+/// The logical tree of `scene` by `builder` (SAH leaves of at most `leaf_size` triangles).
+pub(crate) fn build_with(scene: &Scene, builder: BuilderArg, leaf_size: u32) -> LogicalTree {
+    progress(&format!(
+        "building the logical tree of {} triangles",
+        scene.len()
+    ));
+    match builder {
         BuilderArg::Sah => build_sah_binned(
             &scene.triangles,
             &SahOptions {
-                max_leaf: args.leaf_size as usize,
+                max_leaf: leaf_size as usize,
                 ..SahOptions::default()
             },
         ),
@@ -441,10 +446,10 @@ pub(crate) fn rays(scene: &Scene, args: &TraceArgs) -> Result<Vec<Ray>, CliError
 
 /// Traces once for the hits, then times by the plan of `runs` (the first trace is the
 /// warm-up; with `runs == 1` it is also the one timed run).
-fn timed(
+pub(crate) fn timed<T>(
     runs: u32,
-    mut trace: impl FnMut() -> Result<Vec<Hit>, CliError>,
-) -> Result<(Vec<Hit>, Timing), CliError> {
+    mut trace: impl FnMut() -> Result<T, CliError>,
+) -> Result<(T, Timing), CliError> {
     let t = Instant::now();
     let hits = trace()?;
     let first = t.elapsed();

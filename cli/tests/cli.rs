@@ -681,3 +681,150 @@ fn any_layout_file_traces_to_the_reference_hits() {
         text(&o.stderr)
     );
 }
+
+#[test]
+fn run_answers_every_query_kind_and_checks_it_against_its_reference() {
+    let dir = scratch("run");
+    let scene = write(&dir, "soup.obj", &soup(300));
+    // Closest points, on two layouts: the same answers, written as 20-byte records.
+    let mut files = Vec::new();
+    for layout in ["pbrt", "sg-eq"] {
+        let out = dir.join(format!("{layout}.points")).display().to_string();
+        let o = scion(&[
+            "run",
+            "--algorithm",
+            "closest-point",
+            "--scene",
+            &scene,
+            "--layout",
+            layout,
+            "--n",
+            "500",
+            "--runs",
+            "1",
+            "--backend",
+            "jit",
+            "-o",
+            &out,
+        ]);
+        assert!(o.status.success(), "{layout}: {}", text(&o.stderr));
+        let stdout = text(&o.stdout);
+        assert!(
+            stdout.contains("closest_point_query (closest-point, BVH)"),
+            "{stdout}"
+        );
+        assert!(
+            stdout.contains("identical to brute force on 500 of 500"),
+            "{stdout}"
+        );
+        files.push(std::fs::read(&out).unwrap());
+    }
+    assert_eq!(files[0].len(), 500 * 20);
+    assert_eq!(files[0], files[1]);
+    // The best-first traversal by its name, points from a file.
+    let points = dir.join("in.points");
+    let bytes: Vec<u8> = [[0.5f32, 0.5, 0.5], [2.0, -1.0, 3.0]]
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    std::fs::write(&points, bytes).unwrap();
+    let o = scion(&[
+        "run",
+        "--algorithm",
+        "closest_point_best_first",
+        "--scene",
+        &scene,
+        "--queries-file",
+        &points.display().to_string(),
+        "--runs",
+        "1",
+        "--stack-size",
+        "4096",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stdout).contains("identical to brute force on 2 of 2"),
+        "{}",
+        text(&o.stdout)
+    );
+    // Any hit and closest hit; the closest hits equal scion trace's.
+    let o = scion(&[
+        "run",
+        "--algorithm",
+        "any-hit",
+        "--scene",
+        &scene,
+        "--n",
+        "300",
+        "--runs",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stdout).contains("occluded (any-hit, BVH)"),
+        "{}",
+        text(&o.stdout)
+    );
+    let hits = dir.join("run.hits").display().to_string();
+    let o = scion(&[
+        "run",
+        "--algorithm",
+        "closest-hit",
+        "--scene",
+        &scene,
+        "--n",
+        "300",
+        "--runs",
+        "1",
+        "-o",
+        &hits,
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let traced = dir.join("trace.hits").display().to_string();
+    let o = scion(&[
+        "trace", "--scene", &scene, "--n", "300", "--runs", "1", "-o", &traced,
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert_eq!(read_hits(&hits).unwrap(), read_hits(&traced).unwrap());
+    // Bad requests: no such entry, a points file of the wrong size, a kind the layout's type
+    // has no entry of.
+    let o = scion(&["run", "--algorithm", "nearest", "--scene", &scene]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        text(&o.stderr).contains("not an entry of a known query kind"),
+        "{}",
+        text(&o.stderr)
+    );
+    std::fs::write(&points, [0u8; 13]).unwrap();
+    let o = scion(&[
+        "run",
+        "--algorithm",
+        "closest-point",
+        "--scene",
+        &scene,
+        "--queries-file",
+        &points.display().to_string(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        text(&o.stderr).contains("12-byte points"),
+        "{}",
+        text(&o.stderr)
+    );
+    let o = scion(&[
+        "run",
+        "--algorithm",
+        "closest-point",
+        "--scene",
+        &scene,
+        "--layout",
+        "hair-bvh",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        text(&o.stderr).contains("no closest-point entry traverses `Hair`"),
+        "{}",
+        text(&o.stderr)
+    );
+}

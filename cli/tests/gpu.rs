@@ -158,7 +158,10 @@ fn unknown_layouts_are_errors() {
         err.contains("error: unknown layout `nope` for the GPU"),
         "{err}"
     );
-    assert!(err.contains("library layouts: pbrt, pbrt-align16") && err.contains("sg-eq-align16"), "{err}");
+    assert!(
+        err.contains("library layouts: pbrt, pbrt-align16") && err.contains("sg-eq-align16"),
+        "{err}"
+    );
 }
 
 #[test]

@@ -18,12 +18,15 @@
 //!   any `.scion` file.
 //! - [`jit`]: closest hit specialized to each library layout, lowered to `lo` and compiled by
 //!   Cranelift or LLVM, as a [`contract::LayoutCode`].
+//! - [`entries`]: any algorithm's exported C entries called as a C host calls them, over
+//!   query and result records of the sizes the compiler's ABI computed (`scion run`).
 //! - [`gpu_emu`]: the GPU pipeline of `scion-cuda` emulated on the CPU: the GPU kernels
 //!   compiled for the host (`lo-host-kernels`), launched as grids of host threads.
 //! - [`quantized`]: how a layout stores its boxes, and the decoded tree a quantized layout
 //!   really traverses (its bit-for-bit reference).
 pub mod backend;
 pub mod contract;
+pub mod entries;
 pub mod gpu_emu;
 pub mod jit;
 pub mod library;

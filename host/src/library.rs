@@ -4,12 +4,14 @@
 //!
 //! What the files declare is read by the front end, not kept in lists: [`declared`] compiles
 //! files with the prelude to the `tree` level and reads the module's layout records (each
-//! layout with the sum type the type checker chose for it), the closest-hit functions
-//! (`(ray: Ray, tree: T, best: mut (f32, u32))`, by the tree type `T` they traverse) and, from
-//! a layout's build functions, how it stores boxes (a build that quantizes with
-//! `quant_lo`/`quant_hi` is [`Boxes::GlobalQ16`], with `sg_code_up`/`sg_code_down`
-//! [`Boxes::SnappedQ10`]; the decoded tree is then the bit-for-bit reference). [`resolve`]
-//! pairs a layout with the closest hit over its type.
+//! layout with the sum type the type checker chose for it), the entry functions of a known
+//! [`QueryKind`] (by signature: `(ray: Ray, tree: T, best: mut (f32, u32))` is a closest hit,
+//! `(ray, tree, hit: mut u32)` an any hit, `(p: f32x3, tree, best: mut (f32, u32, f32x3))` a
+//! closest point; each with the tree type `T` it traverses) and, from a layout's build
+//! functions, how it stores boxes (a build that quantizes with `quant_lo`/`quant_hi` is
+//! [`Boxes::GlobalQ16`], with `sg_code_up`/`sg_code_down` [`Boxes::SnappedQ10`]; the decoded
+//! tree is then the bit-for-bit reference). [`resolve_kind`] pairs a layout with an entry of a
+//! kind over its type ([`resolve`]: the closest hit).
 //!
 //! Names: a library layout's name is its file stem with `-` for `_` (`pbrt_q16.scion` is
 //! `pbrt-q16`); an algorithm's is its file stem (`closest_hit_dop14`) or a closest-hit
@@ -63,13 +65,83 @@ pub struct DeclaredLayout {
     pub boxes: Boxes,
 }
 
+/// The kinds of query an entry answers, by its signature `(query, tree: T, result: mut R)`:
+/// what `scion run` knows how to generate, start, check and write.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum QueryKind {
+    /// `(ray: Ray, tree, best: mut (f32, u32))`: the nearest hit's distance and primitive.
+    ClosestHit,
+    /// `(ray: Ray, tree, hit: mut u32)`: whether anything is hit within the ray's range.
+    AnyHit,
+    /// `(p: f32x3, tree, best: mut (f32, u32, f32x3))`: the nearest surface point.
+    ClosestPoint,
+}
+
+impl QueryKind {
+    /// Every kind.
+    pub const ALL: [QueryKind; 3] = [
+        QueryKind::ClosestHit,
+        QueryKind::AnyHit,
+        QueryKind::ClosestPoint,
+    ];
+
+    /// The command-line name (`closest-hit`, `any-hit`, `closest-point`).
+    pub fn name(self) -> &'static str {
+        match self {
+            QueryKind::ClosestHit => "closest-hit",
+            QueryKind::AnyHit => "any-hit",
+            QueryKind::ClosestPoint => "closest-point",
+        }
+    }
+
+    /// The library function taken when several of this kind traverse the layout's type.
+    pub fn preferred(self) -> &'static str {
+        match self {
+            QueryKind::ClosestHit => "closest_hit",
+            QueryKind::AnyHit => "occluded",
+            QueryKind::ClosestPoint => "closest_point_query",
+        }
+    }
+
+    /// The entry's signature as source writes it.
+    pub fn source_signature(self) -> &'static str {
+        match self {
+            QueryKind::ClosestHit => "(ray: Ray, tree: T, best: mut (f32, u32))",
+            QueryKind::AnyHit => "(ray: Ray, tree: T, hit: mut u32)",
+            QueryKind::ClosestPoint => "(p: f32x3, tree: T, best: mut (f32, u32, f32x3))",
+        }
+    }
+
+    /// The query and result types (as the `tree` level prints them) of this kind.
+    fn signature(self) -> (&'static str, &'static str) {
+        match self {
+            QueryKind::ClosestHit => ("!tree.adt<\"Ray\">", "!tree.ref<tuple<f32, u32>>"),
+            QueryKind::AnyHit => ("!tree.adt<\"Ray\">", "!tree.ref<u32>"),
+            QueryKind::ClosestPoint => {
+                ("vector<3xf32>", "!tree.ref<tuple<f32, u32, vector<3xf32>>>")
+            }
+        }
+    }
+}
+
 /// What a set of files declares (with the prelude).
 #[derive(Clone, Debug, Default)]
 pub struct Declared {
     /// Layouts, in declaration order.
     pub layouts: Vec<DeclaredLayout>,
-    /// Closest-hit functions `(ray: Ray, tree: T, best: mut (f32, u32))`: name and `T`.
-    pub closest_hits: Vec<(String, String)>,
+    /// Entry functions `(query, tree: T, result: mut R)` of a known kind: name, `T`, kind.
+    pub entries: Vec<(String, String, QueryKind)>,
+}
+
+impl Declared {
+    /// The entries of `kind`: name and tree type.
+    pub fn of_kind(&self, kind: QueryKind) -> Vec<(String, String)> {
+        self.entries
+            .iter()
+            .filter(|e| e.2 == kind)
+            .map(|e| (e.0.clone(), e.1.clone()))
+            .collect()
+    }
 }
 
 /// Reads what `files` (name, text) declare, through the front end; errors are rendered
@@ -91,7 +163,7 @@ pub fn declared(files: &[(String, String)]) -> Result<Declared, String> {
                 boxes: build_boxes(&module, &l.name),
             })
             .collect(),
-        closest_hits: closest_hits(&module),
+        entries: entries(&module),
     })
 }
 
@@ -119,37 +191,42 @@ fn build_boxes(module: &Module, layout: &str) -> Boxes {
     boxes
 }
 
-/// The module's closest-hit functions: name and the tree type they traverse.
-fn closest_hits(module: &Module) -> Vec<(String, String)> {
-    let best = "!tree.ref<tuple<f32, u32>>";
+/// The module's entry functions of a known [`QueryKind`]: name, tree type, kind.
+fn entries(module: &Module) -> Vec<(String, String, QueryKind)> {
     module
         .func_order
         .iter()
         .filter_map(|&f| {
             let func = &module.funcs[f];
-            let [ray, tree, out] = func.params[..] else {
+            let [query, tree, out] = func.params[..] else {
                 return None;
             };
-            let ray_ok = matches!(module.types.get(ray), Type::Adt(n) if n == "Ray");
-            let out_ok = module.types.display(out).to_string() == best;
-            match module.types.get(tree) {
-                Type::Adt(t) if ray_ok && out_ok && func.results.is_empty() => {
-                    Some((func.name.clone(), t.clone()))
-                }
-                _ => None,
+            if !func.results.is_empty() {
+                return None;
             }
+            let Type::Adt(t) = module.types.get(tree) else {
+                return None;
+            };
+            let (q, r) = (
+                module.types.display(query).to_string(),
+                module.types.display(out).to_string(),
+            );
+            QueryKind::ALL
+                .into_iter()
+                .find(|k| k.signature() == (q.as_str(), r.as_str()))
+                .map(|k| (func.name.clone(), t.clone(), k))
         })
         .collect()
 }
 
-/// A closest-hit program `--layout` and `--algorithm` name.
+/// The program `--layout` and `--algorithm` name (a layout and an entry over its type).
 #[derive(Clone, Debug)]
 pub struct Resolved {
     /// The files, the layout's name and the closest hit's name.
     pub program: Program,
     /// How the layout stores boxes (its reference is the decoded tree when quantized).
     pub boxes: Boxes,
-    /// The sum type the layout realizes and the closest hit traverses.
+    /// The sum type the layout realizes and the entry traverses.
     pub tree_type: String,
     /// The library layout's file stem, `None` for a layout from a file.
     pub library_stem: Option<&'static str>,
@@ -175,9 +252,19 @@ fn read(path: &str) -> Result<(String, String), String> {
 }
 
 /// Resolves `--layout layout` and `--algorithm algorithm` (`None`: the closest hit over the
-/// layout's tree type, from the library) to a program. Errors say what was looked for and
-/// what exists.
+/// layout's tree type, from the library) to a closest-hit program ([`resolve_kind`]).
 pub fn resolve(layout: &str, algorithm: Option<&str>) -> Result<Resolved, String> {
+    resolve_kind(layout, algorithm, QueryKind::ClosestHit)
+}
+
+/// Resolves `--layout layout` and `--algorithm algorithm` (`None`: the library's entry of
+/// `kind` over the layout's tree type) to a program whose entry answers `kind`. Errors say
+/// what was looked for and what exists.
+pub fn resolve_kind(
+    layout: &str,
+    algorithm: Option<&str>,
+    kind: QueryKind,
+) -> Result<Resolved, String> {
     // The layout's file.
     let (layout_file, layout_pick, library_stem) = if is_file(layout) {
         let (path, pick) = split_file(layout);
@@ -244,33 +331,27 @@ pub fn resolve(layout: &str, algorithm: Option<&str>) -> Result<Resolved, String
             chosen.name
         )
     })?;
-    // The closest hit over that type.
-    let over: Vec<&(String, String)> = found
-        .closest_hits
-        .iter()
-        .filter(|(_, t)| *t == tree_type)
-        .collect();
-    // With an algorithm file of a single closest hit, that one (checked against the type).
-    let entry_pick = match (&entry_pick, algorithm, &found.closest_hits[..]) {
+    // The entry of that kind over that type.
+    let of_kind = found.of_kind(kind);
+    let what = kind.name();
+    let over: Vec<&(String, String)> = of_kind.iter().filter(|(_, t)| *t == tree_type).collect();
+    // With an algorithm file of a single entry of the kind, that one (checked against the type).
+    let entry_pick = match (&entry_pick, algorithm, &of_kind[..]) {
         (None, Some(_), [(only, _)]) => Some(only.clone()),
         _ => entry_pick,
     };
     let entry = match &entry_pick {
         Some(name) => {
-            let (_, t) = found
-                .closest_hits
-                .iter()
-                .find(|(f, _)| f == name)
-                .ok_or_else(|| {
-                    format!(
-                        "no closest hit `{name}` (a function (ray: Ray, tree: T, best: mut (f32, \
-                         u32))); the library's algorithms are {}",
-                        algorithm_names().join(", ")
-                    )
-                })?;
+            let (_, t) = of_kind.iter().find(|(f, _)| f == name).ok_or_else(|| {
+                format!(
+                    "no {what} entry `{name}` (a function {}); the library's algorithms are {}",
+                    kind.source_signature(),
+                    algorithm_names().join(", ")
+                )
+            })?;
             if *t != tree_type {
                 return Err(format!(
-                    "closest hit `{name}` traverses `{t}`, but layout `{}` realizes `{tree_type}`",
+                    "{what} entry `{name}` traverses `{t}`, but layout `{}` realizes `{tree_type}`",
                     chosen.name
                 ));
             }
@@ -280,17 +361,17 @@ pub fn resolve(layout: &str, algorithm: Option<&str>) -> Result<Resolved, String
             [(one, _)] => one.clone(),
             [] => {
                 return Err(format!(
-                    "no closest hit traverses `{tree_type}`, the type layout `{}` realizes; give \
-                     one with --algorithm FILE.scion",
+                    "no {what} entry traverses `{tree_type}`, the type layout `{}` realizes; \
+                     give one with --algorithm FILE.scion",
                     chosen.name
                 ))
             }
-            _ => match over.iter().find(|(f, _)| f == "closest_hit") {
+            _ => match over.iter().find(|(f, _)| f == kind.preferred()) {
                 Some((f, _)) => f.clone(),
                 None => {
                     let names: Vec<&str> = over.iter().map(|(f, _)| f.as_str()).collect();
                     return Err(format!(
-                        "several closest hits traverse `{tree_type}` ({}); pick one with \
+                        "several {what} entries traverse `{tree_type}` ({}); pick one with \
                          --algorithm",
                         names.join(", ")
                     ));
@@ -392,6 +473,36 @@ mod tests {
     }
 
     #[test]
+    fn every_query_kind_finds_its_library_entry() {
+        let r = resolve_kind("pbrt", None, QueryKind::ClosestPoint).unwrap();
+        assert_eq!(r.program.algorithm, "closest_point_query");
+        let r = resolve_kind(
+            "ptr",
+            Some("closest_point_best_first"),
+            QueryKind::ClosestPoint,
+        )
+        .unwrap();
+        assert_eq!(
+            (r.program.layout.as_str(), r.tree_type.as_str()),
+            ("PtrBVH", "BVH")
+        );
+        let r = resolve_kind("sg-eq", None, QueryKind::AnyHit).unwrap();
+        assert_eq!(r.program.algorithm, "occluded");
+        // Only the files needed are compiled: the entry's and the layout's.
+        assert_eq!(
+            r.program.files.len(),
+            2,
+            "{:?}",
+            r.program.files.iter().map(|f| &f.0).collect::<Vec<_>>()
+        );
+        let e = resolve_kind("dop14-split", None, QueryKind::ClosestPoint).unwrap_err();
+        assert!(
+            e.contains("no closest-point entry traverses `DopBVH`"),
+            "{e}"
+        );
+    }
+
+    #[test]
     fn bad_names_and_mismatches_are_explained() {
         let e = resolve("btree", None).unwrap_err();
         assert!(
@@ -404,7 +515,7 @@ mod tests {
             "{e}"
         );
         let e = resolve("pbrt", Some("nope")).unwrap_err();
-        assert!(e.contains("no closest hit `nope`"), "{e}");
+        assert!(e.contains("no closest-hit entry `nope`"), "{e}");
         let e = resolve("/nonexistent/x.scion", None).unwrap_err();
         assert!(e.contains("cannot read /nonexistent/x.scion"), "{e}");
     }

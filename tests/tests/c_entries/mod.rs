@@ -8,17 +8,14 @@
 #![allow(unsafe_code)]
 
 use scion_compiler::abi::EntryTarget;
-use scion_host::contract::LogicalTreeView;
+use scion_host::entries;
 use scion_host::jit::{program_lo, LibraryLo, LoOptions};
 use scion_host::mem_interp::Program;
 use scion_ir::backend::JitCode;
-use scion_ir::types::Type;
+use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::schema::LogicalBytes;
 use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Hit, Ray};
-
-type SizesFn = unsafe extern "C" fn(*const LogicalTreeView, *mut u64);
-type BuildFn = unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) -> i32;
 
 /// The program of `files` (paths from the repository root) with `layout` and `algorithm`.
 pub fn program(files: &[&str], layout: &str, algorithm: &str) -> Program {
@@ -55,18 +52,11 @@ pub fn host_lo_stack(program: &Program, entries: u32) -> LibraryLo {
     .unwrap_or_else(|e| panic!("{}: {e}", program.layout))
 }
 
-/// 64-byte aligned zeroed bytes (at least one block, so every buffer has a real address).
-fn aligned(size: usize) -> (Vec<u8>, usize) {
-    let bytes = vec![0u8; size + 128];
-    let off = bytes.as_ptr().align_offset(64);
-    (bytes, off)
-}
-
 /// Packs `tree` with the layout's entries in `code` (compiled from `lo`) and runs the batch
 /// entry of algorithm `algorithm` over `queries`, updating `results` (which the caller
 /// initialized); returns the batch's status. `Q` and `R` are the `#[repr(C)]` query and result
 /// records, checked against the entry's sizes.
-pub fn run_batch<Q, R>(
+pub fn run_batch<Q: Copy, R: Copy>(
     lo: &LibraryLo,
     code: &dyn JitCode,
     tree: &LogicalTree,
@@ -78,8 +68,10 @@ pub fn run_batch<Q, R>(
     run_batch_bytes(lo, code, tree, &bytes, algorithm, queries, results)
 }
 
-/// [`run_batch`] over logical nodes filled by the caller (`LogicalBytes::fill_oriented`).
-pub fn run_batch_bytes<Q, R>(
+/// [`run_batch`] over logical nodes filled by the caller (`LogicalBytes::fill_oriented`),
+/// through the host's runner (`scion_host::entries`: the entries called as a C host calls
+/// them) on the calling thread; 0, or the status of the first failing query.
+pub fn run_batch_bytes<Q: Copy, R: Copy>(
     lo: &LibraryLo,
     code: &dyn JitCode,
     tree: &LogicalTree,
@@ -88,6 +80,7 @@ pub fn run_batch_bytes<Q, R>(
     queries: &[Q],
     results: &mut [R],
 ) -> i32 {
+    assert_eq!(lo.entry.algorithm, algorithm, "the entry's algorithm");
     assert_eq!(
         std::mem::size_of::<Q>() as u64,
         lo.entry.query.size,
@@ -99,72 +92,27 @@ pub fn run_batch_bytes<Q, R>(
         "result record"
     );
     assert_eq!(queries.len(), results.len());
-    let layout = &lo.entry.layout;
-    let f = |name: String| {
-        code.function_ptr(&name)
-            .unwrap_or_else(|| panic!("no `@{name}`"))
+    let packed = entries::pack(lo, code, tree, bytes).unwrap_or_else(|e| panic!("{e}"));
+    // SAFETY: `Q` and `R` are plain `#[repr(C)]` records of scalars (`Copy`, no padding the
+    // entry reads: their sizes are the entry's record sizes, checked above); viewing them as
+    // bytes and writing back bytes the entry produced for the same record type is sound.
+    let (q, r) = unsafe {
+        (
+            std::slice::from_raw_parts(
+                queries.as_ptr().cast::<u8>(),
+                std::mem::size_of_val(queries),
+            ),
+            std::slice::from_raw_parts_mut(
+                results.as_mut_ptr().cast::<u8>(),
+                std::mem::size_of_val(results),
+            ),
+        )
     };
-    let root_name = format!("scion_{layout}_root");
-    // The root reference's C type: a pointer, a 64-bit or a 32-bit integer.
-    let root_ty = lo
-        .module
-        .func_by_name(&root_name)
-        .map(|r| lo.module.types.get(lo.module.funcs[r].results[0]).clone());
-    let view = LogicalTreeView::new(tree, bytes).unwrap();
-    let n = queries.len() as u64;
-    // SAFETY: the entries have the signatures of docs/c-abi.md for this layout's reference type
-    // (the root reference's type is what `scion_L_root` returns); the view describes the live
-    // tree; every buffer has the size `sizes` gave and is 64-byte aligned; `queries` and
-    // `results` have `n` elements of the record sizes the entry was checked to have above.
-    unsafe {
-        let sizes = std::mem::transmute::<*const u8, SizesFn>(f(format!("scion_{layout}_sizes")));
-        let build = std::mem::transmute::<*const u8, BuildFn>(f(format!("scion_{layout}_build")));
-        let mut sz = vec![0u64; lo.entry.buffers.len()];
-        sizes(&view, sz.as_mut_ptr());
-        let mut bufs: Vec<(Vec<u8>, usize)> = sz.iter().map(|&s| aligned(s as usize)).collect();
-        let table: Vec<*mut u8> = bufs
-            .iter_mut()
-            .map(|(b, o)| b.as_mut_ptr().add(*o))
-            .collect();
-        assert_eq!(build(&view, table.as_ptr()), 0, "{layout}: build");
-        let batch = f(format!("scion_{algorithm}_{layout}"));
-        let root = f(root_name);
-        let (q, r) = (queries.as_ptr(), results.as_mut_ptr());
-        match root_ty {
-            Some(Type::Ptr) => batch_from::<*const u8, Q, R>(root, batch, &view, &table, q, r, n),
-            Some(Type::Int(t)) if t.bits() == 64 => {
-                batch_from::<u64, Q, R>(root, batch, &view, &table, q, r, n)
-            }
-            _ => batch_from::<u32, Q, R>(root, batch, &view, &table, q, r, n),
-        }
+    match entries::run(lo, code, &packed, q, r, &BatchDriver::sequential()) {
+        Ok(()) => 0,
+        Err(entries::RunError::Query(f)) => f.status,
+        Err(e) => panic!("{e}"),
     }
-}
-
-/// Runs batch entry `batch` from the root reference (of C type `Rt`) that `root` gives.
-///
-/// # Safety
-/// `root` and `batch` are a layout's `scion_L_root` and `scion_A_L` with reference type `Rt`;
-/// `table` holds the built buffers; `q` and `r` have `n` records of the entry's sizes.
-unsafe fn batch_from<Rt, Q, R>(
-    root: *const u8,
-    batch: *const u8,
-    view: &LogicalTreeView,
-    table: &[*mut u8],
-    q: *const Q,
-    r: *mut R,
-    n: u64,
-) -> i32 {
-    let root = std::mem::transmute::<
-        *const u8,
-        unsafe extern "C" fn(*const LogicalTreeView, *const *mut u8) -> Rt,
-    >(root);
-    let batch = std::mem::transmute::<
-        *const u8,
-        unsafe extern "C" fn(*const *const u8, *const Q, *mut R, u64, u64, Rt) -> i32,
-    >(batch);
-    let ctable: Vec<*const u8> = table.iter().map(|&p| p as *const u8).collect();
-    let start = root(view, table.as_ptr());
-    batch(ctable.as_ptr(), q, r, 0, n, start)
 }
 
 /// The closest hits of `rays` by a closest-hit algorithm's batch entry (`best` starting at
