@@ -10,6 +10,7 @@
 //! an input, too many threads) exits 2. Outputs are checked before the scene is loaded and
 //! written whole or not at all (`io`).
 
+mod bar;
 mod gpu;
 mod io;
 mod list;
@@ -309,9 +310,9 @@ fn main() -> ExitCode {
         Command::Trace(args) => preflight(args).and_then(|()| trace::run(args)),
         Command::Layouts(args) => list::run(args),
         Command::Run(args) => preflight_run(args).and_then(|()| run::run(args)),
-        Command::Ptx(args) => {
-            io::check_output("-o", &args.output, &[]).and_then(|()| gpu::run_ptx(args))
-        }
+        Command::Ptx(args) => check_gpu_cpu(args.cpu.as_deref())
+            .and_then(|()| io::check_output("-o", &args.output, &[]))
+            .and_then(|()| gpu::run_ptx(args)),
     }
     .and_then(|()| io::finish_stdout());
     match result {
@@ -323,6 +324,15 @@ fn main() -> ExitCode {
             }
             ExitCode::from(if e.usage { 2 } else { 1 })
         }
+    }
+}
+
+/// A `--cpu` for the GPU that LLVM does not know is a bad command line.
+fn check_gpu_cpu(cpu: Option<&str>) -> Result<(), CliError> {
+    match cpu {
+        Some(cpu) => scion_llvm::target::validate_cpu(scion_llvm::Target::Nvptx64, cpu)
+            .map_err(|e| CliError::usage(format!("--cpu {cpu}: {}", e.0))),
+        None => Ok(()),
     }
 }
 
@@ -353,6 +363,9 @@ fn preflight(args: &mut TraceArgs) -> Result<(), CliError> {
     args.scene = scion_runtime::scene::manifest::resolve(&args.scene)
         .map_err(|e| CliError::new(format!("--scene {}: {e}", args.scene.display())))?;
     io::check_threads(args.threads)?;
+    if args.device == DeviceArg::Gpu {
+        check_gpu_cpu(args.cpu.as_deref())?;
+    }
     let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--scene", &args.scene)];
     if let Some(rays) = &args.rays_file {
         inputs.push(("--rays-file", rays));

@@ -142,9 +142,13 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
             if threads == 1 { "" } else { "s" }
         ))
     };
+    // The interpreters get a progress bar over every trace (the checked one and the timed runs).
+    let traces = 1 + if args.runs > 1 { args.runs as u64 } else { 0 };
+    let bar = || crate::bar::Bar::new("rays", rays.len() as u64 * traces);
     let (hits, timing, packed) = match &engine {
         Engine::Free(b) => {
             tracing();
+            let _bar = (args.backend == BackendArg::Interp).then(bar);
             let (hits, timing) = timed(args.runs, || {
                 b.trace(&scene.triangles, &tree, &rays)
                     .map_err(|e| CliError::new(format!("{} failed: {e}", b.name())))
@@ -157,6 +161,7 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
             ));
             let (sizes, time) = b.program().pack_report(&tree).map_err(CliError::new)?;
             tracing();
+            let _bar = bar();
             let (hits, timing) = timed(args.runs, || {
                 b.trace(&scene.triangles, &tree, &rays)
                     .map_err(|e| CliError::new(format!("{} failed: {e}", b.name())))

@@ -22,6 +22,7 @@
 //!   query and result records of the sizes the compiler's ABI computed (`scion run`).
 //! - [`gpu_emu`]: the GPU pipeline of `scion-cuda` emulated on the CPU: the GPU kernels
 //!   compiled for the host (`lo-host-kernels`), launched as grids of host threads.
+//! - [`progress`]: how many queries the interpreters have answered, for progress bars.
 //! - [`quantized`]: how a layout stores its boxes, and the decoded tree a quantized layout
 //!   really traverses (its bit-for-bit reference).
 pub mod backend;
@@ -32,4 +33,5 @@ pub mod jit;
 pub mod library;
 pub mod mem_interp;
 pub mod oracle;
+pub mod progress;
 pub mod quantized;

@@ -319,8 +319,10 @@ pub fn closest_hits_in(
     rays.iter()
         .enumerate()
         .map(|(k, ray)| {
-            closest_hit_in(it, before.to_vec(), ray, root.clone())
-                .map_err(|e| format!("ray {}: {e}", first + k))
+            let hit = closest_hit_in(it, before.to_vec(), ray, root.clone())
+                .map_err(|e| format!("ray {}: {e}", first + k));
+            crate::progress::add(1);
+            hit
         })
         .collect()
 }

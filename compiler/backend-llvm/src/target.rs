@@ -100,6 +100,21 @@ pub(crate) fn llvm_level(level: u8) -> OptimizationLevel {
     }
 }
 
+/// Checks a command line's `--cpu` for `target` before any work: `native` only for this
+/// machine's architecture, any other name one LLVM knows for the target (a near miss named).
+pub fn validate_cpu(target: Target, cpu: &str) -> Result<(), LlvmError> {
+    if cpu == "native" {
+        return match Target::host() == Some(target) {
+            true => Ok(()),
+            false => Err(LlvmError(format!(
+                "--cpu=native needs the target of this machine, not {}",
+                target.name()
+            ))),
+        };
+    }
+    check_cpu(target, cpu)
+}
+
 /// The target machine for `target`, `cpu` (`None`: the default; `native`: this machine's CPU
 /// and features, for the host's architecture only) at `-O{level}`.
 pub fn target_machine(

@@ -12,9 +12,10 @@ use scion_ir::pass::{PassCx, PassError, PassManager};
 use std::io::{Read, Write};
 use std::path::PathBuf;
 
-/// scion-opt: run Scion passes on text IR.
+/// scion-opt: run Scion passes on text IR (tree, mem or lo level) and print the result, for
+/// testing passes one at a time (docs/ir.md).
 #[derive(Debug, Parser)]
-#[command(name = "scion-opt", version, about)]
+#[command(name = "scion-opt", version)]
 struct Args {
     /// Input file with text IR (`-` or nothing: standard input).
     #[arg(value_name = "FILE")]
@@ -184,9 +185,14 @@ fn run(args: &Args) -> i32 {
             }
         }
     }
-    if let Some(e) = failed.or_else(|| out.flush().err()) {
-        eprintln!("error[E0902]: cannot write standard output: {e}");
-        return 1;
+    match failed.or_else(|| out.flush().err()) {
+        // A reader that stopped early (`scion-opt ... | head`) is not a failure.
+        Some(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {}
+        Some(e) => {
+            eprintln!("error[E0902]: cannot write standard output: {e}");
+            return 1;
+        }
+        None => {}
     }
     status
 }

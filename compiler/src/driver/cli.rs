@@ -134,7 +134,7 @@ Not built yet (these say so with error E0901 instead of being ignored):
 /// Compiles tree traversals written against a logical BVH (an algebraic data type) to code
 /// specialized for a physical layout (a `layout` spec) and its packer (a `build` spec).
 #[derive(Debug, Parser)]
-#[command(name = "scionc", version, about, long_about = None, after_help = AFTER_HELP)]
+#[command(name = "scionc", version, after_help = AFTER_HELP)]
 pub struct Options {
     /// Scion source files (.scion), compiled together after the prelude.
     #[arg(value_name = "FILE")]

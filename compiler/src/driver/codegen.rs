@@ -1,7 +1,8 @@
 //! `--emit=llvm|asm|obj|ptx`: runs the LLVM backend (`scion-llvm`) on the `lo` module the
 //! front end lowered. Input: the module and the command line's `--target`, `--cpu` and `-O`;
-//! output: the bytes to write, or a diagnostic for options that do not fit together
-//! (E0920) and backend failures (E0921).
+//! output: the bytes to write, or a diagnostic for options that do not fit together or a
+//! `--cpu` LLVM does not know for the target (E0920, a bad command line) and backend failures
+//! (E0921).
 
 use super::cli::{Emit, Options, Target};
 use scion_ir::diag::Diagnostic;
@@ -39,6 +40,11 @@ pub fn select_target(opts: &Options) -> Result<scion_llvm::Target, Diagnostic> {
             "`--emit=obj` has no meaning for nvptx64: GPU code is PTX text",
         )
         .with_note("use --emit=ptx"));
+    }
+    if let Some(cpu) = &opts.cpu {
+        scion_llvm::target::validate_cpu(target, cpu).map_err(|e| {
+            Diagnostic::error("E0920", e.0).with_note(format!("target {}", target.triple()))
+        })?;
     }
     Ok(target)
 }

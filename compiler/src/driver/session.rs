@@ -185,6 +185,8 @@ fn write_output(err: &mut impl Write, path: Option<&std::path::Path>, bytes: &[u
         let mut out = std::io::stdout().lock();
         return match out.write_all(bytes).and_then(|()| out.flush()) {
             Ok(()) => 0,
+            // A reader that stopped early (`scionc ... | head`) is not a failure.
+            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => 0,
             Err(e) => write_error(err, "standard output", &e),
         };
     };

@@ -1,0 +1,51 @@
+//! Progress bars on standard error for the slow paths (the interpreters answer a few thousand
+//! queries a second; a large scene takes hours): a thread draws the count of
+//! `scion_host::progress` against the total, with the time left, until the bar is dropped.
+//! indicatif hides the bar when standard error is not a terminal (logs and tests see nothing).
+
+use indicatif::{ProgressBar, ProgressStyle};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+/// A bar counting `scion_host::progress` from zero to a total.
+pub struct Bar {
+    stop: Arc<AtomicBool>,
+    drawer: Option<JoinHandle<()>>,
+}
+
+impl Bar {
+    /// Starts a bar for `total` queries (`what`: "rays", "points").
+    pub fn new(what: &str, total: u64) -> Bar {
+        scion_host::progress::reset();
+        let bar = ProgressBar::new(total);
+        if let Ok(style) = ProgressStyle::with_template(&format!(
+            "scion: {{bar:40}} {{pos}}/{{len}} {what} ({{elapsed}} elapsed, about {{eta}} left)"
+        )) {
+            bar.set_style(style);
+        }
+        let stop = Arc::new(AtomicBool::new(false));
+        let stopped = stop.clone();
+        let drawer = std::thread::Builder::new()
+            .name("scion-progress".into())
+            .spawn(move || {
+                while !stopped.load(Ordering::Relaxed) {
+                    bar.set_position(scion_host::progress::done().min(total));
+                    std::thread::sleep(Duration::from_millis(200));
+                }
+                bar.finish_and_clear();
+            })
+            .ok();
+        Bar { stop, drawer }
+    }
+}
+
+impl Drop for Bar {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(d) = self.drawer.take() {
+            let _ = d.join();
+        }
+    }
+}
