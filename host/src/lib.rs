@@ -23,6 +23,7 @@
 //! - [`gpu_emu`]: the GPU pipeline of `scion-cuda` emulated on the CPU: the GPU kernels
 //!   compiled for the host (`lo-host-kernels`), launched as grids of host threads.
 //! - [`progress`]: how many queries the interpreters have answered, for progress bars.
+//! - [`queries`]: the table of query kinds: queries, initial results, reference answers.
 //! - [`quantized`]: how a layout stores its boxes, and the decoded tree a quantized layout
 //!   really traverses (its bit-for-bit reference).
 pub mod backend;
@@ -35,3 +36,4 @@ pub mod mem_interp;
 pub mod oracle;
 pub mod progress;
 pub mod quantized;
+pub mod queries;

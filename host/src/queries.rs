@@ -1,0 +1,243 @@
+//! The table of query kinds ([`QueryKind`]): per kind, how queries are made or read, how a
+//! result record starts, what the reference answer is and when an answer equals it. Used by
+//! `scion run` and by the differential table of query kinds (tests/tests/query_kinds.rs) over
+//! the entries of `crate::entries`.
+//!
+//! | kind | query record | result record (starts as) | reference, equality |
+//! |---|---|---|---|
+//! | closest hit | a `Ray` (32 B) | `(t, id)` 8 B (`(tmax, u32::MAX)`) | the reference traversal of the tree the layout traverses; `t` bits and id |
+//! | any hit | a `Ray` | `u32` (0) | that traversal's closest hit: nonzero iff it hits |
+//! | closest point | `f32x3` (12 B) | `(d, id, point)` 20 B (`(inf, u32::MAX, 0)`) | float32 brute force, every bit |
+
+use crate::library::QueryKind;
+use scion_runtime::batch::{BatchDriver, BLOCK};
+use scion_runtime::bvh::LogicalTree;
+use scion_runtime::geom::{Hit, Ray, Triangle, Vec3};
+use scion_runtime::query::{hits_checksum, io::rays_to_bytes};
+use scion_runtime::reference::closest_hits_tree;
+use scion_runtime::reference::closest_point::{closest_point_brute, ClosestPoint};
+use std::sync::Mutex;
+
+/// Queries of one kind, as the entry's query records.
+#[derive(Clone, Debug)]
+pub struct Queries {
+    /// Their kind.
+    pub kind: QueryKind,
+    /// The records, back to back.
+    pub bytes: Vec<u8>,
+    /// The rays of a hit kind (empty otherwise).
+    pub rays: Vec<Ray>,
+    /// The points of a closest-point query (empty otherwise).
+    pub points: Vec<Vec3>,
+}
+
+impl Queries {
+    /// Hit queries (closest or any) of `rays`.
+    pub fn rays(kind: QueryKind, rays: Vec<Ray>) -> Queries {
+        assert!(kind != QueryKind::ClosestPoint, "rays are hit queries");
+        Queries {
+            kind,
+            bytes: rays_to_bytes(&rays),
+            rays,
+            points: Vec::new(),
+        }
+    }
+
+    /// Closest-point queries of `points`.
+    pub fn points(points: Vec<Vec3>) -> Queries {
+        Queries {
+            kind: QueryKind::ClosestPoint,
+            bytes: points
+                .iter()
+                .flat_map(|p| [p.x, p.y, p.z])
+                .flat_map(f32::to_le_bytes)
+                .collect(),
+            rays: Vec::new(),
+            points,
+        }
+    }
+
+    /// How many queries.
+    pub fn len(&self) -> usize {
+        match self.kind {
+            QueryKind::ClosestPoint => self.points.len(),
+            _ => self.rays.len(),
+        }
+    }
+
+    /// True when there are none.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The sizes of this kind's query and result records.
+    pub fn record_sizes(&self) -> (u64, u64) {
+        match self.kind {
+            QueryKind::ClosestHit => (32, 8),
+            QueryKind::AnyHit => (32, 4),
+            QueryKind::ClosestPoint => (12, 20),
+        }
+    }
+
+    /// The result records a query starts from.
+    pub fn initial_results(&self) -> Vec<u8> {
+        match self.kind {
+            QueryKind::ClosestHit => self
+                .rays
+                .iter()
+                .flat_map(|r| {
+                    let mut b = r.tmax.to_le_bytes().to_vec();
+                    b.extend_from_slice(&u32::MAX.to_le_bytes());
+                    b
+                })
+                .collect(),
+            QueryKind::AnyHit => vec![0; self.rays.len() * 4],
+            QueryKind::ClosestPoint => (0..self.points.len())
+                .flat_map(|_| closest_point_bytes(&ClosestPoint::start(f32::INFINITY)))
+                .collect(),
+        }
+    }
+
+    /// Compares `results` with the reference: for hits, the reference traversal of
+    /// `traversed` (the tree the layout traverses: its decoded boxes when quantized); for
+    /// closest points, brute force over `triangles` on the first `max_brute` points. `Ok` says
+    /// what was checked; `Err` names the first query whose answer differs, with both answers.
+    pub fn check(
+        &self,
+        triangles: &[Triangle],
+        traversed: &LogicalTree,
+        results: &[u8],
+        max_brute: usize,
+        driver: &BatchDriver,
+    ) -> Result<String, String> {
+        let word = |i: usize| u32::from_le_bytes(results[i..i + 4].try_into().unwrap());
+        let differ = |i: usize, got: String, want: String| {
+            Err(format!(
+                "query {i}: the answer differs from the reference: got {got}, reference {want}"
+            ))
+        };
+        match self.kind {
+            QueryKind::ClosestHit | QueryKind::AnyHit => {
+                let want = closest_hits_tree(traversed, &self.rays, driver);
+                for (i, w) in want.iter().enumerate() {
+                    if self.kind == QueryKind::ClosestHit {
+                        let got = Hit::from_best(f32::from_bits(word(8 * i)), word(8 * i + 4));
+                        if got.t.to_bits() != w.t.to_bits() || got.prim != w.prim {
+                            return differ(i, format!("{got:?}"), format!("{w:?}"));
+                        }
+                    } else if (word(4 * i) != 0) != w.is_hit() {
+                        return differ(i, format!("occluded {}", word(4 * i)), format!("{w:?}"));
+                    }
+                }
+                Ok(format!(
+                    "identical to the reference on all {} queries (checksum of its hits {:016x})",
+                    self.rays.len(),
+                    hits_checksum(&want)
+                ))
+            }
+            QueryKind::ClosestPoint => {
+                let n = self.points.len();
+                let k = n.min(max_brute);
+                let want = brute_points(triangles, &self.points[..k], driver);
+                for (i, w) in want.iter().enumerate() {
+                    let got = closest_point_from(&results[20 * i..20 * i + 20]);
+                    if !got.bit_eq(w) {
+                        return differ(i, format!("{got:?}"), format!("{w:?}"));
+                    }
+                }
+                Ok(format!(
+                    "identical to brute force on {k} of {n} queries (the first {k})"
+                ))
+            }
+        }
+    }
+}
+
+/// Brute force's closest point of each of `points`, on `driver`'s threads.
+fn brute_points(
+    triangles: &[Triangle],
+    points: &[Vec3],
+    driver: &BatchDriver,
+) -> Vec<ClosestPoint> {
+    let mut want = vec![ClosestPoint::start(f32::INFINITY); points.len()];
+    let chunks: Vec<Mutex<&mut [ClosestPoint]>> = want.chunks_mut(BLOCK).map(Mutex::new).collect();
+    driver.run(points.len(), |begin, end| {
+        let mut out = chunks[begin / BLOCK]
+            .lock()
+            .unwrap_or_else(|p| p.into_inner());
+        for (j, i) in (begin..end).enumerate() {
+            out[j] = closest_point_brute(triangles, points[i], f32::INFINITY);
+        }
+    });
+    drop(chunks);
+    want
+}
+
+/// The 20-byte record of a closest point: distance, primitive id, point.
+pub fn closest_point_bytes(c: &ClosestPoint) -> Vec<u8> {
+    [
+        c.distance.to_bits(),
+        c.prim,
+        c.point.x.to_bits(),
+        c.point.y.to_bits(),
+        c.point.z.to_bits(),
+    ]
+    .into_iter()
+    .flat_map(u32::to_le_bytes)
+    .collect()
+}
+
+/// A closest point from its 20-byte record.
+pub fn closest_point_from(b: &[u8]) -> ClosestPoint {
+    let w = |i: usize| u32::from_le_bytes(b[4 * i..4 * i + 4].try_into().unwrap());
+    ClosestPoint {
+        distance: f32::from_bits(w(0)),
+        prim: w(1),
+        point: Vec3::new(
+            f32::from_bits(w(2)),
+            f32::from_bits(w(3)),
+            f32::from_bits(w(4)),
+        ),
+    }
+}
+
+/// A points file's bytes: 12-byte records, f32 x, y, z little-endian (docs/formats.md). `Err`
+/// for a size that is not whole records or a coordinate that is not finite.
+pub fn points_from_bytes(bytes: &[u8]) -> Result<Vec<Vec3>, String> {
+    if bytes.len() % 12 != 0 {
+        return Err(format!(
+            "{} bytes is not a whole number of 12-byte points",
+            bytes.len()
+        ));
+    }
+    let f = |b: &[u8], i: usize| f32::from_le_bytes(b[i..i + 4].try_into().unwrap());
+    let points: Vec<Vec3> = bytes
+        .chunks_exact(12)
+        .map(|b| Vec3::new(f(b, 0), f(b, 4), f(b, 8)))
+        .collect();
+    match points.iter().position(|p| !p.is_finite()) {
+        Some(i) => Err(format!("point {i} is not finite: {:?}", points[i])),
+        None => Ok(points),
+    }
+}
+
+/// `n` points uniform in the box `[low, high]` (xorshift64 seeded by `seed`, 53-bit fractions).
+pub fn uniform_points(low: Vec3, high: Vec3, n: usize, seed: u64) -> Vec<Vec3> {
+    let mut x = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
+    let mut unit = move || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        (x >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let lerp = |a: f32, b: f32, t: f64| (f64::from(a) + (f64::from(b) - f64::from(a)) * t) as f32;
+    (0..n)
+        .map(|_| {
+            Vec3::new(
+                lerp(low.x, high.x, unit()),
+                lerp(low.y, high.y, unit()),
+                lerp(low.z, high.z, unit()),
+            )
+        })
+        .collect()
+}
