@@ -17,8 +17,8 @@ use scion_cuda::kit::PtxKit;
 use scion_cuda::trace::GpuPipeline;
 use scion_cuda::{Device, Launcher};
 use scion_host::gpu_emu::EmulatedGpu;
-use scion_host::jit::{library_lo, Codegen, LoOptions, ALGORITHM};
-use scion_host::mem_interp::library_layouts;
+use scion_host::jit::{program_lo, Codegen, LoOptions, ALGORITHM};
+use scion_host::mem_interp::Program;
 use scion_host::quantized::{Boxes, DecodedTree};
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::LogicalTree;
@@ -40,15 +40,15 @@ pub fn compile_kit(
     cpu: Option<&str>,
 ) -> Result<(PtxKit, Duration), CliError> {
     let start = Instant::now();
-    let (stem, name, boxes) = library_layout(layout)?;
+    let (program, boxes) = gpu_program(layout)?;
+    let name = program.layout.as_str();
     let fail = |what: &str, detail: String| {
         CliError::new(format!(
             "cannot compile closest hit for `{layout}` ({what}): {detail}"
         ))
     };
-    let lo = library_lo(
-        stem,
-        name,
+    let lo = program_lo(
+        &program,
         &LoOptions {
             stack_size,
             opt_level: OPT_LEVEL,
@@ -203,13 +203,13 @@ fn run_emulated(args: &TraceArgs) -> Result<(), CliError> {
         );
     }
     let layout = args.layout.as_deref().unwrap_or("pbrt");
-    let (stem, name, boxes) = library_layout(layout)?;
+    let (program, boxes) = gpu_program(layout)?;
+    let name = program.layout.clone();
     progress(&format!(
         "compiling the GPU kernels of closest hit for layout `{layout}` for this CPU"
     ));
-    let gpu = EmulatedGpu::compile(
-        stem,
-        name,
+    let gpu = EmulatedGpu::compile_program(
+        &program,
         &LoOptions {
             stack_size: args.stack_size,
             opt_level: OPT_LEVEL,
@@ -253,17 +253,21 @@ fn run_emulated(args: &TraceArgs) -> Result<(), CliError> {
     trace_and_report(&pipeline, args, &input, &report)
 }
 
-/// The library layout `--layout` names: file stem, source name and boxes.
-fn library_layout(layout: &str) -> Result<(&'static str, &'static str, Boxes), CliError> {
-    let stem = layout.replace('-', "_");
-    library_layouts()
-        .iter()
-        .find(|l| l.0 == stem)
-        .copied()
-        .ok_or_else(|| {
-            CliError::usage(format!("unknown layout `{layout}` for the GPU"))
-                .note(format!("library layouts: {}", closest_hit_layout_names()))
-        })
+/// The closest-hit program of the layout `--layout` names (a library name or a layout file,
+/// `scion_host::library::resolve`) and how it stores boxes: the GPU kernels are closest hit's.
+fn gpu_program(layout: &str) -> Result<(Program, Boxes), CliError> {
+    let unknown = |why: String| {
+        CliError::usage(format!("unknown layout `{layout}` for the GPU: {why}"))
+            .note(format!("library layouts: {}", closest_hit_layout_names()))
+    };
+    let r = scion_host::library::resolve(layout, None).map_err(unknown)?;
+    if r.program.algorithm != ALGORITHM {
+        return Err(unknown(format!(
+            "it is traversed by `{}`, and the GPU path runs `{ALGORITHM}`",
+            r.program.algorithm
+        )));
+    }
+    Ok((r.program, r.boxes))
 }
 
 fn gpu_err(e: scion_cuda::CudaError) -> CliError {

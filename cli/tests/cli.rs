@@ -625,6 +625,26 @@ fn any_layout_file_traces_to_the_reference_hits() {
             "{backend}"
         );
     }
+    // The GPU kernels of the same file, emulated on the CPU, checked against the reference.
+    let o = scion(&[
+        "trace",
+        "--scene",
+        &scene,
+        "--n",
+        "2048",
+        "--runs",
+        "1",
+        "--device",
+        "gpu-emulated",
+        "--layout",
+        &layout,
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stdout).contains("identical to the reference on all 2048 rays"),
+        "{}",
+        text(&o.stdout)
+    );
     // The library's algorithms by name, a layout and algorithm that do not fit, a missing
     // layout in a file.
     let o = scion(&[

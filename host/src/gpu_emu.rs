@@ -14,7 +14,7 @@
 #![allow(unsafe_code)]
 
 use crate::backend::Backend;
-use crate::jit::{library_lo, Code, Codegen, LoOptions, ALGORITHM};
+use crate::jit::{Code, Codegen, LoOptions, ALGORITHM};
 use crate::quantized::Boxes;
 use scion_compiler::abi::EntryTarget;
 use scion_cuda::args::PackedArgs;
@@ -83,10 +83,20 @@ impl EmulatedGpu {
         codegen: Codegen,
         workers: usize,
     ) -> Result<EmulatedGpu, String> {
+        let program = crate::mem_interp::Program::library(stem, layout)?;
+        EmulatedGpu::compile_program(&program, opts, codegen, workers)
+    }
+
+    /// [`EmulatedGpu::compile`] for any closest-hit program (a layout file's, say).
+    pub fn compile_program(
+        program: &crate::mem_interp::Program,
+        opts: &LoOptions,
+        codegen: Codegen,
+        workers: usize,
+    ) -> Result<EmulatedGpu, String> {
         let start = Instant::now();
-        let lo = library_lo(
-            stem,
-            layout,
+        let lo = crate::jit::program_lo(
+            program,
             &LoOptions {
                 target: EntryTarget::Gpu,
                 ..*opts
