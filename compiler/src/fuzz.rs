@@ -311,8 +311,14 @@ pub fn library_seeds(library: &std::path::Path) -> std::io::Result<Vec<String>> 
 /// oriented child boxes, `f64` arithmetic, 64-bit tagged references).
 pub const LAYOUT_SEEDS: [&str; 9] = [
     include_str!("../../lit-tests/Inputs/wide4_layout.scion"),
-    include_str!("../../lit-tests/Inputs/bvh8_q8_ci_layout.scion"),
-    include_str!("../../lit-tests/Inputs/bvh8_layout.scion"),
+    concat!(
+        include_str!("../../library/algorithms/closest_hit8.scion"),
+        include_str!("../../library/layouts/bvh8_q8_ci.scion")
+    ),
+    concat!(
+        include_str!("../../library/algorithms/closest_hit8.scion"),
+        include_str!("../../library/layouts/bvh8.scion")
+    ),
     include_str!("../../lit-tests/Inputs/user_functions_layout.scion"),
     concat!(
         include_str!("../../library/algorithms/closest_hit_dop14.scion"),

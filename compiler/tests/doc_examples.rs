@@ -103,7 +103,10 @@ fn howto_add_a_layout_examples_compile_and_are_the_traced_file() {
     assert!(check_file("docs/howto-add-a-layout.md") >= 5);
     blocks_are_pieces_of(
         "docs/howto-add-a-layout.md",
-        &["lit-tests/Inputs/bvh8_layout.scion"],
+        &[
+            "library/algorithms/closest_hit8.scion",
+            "library/layouts/bvh8.scion",
+        ],
     );
 }
 

@@ -116,8 +116,20 @@ fn specializations_on_text_ir_match_the_driver() {
             ],
             "SharedSlabParent",
         ),
-        (&["lit-tests/Inputs/bvh8_layout.scion"], "Bvh8"),
-        (&["lit-tests/Inputs/bvh8_q8_ci_layout.scion"], "Bvh8Q8CI"),
+        (
+            &[
+                "library/algorithms/closest_hit8.scion",
+                "library/layouts/bvh8.scion",
+            ],
+            "Bvh8",
+        ),
+        (
+            &[
+                "library/algorithms/closest_hit8.scion",
+                "library/layouts/bvh8_q8_ci.scion",
+            ],
+            "Bvh8Q8CI",
+        ),
     ];
     for (files, layout) in cases {
         let tree = scionc(&["--emit=tree"], files);

@@ -167,13 +167,19 @@ pub fn declared(files: &[(String, String)]) -> Result<Declared, String> {
     })
 }
 
-/// How layout `layout`'s build functions (attribute `build_of`) store boxes, by the quantizing
-/// intrinsics they call.
+/// How layout `layout` stores boxes, as far as its bit-for-bit reference goes: quantized
+/// against one frame its `build root` writes from the root's box ([`Boxes::GlobalQ16`] when
+/// that build calls `frame_step`, [`Boxes::SnappedQ10`] when it calls `sg_bins`), else
+/// [`Boxes::Exact`] (a layout quantizing each node against its own frame, as the eight-wide
+/// `-q8`/`-q16` ones, is checked against the exact tree's reference; its boxes are
+/// conservative).
 fn build_boxes(module: &Module, layout: &str) -> Boxes {
     let mut boxes = Boxes::Exact;
     for &f in &module.func_order {
         let func = &module.funcs[f];
-        if func.attrs.get("build_of").and_then(|a| a.as_str()) != Some(layout) {
+        if func.attrs.get("build_of").and_then(|a| a.as_str()) != Some(layout)
+            || func.attrs.get("variant").and_then(|a| a.as_str()) != Some("root")
+        {
             continue;
         }
         for op in scion_ir::walk::region_ops(module, func.body) {
@@ -182,8 +188,8 @@ fn build_boxes(module: &Module, layout: &str) -> Boxes {
                 continue;
             }
             match op.str_attr("name") {
-                Some("quant_lo" | "quant_hi") => boxes = Boxes::GlobalQ16,
-                Some("sg_code_up" | "sg_code_down") => boxes = Boxes::SnappedQ10,
+                Some("frame_step") => boxes = Boxes::GlobalQ16,
+                Some("sg_bins") => boxes = Boxes::SnappedQ10,
                 _ => {}
             }
         }

@@ -20,16 +20,7 @@ use std::path::PathBuf;
 
 /// (input file under lit-tests/Inputs, layout, algorithm, bytes of a record, width, whether
 /// every node has a record (else interior nodes only, leaves being references)).
-const PROGRAMS: [(&str, &str, &str, usize, usize, bool); 4] = [
-    (
-        "bvh8_q8_ci_layout.scion",
-        "Bvh8Q8CI",
-        "closest_hit8",
-        104,
-        8,
-        false,
-    ),
-    ("bvh8_layout.scion", "Bvh8", "closest_hit8", 256, 8, false),
+const PROGRAMS: [(&str, &str, &str, usize, usize, bool); 2] = [
     (
         "bvh8_aos_layout.scion",
         "Bvh8Aos",
@@ -56,10 +47,10 @@ fn records(tree: &scion_runtime::bvh::LogicalTree, width: usize, every_node: boo
     }
 }
 
-/// The boxes `bvh8-q8-ci` stores for a node's children: its frame over the occupied slots
-/// (8-bit codes) and each slot's codes decoded (`scion_ir::tree::quant`, the builtins' exact
+/// The boxes a `bvh8-q8*` or `bvh8-q16*` layout stores for a node's children: its frame over
+/// the occupied slots (codes up to `m`: 255 or 65535) and each slot's codes decoded (`scion_ir::tree::quant`, the builtins' exact
 /// semantics); empty slots stay empty.
-fn decoded8(node: &WideNode<8>) -> [Aabb; 8] {
+fn decoded8(node: &WideNode<8>, m: u32) -> [Aabb; 8] {
     use scion_ir::tree::quant::{decode, frame_origin, frame_step, quant_hi, quant_lo};
     let mut lo = [f32::INFINITY; 3];
     let mut hi = [f32::NEG_INFINITY; 3];
@@ -71,25 +62,25 @@ fn decoded8(node: &WideNode<8>) -> [Aabb; 8] {
         }
     }
     let o = lo.map(frame_origin);
-    let s = [0, 1, 2].map(|a| frame_step(o[a], hi[a], 255));
+    let s = [0, 1, 2].map(|a| frame_step(o[a], hi[a], m));
     node.bounds.map(|b| {
         if b.is_empty() {
             return b;
         }
         let (l, h) = (b.low.to_array(), b.high.to_array());
-        let dl = [0, 1, 2].map(|a| decode(quant_lo(l[a], o[a], s[a], 255), o[a], s[a]));
-        let dh = [0, 1, 2].map(|a| decode(quant_hi(h[a], o[a], s[a], 255), o[a], s[a]));
+        let dl = [0, 1, 2].map(|a| decode(quant_lo(l[a], o[a], s[a], m), o[a], s[a]));
+        let dh = [0, 1, 2].map(|a| decode(quant_hi(h[a], o[a], s[a], m), o[a], s[a]));
         Aabb::new(Vec3::from_array(dl), Vec3::from_array(dh))
     })
 }
 
 /// The wide reference's hits over `tree` collapsed to `width` children, over the boxes the
-/// layout stores (decoded when `quantized`).
+/// layout stores (decoded with codes up to `quantized` when it quantizes per node).
 fn wide_reference(
     tree: &scion_runtime::bvh::LogicalTree,
     rays: &[scion_runtime::geom::Ray],
     width: usize,
-    quantized: bool,
+    quantized: Option<u32>,
 ) -> Vec<Hit> {
     match width {
         4 => {
@@ -100,9 +91,9 @@ fn wide_reference(
         }
         8 => {
             let mut w = collapse::<8>(tree);
-            if quantized {
+            if let Some(m) = quantized {
                 for n in &mut w.nodes {
-                    n.bounds = decoded8(n);
+                    n.bounds = decoded8(n, m);
                 }
             }
             rays.iter()
@@ -125,6 +116,73 @@ fn program(file: &str, layout: &str, algorithm: &str) -> Program {
     }
 }
 
+/// A wide layout and its closest hit, with what the test checks of its packing.
+struct Wide {
+    program: Program,
+    /// Bytes of one record of its node group.
+    node_bytes: usize,
+    /// Children per node.
+    width: usize,
+    /// Whether every node (leaves too) has a record.
+    every_node: bool,
+    /// The largest code of a layout quantizing per node (`None`: exact boxes).
+    code_max: Option<u32>,
+}
+
+/// Every library layout of `BVH8` (the registry's: a new file joins without an edit), with its
+/// record size from the compiled entries' buffer plan, and the other shapes of `lit-tests/Inputs`
+/// (an array-of-structures eight-wide node, a four-wide tree with records for every node).
+fn wide_programs() -> Vec<Wide> {
+    let mut out = Vec::new();
+    for &(stem, _) in scion_host::library::LAYOUT_FILES {
+        let Ok(r) = scion_host::library::resolve(stem, None) else {
+            continue;
+        };
+        if r.tree_type != "BVH8" {
+            continue;
+        }
+        let lo = scion_host::jit::program_lo(
+            &r.program,
+            &scion_host::jit::LoOptions {
+                stack_size: Some(512),
+                opt_level: JIT_OPT_LEVEL,
+                dsl_opt: true,
+                target: scion_compiler::abi::EntryTarget::Host,
+            },
+        )
+        .unwrap_or_else(|e| panic!("{stem}: {e}"));
+        let nodes = lo.entry.buffers.iter().find(|b| b.name == "nodes");
+        let node_bytes = nodes
+            .unwrap_or_else(|| panic!("{stem}: no nodes buffer"))
+            .stride;
+        let code_max = if stem.contains("_q8") {
+            Some(255)
+        } else if stem.contains("_q16") {
+            Some(65535)
+        } else {
+            None
+        };
+        out.push(Wide {
+            program: r.program,
+            node_bytes: node_bytes as usize,
+            width: 8,
+            every_node: false,
+            code_max,
+        });
+    }
+    assert_eq!(out.len(), 10, "Table 1's ten eight-wide layouts");
+    for (file, layout, algorithm, node_bytes, width, every_node) in PROGRAMS {
+        out.push(Wide {
+            program: program(file, layout, algorithm),
+            node_bytes,
+            width,
+            every_node,
+            code_max: None,
+        });
+    }
+    out
+}
+
 #[test]
 fn wide_layouts_match_the_wide_reference() {
     let driver = BatchDriver::new(2).unwrap();
@@ -133,10 +191,16 @@ fn wide_layouts_match_the_wide_reference() {
     for name in ["teapot", "pine"] {
         scenes.push(real_scene(name).unwrap_or_else(|e| panic!("real scene {name}: {e}")));
     }
-    for (file, layout, algorithm, node_bytes, width, every_node) in PROGRAMS {
+    for w in wide_programs() {
+        let (layout, node_bytes, width, every_node) = (
+            w.program.layout.as_str(),
+            w.node_bytes,
+            w.width,
+            w.every_node,
+        );
         for codegen in [Codegen::Cranelift, Codegen::Llvm(3)] {
             let code = JitClosestHit::compile_program(
-                &program(file, layout, algorithm),
+                &w.program,
                 // Unordered visits push up to width - 1 entries per level, and some hard
                 // cases are deep; a stack too small is reported (the error names the ray).
                 Some(512),
@@ -154,7 +218,7 @@ fn wide_layouts_match_the_wide_reference() {
                     let mut rays = RayKind::Secondary.rays(scene, 300, i as u64);
                     rays.extend(RayKind::Axis.rays(scene, 100, i as u64));
                     rays.extend(RayKind::Features.rays(scene, 200, 0));
-                    let want = wide_reference(&tree, &rays, width, layout == "Bvh8Q8CI");
+                    let want = wide_reference(&tree, &rays, width, w.code_max);
                     let packed = Packed::new(&code, &tree)
                         .unwrap_or_else(|e| panic!("{layout} {codegen:?} scene {i}: {e}"));
                     if !tree.is_empty() {

@@ -30,7 +30,7 @@ fn library_layout(layout: &str) -> Result<(&'static str, &'static str), String> 
 /// file (`PATH.scion[:LAYOUT]`), each with the closest hit over its type
 /// (`scion_host::library::resolve`), or a closest hit in files as
 /// `PATH.scion[+PATH.scion...]:LAYOUT:ENTRY`
-/// (`lit-tests/Inputs/bvh8_layout.scion:Bvh8:closest_hit8`,
+/// (`lit-tests/Inputs/bvh8_aos_layout.scion:Bvh8Aos:closest_hit8`,
 /// `library/algorithms/closest_hit_dop14.scion+library/layouts/dop14_split.scion:DopSplit:closest_hit_dop14`).
 fn program_of(layout: &str) -> Result<Program, String> {
     if let [paths, name, entry] = layout.split(':').collect::<Vec<_>>()[..] {

@@ -585,7 +585,10 @@ fn table1_bvh8_in_its_natural_form_packs_and_traverses_like_the_binary_tree() {
     // Catalog §4.1: 256-byte records, L64 links, six planes of eight floats decoded by a user
     // function in the layout (`child_bounds = boxes8(...)`) and encoded by array literals in
     // the build (`build lower_x = plane8(child_bounds, false, 0)`).
-    let src = include_str!("../../../../lit-tests/Inputs/bvh8_layout.scion");
+    let src = concat!(
+        include_str!("../../../../library/algorithms/closest_hit8.scion"),
+        include_str!("../../../../library/layouts/bvh8.scion")
+    );
     packs_like_the_binary_tree(src, "Bvh8", "closest_hit8", 3, 8);
 }
 
@@ -593,7 +596,10 @@ fn table1_bvh8_in_its_natural_form_packs_and_traverses_like_the_binary_tree() {
 fn table1_bvh8_q8_ci_packs_and_traverses_like_the_binary_tree() {
     // Catalog §4.5, §8.5: 104-byte records, eight-bit codes in a per-node frame decoded by a
     // user function (conservative boxes), L32 links whose count goes in with `this[28:32]`.
-    let src = include_str!("../../../../lit-tests/Inputs/bvh8_q8_ci_layout.scion");
+    let src = concat!(
+        include_str!("../../../../library/algorithms/closest_hit8.scion"),
+        include_str!("../../../../library/layouts/bvh8_q8_ci.scion")
+    );
     packs_like_the_binary_tree(src, "Bvh8Q8CI", "closest_hit8", 3, 8);
 }
 
