@@ -1,7 +1,10 @@
 //! The library's programs type-check with zero diagnostics: the prelude, then every other
 //! `library/*.scion` and `library/*/*.scion` file (each after the prelude, a layout also after
 //! the algorithm files, which declare the tree types beyond the prelude's that layouts realize;
-//! and all of them together), and the `lit-tests` inputs that are meant to compile.
+//! and the prelude with all the algorithm files together, as the registry compiles them with
+//! each layout), and the `lit-tests` inputs that are meant to compile. Layout files are
+//! alternatives to one another and are never compiled together: each may name its helpers as
+//! it likes (the eight-wide quantized layouts each have their own `Frame` and `dequant`).
 
 use super::{check_files, PRELUDE};
 use std::path::{Path, PathBuf};
@@ -60,11 +63,12 @@ fn library_files_type_check() {
                 .all(|t| !t.has_vars() && !t.has_error()),
             "{name}"
         );
-        all.push((name, text));
+        if !name.contains("/layouts/") {
+            all.push((name, text));
+        }
     }
-    let (_, typed, diags, sm) = check_files(&all);
+    let (_, _, diags, sm) = check_files(&all);
     assert!(diags.is_empty(), "{}", diags.render(&sm));
-    assert!(typed.layouts.len() >= 2);
 }
 
 #[test]
