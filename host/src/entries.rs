@@ -341,8 +341,8 @@ pub fn run(
             sig.algorithm
         )));
     }
-    if queries.len() % qs != 0
-        || results.len() % rs != 0
+    if queries.len() / qs * qs != queries.len()
+        || results.len() / rs * rs != results.len()
         || queries.len() / qs != results.len() / rs
     {
         return Err(RunError::Setup(format!(

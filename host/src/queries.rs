@@ -204,7 +204,7 @@ pub fn closest_point_from(b: &[u8]) -> ClosestPoint {
 /// A points file's bytes: 12-byte records, f32 x, y, z little-endian (docs/formats.md). `Err`
 /// for a size that is not whole records or a coordinate that is not finite.
 pub fn points_from_bytes(bytes: &[u8]) -> Result<Vec<Vec3>, String> {
-    if bytes.len() % 12 != 0 {
+    if bytes.len() / 12 * 12 != bytes.len() {
         return Err(format!(
             "{} bytes is not a whole number of 12-byte points",
             bytes.len()

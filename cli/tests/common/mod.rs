@@ -30,3 +30,28 @@ pub fn text(b: &[u8]) -> String {
 /// A unit cube's six faces as 12 triangles.
 pub const CUBE: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n\
 f 1 2 3 4\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+
+/// A soup of `n` small triangles in the unit cube (a deterministic LCG), as OBJ text.
+pub fn soup(n: usize) -> String {
+    let mut state = 12345u64;
+    let mut f = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 40) as f32) / (1u64 << 24) as f32
+    };
+    let mut obj = String::new();
+    for i in 0..n {
+        let c = [f(), f(), f()];
+        for _ in 0..3 {
+            obj.push_str(&format!(
+                "v {} {} {}\n",
+                c[0] + 0.1 * f(),
+                c[1] + 0.1 * f(),
+                c[2] + 0.1 * f()
+            ));
+        }
+        obj.push_str(&format!("f {} {} {}\n", 3 * i + 1, 3 * i + 2, 3 * i + 3));
+    }
+    obj
+}

@@ -1,0 +1,308 @@
+//! `scion run` and `scion trace --layout FILE` end to end: a layout file the library does not
+//! have traces to the reference's hits through both JITs and the emulated GPU kernels; every
+//! query kind `scion run` knows answers as its reference (closest hits as `scion trace`'s);
+//! requests that do not fit are usage errors that name what exists.
+
+mod common;
+
+use common::{scion, soup, text};
+use scion_runtime::query::read_hits;
+use std::path::{Path, PathBuf};
+
+fn scratch(test: &str) -> PathBuf {
+    common::scratch("run", test)
+}
+
+fn write(dir: &Path, name: &str, body: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, body).unwrap();
+    p.display().to_string()
+}
+
+/// A layout the library does not have, written by a user: PBRT's fields in another order
+/// (count first, then the overlay, then the box), 64-byte aligned nodes.
+const USER_LAYOUT: &str = "
+layout Mine(I: u32) {
+  P: u32; N: u32; primitives: Triangle[P];
+  group nodes[size=N, align=64] by I {
+    nprims: u16;
+    2;
+    split nprims {
+      > 0 -> Leaf { p_o: u32; data = primitives[p_o : p_o + nprims]; };
+      0 -> Interior { c_o: u32; left = I + 1; right = I + c_o; };
+    };
+    bounds: AABB;
+  };
+};
+build Mine[order=pre] {
+  build Interior(bounds: AABB, left: BVH, right: BVH) {
+    build bounds; build nprims = 0; build left;
+    let R: u32 = build right;
+    build c_o = R - this;
+    return this;
+  };
+  build Leaf(bounds: AABB, nprims: u16, data: Triangle[nprims]) {
+    build bounds; build nprims; build p_o = append(data, nprims);
+    return this;
+  };
+};
+";
+
+#[test]
+fn any_layout_file_traces_to_the_reference_hits() {
+    let dir = scratch("user_layout");
+    let scene = write(&dir, "soup.obj", &soup(300));
+    let layout = write(&dir, "mine.scion", USER_LAYOUT);
+    let reference = dir.join("ref.hits").display().to_string();
+    let o = scion(&[
+        "trace", "--scene", &scene, "--n", "4096", "--runs", "1", "-o", &reference,
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    for backend in ["jit", "llvm"] {
+        let out = dir.join(format!("{backend}.hits")).display().to_string();
+        let o = scion(&[
+            "trace",
+            "--scene",
+            &scene,
+            "--n",
+            "4096",
+            "--runs",
+            "1",
+            "--backend",
+            backend,
+            "--layout",
+            &layout,
+            "-o",
+            &out,
+        ]);
+        assert!(o.status.success(), "{backend}: {}", text(&o.stderr));
+        assert!(text(&o.stdout).contains("Mine"), "{}", text(&o.stdout));
+        assert_eq!(
+            read_hits(&out).unwrap(),
+            read_hits(&reference).unwrap(),
+            "{backend}"
+        );
+    }
+    // The GPU kernels of the same file, emulated on the CPU, checked against the reference.
+    let o = scion(&[
+        "trace",
+        "--scene",
+        &scene,
+        "--n",
+        "2048",
+        "--runs",
+        "1",
+        "--device",
+        "gpu-emulated",
+        "--layout",
+        &layout,
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stdout).contains("identical to the reference on all 2048 rays"),
+        "{}",
+        text(&o.stdout)
+    );
+    // The library's algorithms by name, a layout and algorithm that do not fit, a missing
+    // layout in a file.
+    let o = scion(&[
+        "trace",
+        "--scene",
+        &scene,
+        "--n",
+        "64",
+        "--runs",
+        "1",
+        "--backend",
+        "jit",
+        "--layout",
+        &layout,
+        "--algorithm",
+        "closest_hit",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let o = scion(&[
+        "trace",
+        "--scene",
+        &scene,
+        "--runs",
+        "1",
+        "--backend",
+        "jit",
+        "--layout",
+        &layout,
+        "--algorithm",
+        "closest_hit_dop14",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        text(&o.stderr).contains("realizes `BVH`"),
+        "{}",
+        text(&o.stderr)
+    );
+    let pick = format!("{layout}:Yours");
+    let o = scion(&[
+        "trace",
+        "--scene",
+        &scene,
+        "--runs",
+        "1",
+        "--backend",
+        "jit",
+        "--layout",
+        &pick,
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        text(&o.stderr).contains("declares no layout `Yours`"),
+        "{}",
+        text(&o.stderr)
+    );
+}
+
+#[test]
+fn run_answers_every_query_kind_and_checks_it_against_its_reference() {
+    let dir = scratch("run");
+    let scene = write(&dir, "soup.obj", &soup(300));
+    // Closest points, on two layouts: the same answers, written as 20-byte records.
+    let mut files = Vec::new();
+    for layout in ["pbrt", "sg-eq"] {
+        let out = dir.join(format!("{layout}.points")).display().to_string();
+        let o = scion(&[
+            "run",
+            "--algorithm",
+            "closest-point",
+            "--scene",
+            &scene,
+            "--layout",
+            layout,
+            "--n",
+            "500",
+            "--runs",
+            "1",
+            "--backend",
+            "jit",
+            "-o",
+            &out,
+        ]);
+        assert!(o.status.success(), "{layout}: {}", text(&o.stderr));
+        let stdout = text(&o.stdout);
+        assert!(
+            stdout.contains("closest_point_query (closest-point, BVH)"),
+            "{stdout}"
+        );
+        assert!(
+            stdout.contains("identical to brute force on 500 of 500"),
+            "{stdout}"
+        );
+        files.push(std::fs::read(&out).unwrap());
+    }
+    assert_eq!(files[0].len(), 500 * 20);
+    assert_eq!(files[0], files[1]);
+    // The best-first traversal by its name, points from a file.
+    let points = dir.join("in.points");
+    let bytes: Vec<u8> = [[0.5f32, 0.5, 0.5], [2.0, -1.0, 3.0]]
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    std::fs::write(&points, bytes).unwrap();
+    let o = scion(&[
+        "run",
+        "--algorithm",
+        "closest_point_best_first",
+        "--scene",
+        &scene,
+        "--queries-file",
+        &points.display().to_string(),
+        "--runs",
+        "1",
+        "--stack-size",
+        "4096",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stdout).contains("identical to brute force on 2 of 2"),
+        "{}",
+        text(&o.stdout)
+    );
+    // Any hit and closest hit; the closest hits equal scion trace's.
+    let o = scion(&[
+        "run",
+        "--algorithm",
+        "any-hit",
+        "--scene",
+        &scene,
+        "--n",
+        "300",
+        "--runs",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stdout).contains("occluded (any-hit, BVH)"),
+        "{}",
+        text(&o.stdout)
+    );
+    let hits = dir.join("run.hits").display().to_string();
+    let o = scion(&[
+        "run",
+        "--algorithm",
+        "closest-hit",
+        "--scene",
+        &scene,
+        "--n",
+        "300",
+        "--runs",
+        "1",
+        "-o",
+        &hits,
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let traced = dir.join("trace.hits").display().to_string();
+    let o = scion(&[
+        "trace", "--scene", &scene, "--n", "300", "--runs", "1", "-o", &traced,
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert_eq!(read_hits(&hits).unwrap(), read_hits(&traced).unwrap());
+    // Bad requests: no such entry, a points file of the wrong size, a kind the layout's type
+    // has no entry of.
+    let o = scion(&["run", "--algorithm", "nearest", "--scene", &scene]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        text(&o.stderr).contains("not an entry of a known query kind"),
+        "{}",
+        text(&o.stderr)
+    );
+    std::fs::write(&points, [0u8; 13]).unwrap();
+    let o = scion(&[
+        "run",
+        "--algorithm",
+        "closest-point",
+        "--scene",
+        &scene,
+        "--queries-file",
+        &points.display().to_string(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        text(&o.stderr).contains("12-byte points"),
+        "{}",
+        text(&o.stderr)
+    );
+    let o = scion(&[
+        "run",
+        "--algorithm",
+        "closest-point",
+        "--scene",
+        &scene,
+        "--layout",
+        "hair-bvh",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        text(&o.stderr).contains("no closest-point entry traverses `Hair`"),
+        "{}",
+        text(&o.stderr)
+    );
+}
