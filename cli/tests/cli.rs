@@ -8,19 +8,13 @@
 
 mod common;
 
-use common::{scion, soup, text, CUBE};
+use common::{scion, soup, text, write, CUBE};
 use scion_runtime::geom::{Ray, Vec3};
 use scion_runtime::query::{read_hits, write_rays};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 fn scratch(test: &str) -> PathBuf {
     common::scratch("cli", test)
-}
-
-fn write(dir: &Path, name: &str, body: &str) -> String {
-    let p = dir.join(name);
-    std::fs::write(&p, body).unwrap();
-    p.display().to_string()
 }
 
 #[test]

@@ -5,18 +5,12 @@
 
 mod common;
 
-use common::{scion, soup, text};
+use common::{fails_with, scion, soup, succeeds_with, text, write};
 use scion_runtime::query::read_hits;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 fn scratch(test: &str) -> PathBuf {
     common::scratch("run", test)
-}
-
-fn write(dir: &Path, name: &str, body: &str) -> String {
-    let p = dir.join(name);
-    std::fs::write(&p, body).unwrap();
-    p.display().to_string()
 }
 
 /// A layout the library does not have, written by a user: PBRT's fields in another order
@@ -97,12 +91,7 @@ fn any_layout_file_traces_to_the_reference_hits() {
         "--layout",
         &layout,
     ]);
-    assert!(o.status.success(), "{}", text(&o.stderr));
-    assert!(
-        text(&o.stdout).contains("identical to the reference on all 2048 rays"),
-        "{}",
-        text(&o.stdout)
-    );
+    succeeds_with(&o, "identical to the reference on all 2048 rays");
     // The library's algorithms by name, a layout and algorithm that do not fit, a missing
     // layout in a file.
     let o = scion(&[
@@ -134,12 +123,7 @@ fn any_layout_file_traces_to_the_reference_hits() {
         "--algorithm",
         "closest_hit_dop14",
     ]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(
-        text(&o.stderr).contains("realizes `BVH`"),
-        "{}",
-        text(&o.stderr)
-    );
+    fails_with(&o, 2, "realizes `BVH`");
     let pick = format!("{layout}:Yours");
     let o = scion(&[
         "trace",
@@ -152,12 +136,7 @@ fn any_layout_file_traces_to_the_reference_hits() {
         "--layout",
         &pick,
     ]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(
-        text(&o.stderr).contains("declares no layout `Yours`"),
-        "{}",
-        text(&o.stderr)
-    );
+    fails_with(&o, 2, "declares no layout `Yours`");
 }
 
 #[test]
@@ -220,12 +199,7 @@ fn run_answers_every_query_kind_and_checks_it_against_its_reference() {
         "--stack-size",
         "4096",
     ]);
-    assert!(o.status.success(), "{}", text(&o.stderr));
-    assert!(
-        text(&o.stdout).contains("identical to brute force on 2 of 2"),
-        "{}",
-        text(&o.stdout)
-    );
+    succeeds_with(&o, "identical to brute force on 2 of 2");
     // Any hit and closest hit; the closest hits equal scion trace's.
     let o = scion(&[
         "run",
@@ -238,12 +212,7 @@ fn run_answers_every_query_kind_and_checks_it_against_its_reference() {
         "--runs",
         "1",
     ]);
-    assert!(o.status.success(), "{}", text(&o.stderr));
-    assert!(
-        text(&o.stdout).contains("occluded (any-hit, BVH)"),
-        "{}",
-        text(&o.stdout)
-    );
+    succeeds_with(&o, "occluded (any-hit, BVH)");
     let hits = dir.join("run.hits").display().to_string();
     let o = scion(&[
         "run",
@@ -268,12 +237,7 @@ fn run_answers_every_query_kind_and_checks_it_against_its_reference() {
     // Bad requests: no such entry, a points file of the wrong size, a kind the layout's type
     // has no entry of.
     let o = scion(&["run", "--algorithm", "nearest", "--scene", &scene]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(
-        text(&o.stderr).contains("not an entry of a known query kind"),
-        "{}",
-        text(&o.stderr)
-    );
+    fails_with(&o, 2, "not an entry of a known query kind");
     std::fs::write(&points, [0u8; 13]).unwrap();
     let o = scion(&[
         "run",
@@ -284,12 +248,7 @@ fn run_answers_every_query_kind_and_checks_it_against_its_reference() {
         "--queries-file",
         &points.display().to_string(),
     ]);
-    assert_eq!(o.status.code(), Some(1));
-    assert!(
-        text(&o.stderr).contains("12-byte points"),
-        "{}",
-        text(&o.stderr)
-    );
+    fails_with(&o, 1, "12-byte points");
     let o = scion(&[
         "run",
         "--algorithm",
@@ -299,10 +258,5 @@ fn run_answers_every_query_kind_and_checks_it_against_its_reference() {
         "--layout",
         "hair-bvh",
     ]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(
-        text(&o.stderr).contains("no closest-point entry traverses `Hair`"),
-        "{}",
-        text(&o.stderr)
-    );
+    fails_with(&o, 2, "no closest-point entry traverses `Hair`");
 }

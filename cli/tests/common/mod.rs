@@ -22,6 +22,27 @@ pub fn scion(args: &[&str]) -> Output {
         .expect("run scion")
 }
 
+/// Writes `body` as `name` in `dir`; its path as text.
+pub fn write(dir: &std::path::Path, name: &str, body: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, body).unwrap();
+    p.display().to_string()
+}
+
+/// Asserts that `o` succeeded and its report contains `want`.
+pub fn succeeds_with(o: &Output, want: &str) {
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = text(&o.stdout);
+    assert!(out.contains(want), "`{want}` not in:\n{out}");
+}
+
+/// Asserts that `o` exited with `code` and its error contains `want`.
+pub fn fails_with(o: &Output, code: i32, want: &str) {
+    let err = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(code), "{err}");
+    assert!(err.contains(want), "`{want}` not in:\n{err}");
+}
+
 /// Output bytes as text.
 pub fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(b).into_owned()
