@@ -260,3 +260,56 @@ fn run_answers_every_query_kind_and_checks_it_against_its_reference() {
     ]);
     fails_with(&o, 2, "no closest-point entry traverses `Hair`");
 }
+
+#[test]
+fn a_tree_beyond_a_layouts_fields_is_an_error_not_a_wrong_tree() {
+    // The hair BVH keeps a leaf's count in 3 bits of its reference: leaves of up to 15
+    // triangles (the SAH default) do not fit, leaves of up to 7 do.
+    let dir = scratch("limits");
+    let mut obj = String::new();
+    // 40 triangles stacked on one spot: the SAH builder cannot split them below its cap.
+    for i in 0..40 {
+        let z = i as f32 * 1e-3;
+        obj += &format!(
+            "v 0 0 {z}\nv 1 0 {z}\nv 0 1 {z}\nf {} {} {}\n",
+            3 * i + 1,
+            3 * i + 2,
+            3 * i + 3
+        );
+    }
+    let scene = write(&dir, "stack.obj", &obj);
+    let args = [
+        "trace",
+        "--scene",
+        &scene,
+        "--n",
+        "256",
+        "--runs",
+        "1",
+        "--backend",
+        "jit",
+        "--layout",
+        "hair-bvh",
+    ];
+    let o = scion(&args);
+    fails_with(&o, 1, "does not fit layout `HairBVH`");
+    let reference = dir.join("ref.hits").display().to_string();
+    let o = scion(&[
+        "trace",
+        "--scene",
+        &scene,
+        "--n",
+        "256",
+        "--runs",
+        "1",
+        "--leaf-size",
+        "7",
+        "-o",
+        &reference,
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = dir.join("hair.hits").display().to_string();
+    let o = scion(&[&args[..], &["--leaf-size", "7", "-o", &out]].concat());
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert_eq!(read_hits(&out).unwrap(), read_hits(&reference).unwrap());
+}

@@ -70,6 +70,20 @@ pub trait LayoutCode: Sync {
     }
 }
 
+/// What a nonzero status of `@L.build` means, for messages: 1 is a value that does not fit the
+/// bit range a build stores it in (`this[a:b] = e`), i.e. a tree beyond the layout's limits.
+pub fn build_failure(layout: &str, status: i32) -> String {
+    match status {
+        1 => format!(
+            "the tree does not fit layout `{layout}`: a value does not fit the bit range its build \
+             stores it in (`this[a:b] = e`), e.g. a leaf with more triangles than the layout's \
+             count field holds or an index beyond its index bits; build smaller leaves \
+             (scion trace --leaf-size N) or pick a layout with wider fields"
+        ),
+        s => format!("@{layout}.build failed with status {s}"),
+    }
+}
+
 /// The header `%tree` points to in `@L.sizes(%tree, %sizes)` and `@L.build(%tree, %B)`
 /// (design note §3.1): the logical tree's arrays in C form. Building one is safe; whoever
 /// calls native code with its address keeps the tree alive for the call.
@@ -192,10 +206,7 @@ impl Packed {
             .collect();
         let status = code.build(&input, &mut views);
         if status != STATUS_OK {
-            return Err(format!(
-                "@{}.build failed with status {status}",
-                code.layout()
-            ));
+            return Err(build_failure(&code.layout(), status));
         }
         Ok(Packed {
             storage,

@@ -293,7 +293,7 @@ pub fn pack(
         if nonempty {
             let status = build(&view, table.as_ptr());
             if status != 0 {
-                return Err(format!("{}: status {status}", sig.layout_fn("build")));
+                return Err(crate::contract::build_failure(&sig.layout, status));
             }
         }
         let root = match (nonempty, root_ty) {
