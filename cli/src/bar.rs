@@ -9,6 +9,14 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::Duration;
 
+/// Whether a [`Bar`] over queries is being drawn.
+static QUERIES_BAR: AtomicBool = AtomicBool::new(false);
+
+/// True while a [`Bar`] over queries is up (a [`RunsBar`] then stays away).
+pub fn queries_bar_up() -> bool {
+    QUERIES_BAR.load(Ordering::Relaxed)
+}
+
 /// A bar counting `scion_host::progress` from zero to a total.
 pub struct Bar {
     stop: Arc<AtomicBool>,
@@ -19,6 +27,7 @@ impl Bar {
     /// Starts a bar for `total` queries (`what`: "rays", "points").
     pub fn new(what: &str, total: u64) -> Bar {
         scion_host::progress::reset();
+        QUERIES_BAR.store(true, Ordering::Relaxed);
         let bar = ProgressBar::new(total);
         if let Ok(style) = ProgressStyle::with_template(&format!(
             "scion: {{bar:40}} {{pos}}/{{len}} {what} ({{elapsed}} elapsed, about {{eta}} left)"
@@ -43,9 +52,38 @@ impl Bar {
 
 impl Drop for Bar {
     fn drop(&mut self) {
+        QUERIES_BAR.store(false, Ordering::Relaxed);
         self.stop.store(true, Ordering::Relaxed);
         if let Some(d) = self.drawer.take() {
             let _ = d.join();
         }
+    }
+}
+
+/// A bar over the runs of a timed trace ("run 3 of 10"), hidden when standard error is not a
+/// terminal; cleared when dropped.
+pub struct RunsBar(ProgressBar);
+
+impl RunsBar {
+    /// A bar for `total` runs (the checked one and the timed ones).
+    pub fn new(total: u64) -> RunsBar {
+        let bar = ProgressBar::new(total);
+        if let Ok(style) = ProgressStyle::with_template(
+            "scion: run {pos} of {len} ({elapsed} elapsed, about {eta} left)",
+        ) {
+            bar.set_style(style);
+        }
+        RunsBar(bar)
+    }
+
+    /// One more run done.
+    pub fn tick(&self) {
+        self.0.inc(1);
+    }
+}
+
+impl Drop for RunsBar {
+    fn drop(&mut self) {
+        self.0.finish_and_clear();
     }
 }

@@ -455,6 +455,19 @@ pub(crate) fn timed<T>(
     runs: u32,
     mut trace: impl FnMut() -> Result<T, CliError>,
 ) -> Result<(T, Timing), CliError> {
+    // A bar over the runs, unless an interpreter's bar over the queries is up.
+    let bar = (!crate::bar::queries_bar_up())
+        .then(|| crate::bar::RunsBar::new(1 + if runs > 1 { u64::from(runs) } else { 0 }));
+    let tick = || {
+        if let Some(b) = &bar {
+            b.tick();
+        }
+    };
+    let mut trace = move || {
+        let r = trace();
+        tick();
+        r
+    };
     let t = Instant::now();
     let hits = trace()?;
     let first = t.elapsed();
