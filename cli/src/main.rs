@@ -14,6 +14,7 @@ mod bar;
 mod gpu;
 mod io;
 mod list;
+mod quant_error;
 mod run;
 mod trace;
 

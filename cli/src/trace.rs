@@ -292,6 +292,14 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
             s.max_pending,
             if matches!(boxes, Boxes::Exact) { "" } else { " of the decoded boxes" }
         );
+        if !matches!(boxes, Boxes::Exact) {
+            // What the quantized boxes cost: inflation and extra work against the exact tree.
+            let exact = closest_hits_tree_stats(&tree, &rays, &driver);
+            let i = crate::quant_error::inflation(&tree, &traversed);
+            for line in crate::quant_error::report(&i, &s, &exact) {
+                outln!("{line}");
+            }
+        }
         // The same tree collapsed to 4 and 8 children per node: the work a wide layout's
         // traversal would do (nearest first, scion_runtime::reference::closest_hit_wide).
         let w4 = collapse::<4>(&traversed);

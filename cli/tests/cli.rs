@@ -529,3 +529,44 @@ fn library_scenes_by_name_and_compressed_scenes_load() {
         text(&o.stderr)
     );
 }
+
+#[test]
+fn stats_of_a_quantized_layout_report_its_error_against_the_exact_boxes() {
+    let dir = scratch("quant_stats");
+    let scene = write(&dir, "soup.obj", &soup(400));
+    let o = scion(&[
+        "trace",
+        "--scene",
+        &scene,
+        "--n",
+        "2000",
+        "--runs",
+        "1",
+        "--backend",
+        "jit",
+        "--layout",
+        "sg-eq",
+        "--stats",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = text(&o.stdout);
+    assert!(
+        out.contains("contain the exact one (conservative: no hit can be lost)"),
+        "{out}"
+    );
+    assert!(out.contains("error/ray    box tests +"), "{out}");
+    // An exact layout has no such lines.
+    let o = scion(&[
+        "trace",
+        "--scene",
+        &scene,
+        "--n",
+        "200",
+        "--runs",
+        "1",
+        "--backend",
+        "jit",
+        "--stats",
+    ]);
+    assert!(o.status.success() && !text(&o.stdout).contains("error/ray"));
+}

@@ -1,0 +1,112 @@
+//! What a quantized layout costs in accuracy, for `scion trace --stats` (paper §9.2.5; issue
+//! 15's speed against error): its decoded boxes against the exact ones node by node (how much
+//! larger, by surface area and by volume; that every decoded box contains its exact box, i.e.
+//! quantization is conservative and can lose no hit), and the extra work per ray the larger
+//! boxes cause (box tests, node visits, triangle tests of the reference traversal over the
+//! decoded tree against the same traversal over the exact tree).
+
+use scion_runtime::bvh::LogicalTree;
+use scion_runtime::reference::closest_hit::TraversalStats;
+
+/// Decoded against exact boxes over every node of a tree.
+pub struct Inflation {
+    /// Σ decoded surface area / Σ exact surface area.
+    pub area: f64,
+    /// Σ decoded volume / Σ exact volume (1 when every box is flat).
+    pub volume: f64,
+    /// Nodes whose decoded box contains the exact one.
+    pub contained: usize,
+    /// Nodes compared.
+    pub nodes: usize,
+}
+
+fn half_area(b: &[f32; 6]) -> f64 {
+    let d = [0, 1, 2].map(|a| (f64::from(b[a + 3]) - f64::from(b[a])).max(0.0));
+    d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
+}
+
+fn volume(b: &[f32; 6]) -> f64 {
+    (0..3)
+        .map(|a| (f64::from(b[a + 3]) - f64::from(b[a])).max(0.0))
+        .product()
+}
+
+/// `decoded` (the same tree with its boxes as a layout decodes them) against `exact`.
+pub fn inflation(exact: &LogicalTree, decoded: &LogicalTree) -> Inflation {
+    let (mut ea, mut da, mut ev, mut dv, mut contained) = (0.0, 0.0, 0.0, 0.0, 0);
+    for (e, d) in exact.nodes.iter().zip(&decoded.nodes) {
+        ea += half_area(&e.bounds);
+        da += half_area(&d.bounds);
+        ev += volume(&e.bounds);
+        dv += volume(&d.bounds);
+        let holds =
+            (0..3).all(|a| d.bounds[a] <= e.bounds[a] && d.bounds[a + 3] >= e.bounds[a + 3]);
+        contained += usize::from(holds);
+    }
+    let ratio = |d: f64, e: f64| if e > 0.0 { d / e } else { 1.0 };
+    Inflation {
+        area: ratio(da, ea),
+        volume: ratio(dv, ev),
+        contained,
+        nodes: exact.nodes.len().min(decoded.nodes.len()),
+    }
+}
+
+/// "+12.3 %" of `more` over `base` (per ray counts).
+fn extra(more: u64, base: u64) -> String {
+    if base == 0 {
+        return "+0 %".into();
+    }
+    format!("{:+.1} %", (more as f64 / base as f64 - 1.0) * 100.0)
+}
+
+/// The report's lines: the boxes, then the extra work against the exact tree.
+pub fn report(i: &Inflation, decoded: &TraversalStats, exact: &TraversalStats) -> [String; 2] {
+    [
+        format!(
+            "boxes        decoded / exact: surface area x{:.4}, volume x{:.4}; {} of {} decoded boxes contain the exact one{}",
+            i.area,
+            i.volume,
+            i.contained,
+            i.nodes,
+            if i.contained == i.nodes { " (conservative: no hit can be lost)" } else { " (NOT conservative)" }
+        ),
+        format!(
+            "error/ray    box tests {}, nodes visited {}, triangle tests {} against the exact boxes",
+            extra(decoded.boxes_tested, exact.boxes_tested),
+            extra(decoded.nodes_visited, exact.nodes_visited),
+            extra(decoded.triangles_tested, exact.triangles_tested),
+        ),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use scion_host::quantized::{Boxes, DecodedTree};
+    use scion_runtime::bvh::{build_sah_binned, SahOptions};
+    use scion_runtime::scene::gen;
+
+    #[test]
+    fn decoded_boxes_inflate_and_contain_the_exact_ones() {
+        let scene = gen::random_soup(300, 0.1, 7);
+        let tree = build_sah_binned(&scene.triangles, &SahOptions::default());
+        let same = inflation(&tree, &tree);
+        assert_eq!((same.area, same.volume), (1.0, 1.0));
+        assert_eq!(same.contained, tree.nodes.len());
+        for boxes in [Boxes::GlobalQ16, Boxes::SnappedQ10] {
+            let decoded = boxes.decoded_tree(&tree);
+            let i = inflation(&tree, &decoded);
+            assert_eq!(i.contained, i.nodes, "{boxes:?}: conservative");
+            assert!(i.area >= 1.0 && i.volume >= 1.0, "{boxes:?}");
+        }
+        // Fewer bits inflate more: 10-bit snapped grid against 16-bit codes.
+        let q16 = inflation(&tree, &Boxes::GlobalQ16.decoded_tree(&tree));
+        let q10 = inflation(&tree, &Boxes::SnappedQ10.decoded_tree(&tree));
+        assert!(q10.area > q16.area, "{} {}", q10.area, q16.area);
+        // A box that does not contain its exact one is reported.
+        let mut shrunk = tree.clone();
+        shrunk.nodes[0].bounds[0] += 0.01;
+        assert_eq!(inflation(&tree, &shrunk).contained, tree.nodes.len() - 1);
+    }
+}

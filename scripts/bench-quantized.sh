@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# Speed against error for every quantized binary layout of the library (issue 15 item 5): per
+# scene and ray kind, its bytes, Mrays/s (LLVM -O3, 1 thread, the paper's 9 runs) and ratio to
+# pbrt, how much its decoded boxes inflate (surface area, volume; whether every decoded box
+# contains its exact one), the extra work per ray they cause against the exact boxes (box tests,
+# node visits, triangle tests of the reference traversal), and whether its hits equal pbrt's.
+# Writes the table into docs/benchmarks.md between `<!-- bench-quantized:begin -->` and
+# `<!-- bench-quantized:end -->` (BENCH_NO_DOC=1: print only).
+#
+# Usage: scripts/bench-quantized.sh [SCENE_NAME...]   (default: teapot fzk_haus bunny sponza_dabrovic)
+#   Environment: BENCH_N (rays per run, default 65536).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+./scripts/setup.sh >/dev/null
+cargo build --release -q -p scion-cli
+bin="${CARGO_TARGET_DIR:-target}/release/scion"
+n=${BENCH_N:-65536}
+out=target/bench-quantized
+mkdir -p "$out"
+if [ $# -gt 0 ]; then scenes=("$@"); else scenes=(teapot fzk_haus bunny sponza_dabrovic); fi
+# The quantized layouts of the prelude's BVH, as the registry finds them (boxes not exact).
+layouts=$("$bin" layouts | awk 'NR > 1 && $3 == "BVH" && $5 != "exact" { print $1 }')
+
+field() { awk -v k="$1" '$1 == k { print $2 }' "$2"; }
+table=$out/table.md
+{
+  cpu=$(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //')
+  echo "Measured $(date -u '+%Y-%m-%d %H:%M UTC') on $cpu, $(nproc) CPUs; commit $(git rev-parse --short HEAD); $n rays per run (seed 1), 1 thread, LLVM -O3, \`scripts/bench-quantized.sh\`."
+  echo
+  echo "| scene | rays | layout | bytes | Mrays/s | / pbrt | area x | volume x | conservative | extra box tests | extra nodes | extra triangle tests | hits = pbrt |"
+  echo "|---|---|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---|"
+  for s in "${scenes[@]}"; do
+    for rays in primary secondary; do
+      "$bin" trace --scene "$s" --rays "$rays" --n "$n" --threads 1 --backend llvm --layout pbrt \
+        -o "$out/pbrt.hits" > "$out/pbrt.txt" 2>/dev/null
+      base=$(field throughput "$out/pbrt.txt")
+      for l in $layouts; do
+        "$bin" trace --scene "$s" --rays "$rays" --n "$n" --threads 1 --backend llvm --layout "$l" \
+          --stats -o "$out/q.hits" > "$out/q.txt" 2>/dev/null
+        mrays=$(field throughput "$out/q.txt")
+        bytes=$(field structure "$out/q.txt")
+        same=no; cmp -s "$out/q.hits" "$out/pbrt.hits" && same=yes
+        awk -v s="$s" -v r="$rays" -v l="$l" -v b="$bytes" -v m="$mrays" -v base="$base" -v same="$same" '
+          /^boxes / { area = $7; vol = $9; sub(/^x/, "", area); sub(/,$/, "", area); sub(/^x/, "", vol); sub(/;$/, "", vol);
+                      cons = ($0 ~ /\(conservative/) ? "yes" : "NO" }
+          /^error\/ray/ { bt = $4; nv = $8; tt = $12 }
+          END { printf "| %s | %s | %s | %d | %s | %.2f | %s | %s | %s | %s %% | %s %% | %s %% | %s |\n",
+                       s, r, l, b, m, m / base, area, vol, cons, bt, nv, tt, same }' "$out/q.txt"
+      done
+    done
+  done
+} > "$table"
+cat "$table"
+if [ "${BENCH_NO_DOC:-0}" != 1 ]; then
+  python3 - "$table" <<'PY'
+import sys, re
+table = open(sys.argv[1]).read()
+p = "docs/benchmarks.md"
+s = open(p).read()
+begin, end = "<!-- bench-quantized:begin -->", "<!-- bench-quantized:end -->"
+s = re.sub(re.escape(begin) + ".*?" + re.escape(end), lambda m: begin + "\n" + table + end, s, flags=re.S)
+open(p, "w").write(s)
+PY
+fi
