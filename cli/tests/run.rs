@@ -94,48 +94,24 @@ fn any_layout_file_traces_to_the_reference_hits() {
     succeeds_with(&o, "identical to the reference on all 2048 rays");
     // The library's algorithms by name, a layout and algorithm that do not fit, a missing
     // layout in a file.
-    let o = scion(&[
-        "trace",
-        "--scene",
-        &scene,
-        "--n",
-        "64",
-        "--runs",
-        "1",
-        "--backend",
-        "jit",
-        "--layout",
-        &layout,
-        "--algorithm",
-        "closest_hit",
-    ]);
+    let jit = |layout: &str, more: &[&str]| {
+        let base = [
+            "trace",
+            "--scene",
+            &scene,
+            "--runs",
+            "1",
+            "--backend",
+            "jit",
+            "--layout",
+        ];
+        scion(&[&base[..], &[layout], more].concat())
+    };
+    let o = jit(&layout, &["--n", "64", "--algorithm", "closest_hit"]);
     assert!(o.status.success(), "{}", text(&o.stderr));
-    let o = scion(&[
-        "trace",
-        "--scene",
-        &scene,
-        "--runs",
-        "1",
-        "--backend",
-        "jit",
-        "--layout",
-        &layout,
-        "--algorithm",
-        "closest_hit_dop14",
-    ]);
+    let o = jit(&layout, &["--algorithm", "closest_hit_dop14"]);
     fails_with(&o, 2, "realizes `BVH`");
-    let pick = format!("{layout}:Yours");
-    let o = scion(&[
-        "trace",
-        "--scene",
-        &scene,
-        "--runs",
-        "1",
-        "--backend",
-        "jit",
-        "--layout",
-        &pick,
-    ]);
+    let o = jit(&format!("{layout}:Yours"), &[]);
     fails_with(&o, 2, "declares no layout `Yours`");
 }
 
