@@ -12,7 +12,8 @@
 #
 # Usage: scripts/perf-counters.sh [SCENE_NAME [RAYS]]   (default: bunny, primary and secondary)
 #   Environment: SCION_SCENES (default: the repository's scenes/), PERF_N1 / PERF_N2 (ray counts,
-#   default 4096 and 20480). Prints a markdown table.
+#   default 4096 and 20480), PERF_ROWS (rows to run, below; default all). Prints a
+#   markdown table.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh >/dev/null
@@ -33,15 +34,26 @@ scene=${1:-bunny}
 kinds=${2:-primary secondary}
 n1=${PERF_N1:-4096}
 n2=${PERF_N2:-20480}
-export CARGO_TARGET_DIR=target/bench-native
-export RUSTFLAGS="-C target-cpu=native"
+# Valgrind runs no AVX-512 code: on a CPU that has it, the benchmark (and every Rust and C++ peer
+# compiled with it) is built for x86-64-v3 (AVX2) in its own folder; the JIT asks for the CPU valgrind
+# reports, which has no AVX-512 either.
+if grep -qw avx512f /proc/cpuinfo 2>/dev/null; then
+  export CARGO_TARGET_DIR=target/bench-valgrind
+  export RUSTFLAGS="-C target-cpu=x86-64-v3"
+  # tinybvh-rs compiles its C++ with -march=native; flags from the environment come last.
+  export CFLAGS="-march=x86-64-v3" CXXFLAGS="-march=x86-64-v3"
+else
+  export CARGO_TARGET_DIR=target/bench-native
+  export RUSTFLAGS="-C target-cpu=native"
+fi
 bench=$(cargo bench -p scion-bench --bench peers --no-run 2>&1 |
   sed -n 's/.*Executable .*(\(.*\)).*/\1/p' | tail -n 1)
 [ -x "$bench" ] || { echo "perf-counters: no benchmark executable" >&2; exit 1; }
 out=target/perf-counters
 mkdir -p "$out"
 
-# row name | --peers | --layouts
+# row name | --peers | --layouts; PERF_ROWS (a space-separated list of row names with `_` for
+# spaces, e.g. "llvm-O3_bvh8 embree") picks some of them.
 rows=(
   "llvm-O3 pbrt||pbrt"
   "cranelift pbrt||pbrt"
@@ -50,7 +62,19 @@ rows=(
   "tinybvh bvh2|tinybvh-bvh2|"
   "obvhs bvh2|obvhs-bvh2|"
   "embree|embree|"
+  "llvm-O3 bvh8||bvh8"
+  "llvm-O3 bvh8-q8-ci||bvh8-q8-ci"
+  "tinybvh bvh8_cpu|tinybvh-bvh8|"
 )
+if [ -n "${PERF_ROWS:-}" ]; then
+  picked=()
+  for row in "${rows[@]}"; do
+    name=${row%%|*}
+    for want in $PERF_ROWS; do [ "$want" = "${name// /_}" ] && picked+=("$row"); done
+  done
+  [ ${#picked[@]} -gt 0 ] || { echo "perf-counters: no row named in PERF_ROWS=$PERF_ROWS" >&2; exit 2; }
+  rows=("${picked[@]}")
+fi
 
 # counts FILE: "instructions D1-misses LL-misses branches mispredicts" from cachegrind's
 # summary on stderr.

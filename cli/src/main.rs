@@ -222,16 +222,18 @@ pub struct TraceArgs {
     #[arg(long, value_name = "PATH.obj|NAME")]
     pub scene: PathBuf,
     /// The layout for `--backend jit|llvm|mem-interp`: a library layout's name (a file of
-    /// library/layouts with `-` for `_`: pbrt, ptr, pbrt-align16, pbrt-soaos, pbrt-q16, sg-eq,
-    /// dop14-split, hair-bvh; default pbrt), or any layout file, `PATH.scion` (`PATH.scion:NAME`
-    /// when it declares several). `--backend jit|llvm` take either; mem-interp and the GPU the
-    /// library's closest-hit layouts. Layout-free backends trace the logical tree and ignore it.
+    /// library/layouts with `-` for `_`, e.g. pbrt, pbrt-q16, sg-eq, bvh8, bvh8-q8-ci,
+    /// dop14-split, hair-bvh; `scion layouts` lists them all; default pbrt), or any layout file,
+    /// `PATH.scion` (`PATH.scion:NAME` when it declares several). `--backend jit|llvm` take
+    /// either; mem-interp and the GPU the library's closest-hit layouts. Layout-free backends
+    /// trace the logical tree and ignore it.
     #[arg(long, value_name = "NAME|PATH.scion")]
     pub layout: Option<String>,
     /// The closest hit to compile for the layout (`--backend jit|llvm`): a library algorithm
     /// (a file stem of library/algorithms, e.g. closest_hit, or a closest-hit function's name)
     /// or a file, `PATH.scion[:FUNCTION]`. Default: the library's closest hit over the sum type
-    /// the layout realizes (closest_hit for BVH, closest_hit_dop14, closest_hit_hair).
+    /// the layout realizes (closest_hit for BVH, closest_hit8 for BVH8, closest_hit_dop14,
+    /// closest_hit_hair).
     #[arg(long, value_name = "NAME|PATH.scion")]
     pub algorithm: Option<String>,
     /// Which rays to generate (ignored with --rays-file).
