@@ -43,6 +43,11 @@ func t_lanes(a: f32x3, x: f32) -> (f32, f32, f32, f32, f32, bool) =
   (hmin(a), hmax(a), hsum(a), rsqrt(x), trunc(x), isnan(x))
 func t_bits(n: u32, k: i16, v: u8x4) -> (u32, u32, u32, i16, u8x4, u8) =
   (popcount(n), clz(n), ctz(n), ctz(k), clz(v), hmax(v))
+// min/max of an arithmetic result against a constant neither NaN nor zero: LLVM's
+// `llvm.minnum`/`llvm.maxnum` (docs/backends.md), exact here whatever the NaN.
+func t_clamp(a: f32x3, b: f32x3, x: f32) -> (f32x3, f32x3, f32) =
+  (min(max(a * b, splat(-2.5)), splat(7.0)), max(min(a - b, splat(inf)), splat(-inf)),
+   max(x / x, -1.0))
 func keep_min(best: mut (f32, u32), t: f32, id: u32) = {
   if t < best[0] { best = (t, id); }
 }
@@ -67,7 +72,7 @@ func t_ifx(a: f32x3, k: u32) -> (f32, u32) = {
 
 const FUNCS: &[&str] = &[
     "t_hit", "t_slab", "t_box", "t_tri", "t_cpb", "t_cpt", "t_cpc", "t_sat", "t_bb", "t_d2",
-    "t_axis", "t_dir", "t_lanes", "t_bits", "t_mut", "t_ifx",
+    "t_axis", "t_dir", "t_lanes", "t_bits", "t_mut", "t_ifx", "t_clamp",
 ];
 
 /// The `tree` module of the prelude functions above.

@@ -6,8 +6,10 @@
 //!   first), so that `dce` drops the copies it made dead.
 //! * `-O3`: the full DSL pipeline of paper §7.3: `mem-inline` first, so that `mem-cse` sees the
 //!   inlined bodies side by side (the slab tests of `intersects` and `distmin` on one box).
-//! * `-O2` and up end with `mem-sink`, after `dce` (dead uses would hold ops back): loads used
-//!   only in a conditional region move into it (a DOP-14's cold diagonal slabs).
+//! * `-O2` and up end with `mem-split-loads` and `mem-sink`, after `dce` (dead uses would hold
+//!   ops back): a layout array read whole only to be indexed is read one element at a time (an
+//!   eight-wide node's child taken by a sorted key), and loads used only in a conditional region
+//!   move into it (a DOP-14's cold diagonal slabs, the child a branch visits).
 //! * `--no-dsl-opt`: none of these tree/mem optimizations at any level ([`DSL_PASSES`]); the
 //!   specializations, the lowering and the backend's own optimizations stay. It is the
 //!   baseline of the benchmark of what the DSL optimizations gain (`scripts/bench-dslopt.sh`).
@@ -24,15 +26,22 @@ use crate::passes;
 use scion_ir::diag::Diagnostic;
 
 /// The tree/mem optimizations (paper §7.3) that `--no-dsl-opt` leaves out.
-pub const DSL_PASSES: &[&str] = &["mem-inline", "const-fold", "mem-cse", "dce", "mem-sink"];
+pub const DSL_PASSES: &[&str] = &[
+    "mem-inline",
+    "const-fold",
+    "mem-cse",
+    "dce",
+    "mem-split-loads",
+    "mem-sink",
+];
 
 /// The passes of optimization level `level`.
 pub fn for_level(level: u8) -> Vec<String> {
     let names: &[&str] = match level {
         0 => &[],
         1 => &["const-fold", "dce"],
-        2 => &["const-fold", "mem-cse", "dce", "mem-sink"],
-        _ => &["mem-inline", "const-fold", "mem-cse", "dce", "mem-sink"],
+        2 => &["const-fold", "mem-cse", "dce", "mem-split-loads", "mem-sink"],
+        _ => &["mem-inline", "const-fold", "mem-cse", "dce", "mem-split-loads", "mem-sink"],
     };
     names.iter().map(|s| s.to_string()).collect()
 }

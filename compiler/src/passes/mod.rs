@@ -48,6 +48,13 @@ pub fn registry() -> PassRegistry {
         create: || Box::new(mem::sink::MemSink),
     });
     r.register(PassInfo {
+        name: "mem-split-loads",
+        summary: "read an indexed layout array one element at a time instead of whole",
+        input: Level::Any,
+        output: Level::Any,
+        create: || Box::new(mem::split_loads::MemSplitLoads),
+    });
+    r.register(PassInfo {
         name: "mem-cse",
         summary: "reuse dominating equivalent pure tree/mem ops: layout and cell loads, pure calls",
         input: Level::Any,

@@ -16,9 +16,11 @@
 //! `add sub mul div rem` is replaced by the canonical quiet NaN wherever its bits can be
 //! observed ([`scion_ir::lo::nan`]: where it is defined, when some use sees the payload,
 //! possibly through `min`/`max`/`select` and block arguments, which pass an operand's bits on); `min`/`max` are
-//! compare-and-select (minNum/maxNum, first operand on ties, never `llvm.minnum`, whose zero
-//! and NaN-payload cases are looser), a single compare-and-select (`minss`) when an operand is
-//! known never to be NaN ([`scion_ir::lo::nan::MinMaxForm`]); `rem` is `frem` (C `fmod`; an error on NVPTX, whose
+//! compare-and-select (minNum/maxNum, first operand on ties; `llvm.minnum`'s zero and
+//! signaling-NaN cases are looser, so it is used only against a constant neither NaN nor zero
+//! with an arithmetic result, never a signaling NaN, as the other operand), a single
+//! compare-and-select (`minss`) when an operand is known never to be NaN
+//! ([`scion_ir::lo::nan::MinMaxForm`]); `rem` is `frem` (C `fmod`; an error on NVPTX, whose
 //! `frem` is not exact); float-to-int casts are the
 //! saturating `llvm.fpto[su]i.sat`; `next_up`/`next_down` step the bit pattern; directed rounding
 //! (`lo.add_rd` ...) is `llvm.nvvm.{add,mul}.{rm,rp}.f` on NVPTX and, for CPUs, expanded into
@@ -568,7 +570,23 @@ impl<'c> Fn<'_, 'c> {
             }
             L::Min | L::Max => {
                 let form = self.nan.min_max_form(o.operands[0], o.operands[1]);
-                Some(self.min_max(kind == L::Max, args[0], args[1], signed, form)?)
+                let quiet = self.m.def_op(o.operands[0]).is_some_and(|d| {
+                    matches!(
+                        self.m.ops[d].kind,
+                        OpKind::Lo(L::Add | L::Sub | L::Mul | L::Div | L::Fma | L::Sqrt)
+                    )
+                });
+                if form == MinMaxForm::SelectSwapped && quiet {
+                    // `q` a constant neither NaN nor zero, `p` an arithmetic result (never a
+                    // signaling NaN): `llvm.maxnum` is exactly maxNum here (no signed-zero
+                    // tie, a NaN `p` gives `q`), one instruction on every target, and unlike
+                    // the compare-and-select no pass rewrites it into a form the vectorizer
+                    // splits (`fcmp one` and a select apart).
+                    let name = if kind == L::Max { "llvm.maxnum" } else { "llvm.minnum" };
+                    Some(self.call_intr(name, &[args[0].get_type()], &[args[0], args[1]])?)
+                } else {
+                    Some(self.min_max(kind == L::Max, args[0], args[1], signed, form)?)
+                }
             }
             L::NextUp | L::NextDown => Some(self.next(kind == L::NextUp, flt(0))?),
             L::Cmp => {
