@@ -86,7 +86,14 @@ fn optimized(m: &Module, max_ops: usize) -> Module {
     let names = for_level(3);
     assert_eq!(
         names,
-        ["mem-inline", "const-fold", "mem-cse", "dce", "mem-sink"]
+        [
+            "mem-inline",
+            "const-fold",
+            "mem-cse",
+            "dce",
+            "mem-split-loads",
+            "mem-sink"
+        ]
     );
     let registry = scion_compiler::passes::registry();
     let mut pm = PassManager::from_names(&registry, &names).expect("known passes");
