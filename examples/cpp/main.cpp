@@ -3,14 +3,17 @@
 // Loads an OBJ scene and builds its logical BVH with the runtime's C library
 // (libscion_runtime.a), packs it into layout SCION_LAYOUT with the generated entry points
 // (scion_L_sizes, scion_L_build, scion_L_root; one allocation per buffer, aligned to
-// SCION_L_BUFFER_ALIGN), traces the primary rays of `scion trace` with scion_closest_hit_L
-// split into ranges over std::threads, prints `checksum: ...` (the number `scion trace`
+// SCION_L_BUFFER_ALIGN), traces the primary rays of `scion trace` with scion_A_L (A: closest_hit
+// by default) split into ranges over std::threads, prints `checksum: ...` (the number `scion trace`
 // prints) and checks every hit against the runtime's reference. Exit status: 0 when every hit
 // matches, 1 on a mismatch or an error (also out of memory), 2 for bad arguments.
 //
 // Usage: trace SCENE.obj [N rays = 65536, 1..2^32] [SEED = 1] [THREADS = 4, 1..1024]
-// Built by the Makefile next to this file, which passes -DSCION_LAYOUT=<layout name> and
-// -DSCION_HEADER="<header of scionc --emit=header>".
+// Built by the Makefile next to this file, which passes -DSCION_LAYOUT=<layout name>,
+// -DSCION_ENTRY=<closest-hit function> (default closest_hit), -DSCION_TREE=<its tree type>
+// (default BVH) and -DSCION_HEADER="<header of scionc --emit=header>". Any closest hit whose
+// query is a Ray and whose result is (t, id) fits: closest_hit8 over BVH8 for the eight-wide
+// layouts.
 
 #include <cerrno>
 #include <cinttypes>
@@ -27,22 +30,32 @@
 #include "scion_runtime.h"
 #include SCION_HEADER
 
+#ifndef SCION_ENTRY
+#define SCION_ENTRY closest_hit
+#endif
+#ifndef SCION_TREE
+#define SCION_TREE BVH
+#endif
+
 #define SCION_CAT4(a, b, c, d) a##b##c##d
 #define SCION_XCAT4(a, b, c, d) SCION_CAT4(a, b, c, d)
-// scion_<L>_<what>, SCION_<L>_<what>, scion_closest_hit_<L>.
+// scion_<L>_<what>, SCION_<L>_<what>, scion_<A>_<L>, scion_<A>_query, scion_logical_<T>.
 #define LAYOUT_FN(what) SCION_XCAT4(scion_, SCION_LAYOUT, _, what)
 #define LAYOUT_MACRO(what) SCION_XCAT4(SCION_, SCION_LAYOUT, _, what)
-#define BATCH_FN SCION_XCAT4(scion_closest_hit_, SCION_LAYOUT, , )
+#define BATCH_FN SCION_XCAT4(scion_, SCION_ENTRY, _, SCION_LAYOUT)
 #define LAYOUT_REF SCION_XCAT4(scion_, SCION_LAYOUT, _ref, )
+#define QUERY SCION_XCAT4(scion_, SCION_ENTRY, _query, )
+#define RESULT SCION_XCAT4(scion_, SCION_ENTRY, _result, )
+#define LOGICAL_TREE SCION_XCAT4(scion_logical_, SCION_TREE, , )
 
 namespace {
 
-// The query record of closest_hit is a Ray: the runtime's rays are passed as they are.
-static_assert(sizeof(scion_closest_hit_query) == sizeof(ScionRay), "query record is a ray");
-static_assert(offsetof(scion_closest_hit_query, ray_tmax) == offsetof(ScionRay, tmax), "tmax");
-static_assert(offsetof(scion_closest_hit_query, ray_direction_x) == offsetof(ScionRay, dir),
+// The query record of the closest hit is a Ray: the runtime's rays are passed as they are.
+static_assert(sizeof(QUERY) == sizeof(ScionRay), "query record is a ray");
+static_assert(offsetof(QUERY, ray_tmax) == offsetof(ScionRay, tmax), "tmax");
+static_assert(offsetof(QUERY, ray_direction_x) == offsetof(ScionRay, dir),
               "direction");
-static_assert(sizeof(scion_closest_hit_result) == 8, "result record is (t, id)");
+static_assert(sizeof(RESULT) == 8, "result record is (t, id)");
 
 constexpr std::size_t kBuffers = LAYOUT_MACRO(BUFFER_COUNT);
 constexpr std::size_t kAlign = LAYOUT_MACRO(BUFFER_ALIGN);
@@ -107,7 +120,7 @@ int run(int argc, char **argv) {
     // The tree's nodes in the shape the layout's constructor reads: the prelude's `BVH`, whose
     // node struct and schema the generated header declares.
     ScionTreeView view;
-    if (scion_tree_view(tree, &scion_logical_BVH, &view, err, sizeof err) != SCION_RT_OK) {
+    if (scion_tree_view(tree, &LOGICAL_TREE, &view, err, sizeof err) != SCION_RT_OK) {
         return fail("viewing the tree", err);
     }
 
@@ -134,12 +147,12 @@ int run(int argc, char **argv) {
     if (scion_primary_rays(scene, n, seed, rays.data(), err, sizeof err) != SCION_RT_OK) {
         return fail("generating rays", err);
     }
-    std::vector<scion_closest_hit_result> results(n);
+    std::vector<RESULT> results(n);
     for (std::uint64_t i = 0; i < n; ++i) {
         results[i].best_0 = rays[i].tmax;
         results[i].best_1 = UINT32_MAX;
     }
-    const auto *queries = reinterpret_cast<const scion_closest_hit_query *>(rays.data());
+    const auto *queries = reinterpret_cast<const QUERY *>(rays.data());
 
     // Trace: the rays split into one contiguous range per thread. An empty tree has no packed
     // node to start from: every ray misses, and the results stay as initialized.
