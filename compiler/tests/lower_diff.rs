@@ -43,8 +43,8 @@ func t_lanes(a: f32x3, x: f32) -> (f32, f32, f32, f32, f32, bool) =
   (hmin(a), hmax(a), hsum(a), rsqrt(x), trunc(x), isnan(x))
 func t_bits(n: u32, k: i16, v: u8x4) -> (u32, u32, u32, i16, u8x4, u8) =
   (popcount(n), clz(n), ctz(n), ctz(k), clz(v), hmax(v))
-// min/max of an arithmetic result against a constant neither NaN nor zero: LLVM's
-// `llvm.minnum`/`llvm.maxnum` (docs/backends.md), exact here whatever the NaN.
+// min/max of an arithmetic result against a constant neither NaN nor zero (the slab test's NaN
+// clamps; LLVM's `llvm.minnum`/`llvm.maxnum`, docs/backends.md), exact whatever the NaN.
 func t_clamp(a: f32x3, b: f32x3, x: f32) -> (f32x3, f32x3, f32) =
   (min(max(a * b, splat(-2.5)), splat(7.0)), max(min(a - b, splat(inf)), splat(-inf)),
    max(x / x, -1.0))

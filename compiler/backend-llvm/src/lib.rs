@@ -30,6 +30,7 @@
 //! assert!(String::from_utf8(asm).unwrap().contains("fadd"));
 //! ```
 
+mod clamps;
 pub mod jit;
 pub mod target;
 pub mod translate;

@@ -297,7 +297,11 @@ pub(crate) fn optimize(
         format!("default<O{level}>")
     };
     lm.run_passes(&pipeline, tm, opts)
-        .map_err(|e| LlvmError(format!("optimization pipeline: {e}")))
+        .map_err(|e| LlvmError(format!("optimization pipeline: {e}")))?;
+    if tm.get_triple().as_str().to_string_lossy().starts_with("x86_64") {
+        crate::clamps::two_lane_clamps_as_selects(lm);
+    }
+    Ok(())
 }
 
 /// Machine code (`Asm` or `Object`) of `lm`.

@@ -18,7 +18,8 @@
 //! possibly through `min`/`max`/`select` and block arguments, which pass an operand's bits on); `min`/`max` are
 //! compare-and-select (minNum/maxNum, first operand on ties; `llvm.minnum`'s zero and
 //! signaling-NaN cases are looser, so it is used only against a constant neither NaN nor zero
-//! with an arithmetic result, never a signaling NaN, as the other operand), a single
+//! with an arithmetic result, never a signaling NaN, as the other operand; two-lane ones go
+//! back to compare-and-select on x86-64 after optimization, [`crate::clamps`]), a single
 //! compare-and-select (`minss`) when an operand is known never to be NaN
 //! ([`scion_ir::lo::nan::MinMaxForm`]); `rem` is `frem` (C `fmod`; an error on NVPTX, whose
 //! `frem` is not exact); float-to-int casts are the
