@@ -1,0 +1,55 @@
+#!/usr/bin/env bash
+# Instructions per ray of one compiled closest hit, exactly, and where they go: the C++ example
+# (examples/cpp) built for a layout and algorithm with `scionc -O3 --emit=obj`, run once under
+# valgrind's callgrind with collection only inside the generated batch entry, so loading,
+# building and packing do not count. With BLOCKS=1 it also prints the basic blocks of the entry
+# that cost the most per ray (scripts/callgrind-blocks.py: each instruction's count from
+# callgrind.out, summed per block of `objdump -d`). Deterministic, unlike timings on a shared
+# machine: a compiler or library change is measured by running this before and after it.
+#
+# Usage: scripts/count-instructions.sh [LAYOUT_FILE [LAYOUT [ENTRY [TREE [SCENE [N]]]]]]
+#   default: pbrt LinearBVH closest_hit BVH bunny 65536 (primary rays, one thread).
+#   e.g.   scripts/count-instructions.sh bvh8 Bvh8 closest_hit8 BVH8 fzk_haus
+#   Environment: CPU (scionc --cpu, default x86-64-v3: valgrind runs no AVX-512), BLOCKS=1,
+#   ALGORITHM (a .scion file instead of library/algorithms/ENTRY.scion).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+./scripts/setup.sh >/dev/null
+command -v valgrind >/dev/null || {
+  echo "count-instructions: installing valgrind (Debian package)" >&2
+  SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO=sudo
+  $SUDO apt-get update -q >/dev/null
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q valgrind >/dev/null
+}
+layout_file=${1:-pbrt}
+layout=${2:-LinearBVH}
+entry=${3:-closest_hit}
+tree=${4:-BVH}
+scene=${5:-bunny}
+n=${6:-65536}
+cpu=${CPU:-x86-64-v3}
+algorithm=${ALGORITHM:-library/algorithms/$entry.scion}
+cargo build -q --release -p scion-compiler -p scion-runtime-c
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+scionc=target/release/scionc
+$scionc -O3 --emit=obj --cpu="$cpu" --layout "$layout" --entry "$entry" -o "$work/entry.o" \
+  "$algorithm" "library/layouts/$layout_file.scion"
+$scionc --emit=header --layout "$layout" --entry "$entry" -o "$work/scion_${entry}_$layout.h" \
+  "$algorithm" "library/layouts/$layout_file.scion"
+${CXX:-g++} -std=c++17 -O2 -I"$work" -Iruntime/capi/include -DSCION_LAYOUT="$layout" \
+  -DSCION_ENTRY="$entry" -DSCION_TREE="$tree" "-DSCION_HEADER=\"scion_${entry}_$layout.h\"" \
+  examples/cpp/main.cpp "$work/entry.o" -Ltarget/release -lscion_runtime -lpthread -ldl -lm \
+  -o "$work/trace"
+scene_path=$(ls scenes/"$scene".obj scenes/"$scene".obj.gz 2>/dev/null | head -n 1 || true)
+[ -n "$scene_path" ] || scene_path=$scene
+valgrind --tool=callgrind --dump-instr=yes --toggle-collect="scion_${entry}_$layout" \
+  --callgrind-out-file="$work/cg.out" "$work/trace" "$scene_path" "$n" 1 1 > "$work/run.out" \
+  2> "$work/run.err" || { cat "$work/run.err" "$work/run.out" >&2; exit 1; }
+grep -q "mismatches: 0" "$work/run.out" || { cat "$work/run.out" >&2; echo "count-instructions: hits differ from the reference" >&2; exit 1; }
+total=$(sed -n 's/.*Collected : *\([0-9]*\).*/\1/p' "$work/run.err")
+awk -v t="$total" -v n="$n" -v what="$layout_file $entry $scene ($n primary rays, --cpu=$cpu)" \
+  'BEGIN { printf "%s: %.1f instructions per ray\n", what, t / n }'
+if [ "${BLOCKS:-0}" = 1 ]; then
+  (cd "$work" && python3 "$OLDPWD/scripts/callgrind-blocks.py" ./trace "scion_${entry}_$layout" "$n")
+fi
