@@ -145,16 +145,17 @@ def summary(rows_path, n):
     return "\n".join(out) + "\n"
 
 
-def into(doc, summary_path):
+def into(doc, summary_path, begin=BEGIN, end=END):
+    """Replaces the text between the markers `begin` and `end` in `doc` with the summary."""
     text = open(doc).read()
     new = open(summary_path).read()
-    if BEGIN not in text or END not in text:
-        sys.exit("%s: no %s ... %s markers" % (doc, BEGIN, END))
-    head, rest = text.split(BEGIN, 1)
-    _, tail = rest.split(END, 1)
+    if begin not in text or end not in text:
+        sys.exit("%s: no %s ... %s markers" % (doc, begin, end))
+    head, rest = text.split(begin, 1)
+    _, tail = rest.split(end, 1)
     tmp = doc + ".tmp"
     with open(tmp, "w") as f:
-        f.write(head + BEGIN + "\n" + new + END + tail)
+        f.write(head + begin + "\n" + new + end + tail)
     os.replace(tmp, doc)
 
 
