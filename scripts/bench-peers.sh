@@ -18,12 +18,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh >/dev/null
 scenes=$(cd "${SCION_SCENES:-scenes}" && pwd)
-# NAME -> its file in $scenes (NAME.obj, else NAME.obj.gz); fails when neither exists.
-scene_file() {
-  for f in "$scenes/$1.obj" "$scenes/$1.obj.gz"; do [ -f "$f" ] && { echo "$f"; return 0; }; done
-  echo "$(basename "$0"): no scene $1 in $scenes (NAME.obj or NAME.obj.gz)" >&2
-  return 1
-}
+. scripts/bench-lib.sh
 n=${BENCH_N:-65536}
 all=$(nproc)
 threads=${BENCH_THREADS:-1 all}
@@ -35,8 +30,7 @@ rows="$out/rows.tsv"
 if [ $# -gt 0 ]; then
   names=("$@")
 else
-  # The library scenes, smallest first.
-  names=(teapot pine suzanne balloon fzk_haus sponza_dabrovic bunny engine cruiser_cg57 dragon)
+  names=("${LIBRARY_SCENES[@]}")
 fi
 for s in "${names[@]}"; do
   scene_file "$s" > /dev/null || exit 2
@@ -45,9 +39,7 @@ done
 export CARGO_TARGET_DIR=target/bench-native
 export RUSTFLAGS="-C target-cpu=native"
 echo "bench-peers: building the benchmark (target-cpu=native)" >&2
-bench=$(cargo bench -p scion-bench --bench peers --no-run 2>&1 |
-  sed -n 's/.*Executable .*(\(.*\)).*/\1/p' | tail -n 1)
-[ -x "$bench" ] || { echo "bench-peers: the benchmark did not build" >&2; exit 1; }
+bench=$(peers_bench)
 
 total=$(( ${#names[@]} * 2 * $(wc -w <<<"$threads") ))
 k=0

@@ -10,12 +10,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scenes=${1:-${SCION_SCENES:-scenes}}
-# NAME -> its file in $scenes (NAME.obj, else NAME.obj.gz); fails when neither exists.
-scene_file() {
-  for f in "$scenes/$1.obj" "$scenes/$1.obj.gz"; do [ -f "$f" ] && { echo "$f"; return 0; }; done
-  echo "$(basename "$0"): no scene $1 in $scenes (NAME.obj or NAME.obj.gz)" >&2
-  return 1
-}
+. scripts/bench-lib.sh
 shift || true
 cargo build --release -q -p scion-cli
 scion=target/release/scion

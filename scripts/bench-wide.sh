@@ -14,11 +14,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh >/dev/null
 scenes=$(cd "${SCION_SCENES:-scenes}" && pwd)
-scene_file() {
-  for f in "$scenes/$1.obj" "$scenes/$1.obj.gz"; do [ -f "$f" ] && { echo "$f"; return 0; }; done
-  echo "$(basename "$0"): no scene $1 in $scenes (NAME.obj or NAME.obj.gz)" >&2
-  return 1
-}
+. scripts/bench-lib.sh
 n=${BENCH_N:-65536}
 threads=${BENCH_THREADS:-1}
 out=target/bench-wide
@@ -28,7 +24,7 @@ rows="$out/rows.tsv"
 if [ $# -gt 0 ]; then
   names=("$@")
 else
-  names=(teapot pine suzanne balloon fzk_haus sponza_dabrovic bunny engine cruiser_cg57 dragon)
+  names=("${LIBRARY_SCENES[@]}")
 fi
 for s in "${names[@]}"; do
   scene_file "$s" > /dev/null || exit 2
@@ -37,9 +33,7 @@ done
 export CARGO_TARGET_DIR=target/bench-native
 export RUSTFLAGS="-C target-cpu=native"
 echo "bench-wide: building the benchmark (target-cpu=native)" >&2
-bench=$(cargo bench -p scion-bench --bench peers --no-run 2>&1 |
-  sed -n 's/.*Executable .*(\(.*\)).*/\1/p' | tail -n 1)
-[ -x "$bench" ] || { echo "bench-wide: the benchmark did not build" >&2; exit 1; }
+bench=$(peers_bench)
 
 total=$(( ${#names[@]} * 2 ))
 k=0

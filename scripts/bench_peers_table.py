@@ -76,7 +76,9 @@ def header(n):
     )
 
 
-def summary(rows_path, n):
+def read_runs(rows_path):
+    """The benchmark's rows by run: {(scene, rays, threads): {"triangles": n, row name: Mrays/s}}
+    and the runs in the order they came."""
     runs = {}
     order = []
     for line in open(rows_path):
@@ -88,6 +90,11 @@ def summary(rows_path, n):
             runs[key] = {"triangles": int(f[1])}
             order.append(key)
         runs[key][f[5]] = float(f[6])
+    return runs, order
+
+
+def summary(rows_path, n):
+    runs, order = read_runs(rows_path)
     out = [header(n), ""]
     out.append(
         "Throughput of Scion's closest hit (LLVM -O3, pbrt layout) in Mrays/s, and its ratio to "

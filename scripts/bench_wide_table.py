@@ -15,7 +15,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_peers_table import header, into  # noqa: E402
+from bench_peers_table import header, into, read_runs  # noqa: E402
 
 BEGIN = "<!-- bench-wide:begin -->"
 END = "<!-- bench-wide:end -->"
@@ -23,16 +23,7 @@ WIDE = ["llvm-O3 bvh8", "llvm-O3 bvh8-q8-ci"]
 
 
 def summary(rows_path, n):
-    runs, order = {}, []
-    for line in open(rows_path):
-        f = line.rstrip("\n").split("\t")
-        if len(f) < 12:
-            continue
-        key = (f[0], f[2], int(f[4]))
-        if key not in runs:
-            runs[key] = {}
-            order.append(key)
-        runs[key][f[5]] = float(f[6])
+    runs, order = read_runs(rows_path)
     out = [header(n).replace("`scripts/bench-peers.sh`", "`scripts/bench-wide.sh`"), ""]
     out.append(
         "Throughput in Mrays/s of the eight-wide layouts (LLVM -O3, `closest_hit8`) and the "

@@ -15,12 +15,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh >/dev/null
-command -v valgrind >/dev/null || {
-  echo "count-instructions: installing valgrind (Debian package)" >&2
-  SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO=sudo
-  $SUDO apt-get update -q >/dev/null
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q valgrind >/dev/null
-}
+. scripts/bench-lib.sh
+need_valgrind
 layout_file=${1:-pbrt}
 layout=${2:-LinearBVH}
 entry=${3:-closest_hit}
@@ -41,8 +37,7 @@ ${CXX:-g++} -std=c++17 -O2 -I"$work" -Iruntime/capi/include -DSCION_LAYOUT="$lay
   -DSCION_ENTRY="$entry" -DSCION_TREE="$tree" "-DSCION_HEADER=\"scion_${entry}_$layout.h\"" \
   examples/cpp/main.cpp "$work/entry.o" -Ltarget/release -lscion_runtime -lpthread -ldl -lm \
   -o "$work/trace"
-scene_path=$(ls scenes/"$scene".obj scenes/"$scene".obj.gz 2>/dev/null | head -n 1 || true)
-[ -n "$scene_path" ] || scene_path=$scene
+scene_path=$(scene_file "$scene" 2>/dev/null || echo "$scene")
 valgrind --tool=callgrind --dump-instr=yes --toggle-collect="scion_${entry}_$layout" \
   --callgrind-out-file="$work/cg.out" "$work/trace" "$scene_path" "$n" 1 1 > "$work/run.out" \
   2> "$work/run.err" || { cat "$work/run.err" "$work/run.out" >&2; exit 1; }

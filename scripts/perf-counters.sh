@@ -17,19 +17,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh >/dev/null
-command -v valgrind >/dev/null || {
-  echo "perf-counters: installing valgrind (Debian package)" >&2
-  SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO=sudo
-  $SUDO apt-get update -q >/dev/null
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q valgrind >/dev/null
-}
 scenes=$(cd "${SCION_SCENES:-scenes}" && pwd)
-# NAME -> its file in $scenes (NAME.obj, else NAME.obj.gz); fails when neither exists.
-scene_file() {
-  for f in "$scenes/$1.obj" "$scenes/$1.obj.gz"; do [ -f "$f" ] && { echo "$f"; return 0; }; done
-  echo "$(basename "$0"): no scene $1 in $scenes (NAME.obj or NAME.obj.gz)" >&2
-  return 1
-}
+. scripts/bench-lib.sh
+need_valgrind
 scene=${1:-bunny}
 kinds=${2:-primary secondary}
 n1=${PERF_N1:-4096}
@@ -46,9 +36,7 @@ else
   export CARGO_TARGET_DIR=target/bench-native
   export RUSTFLAGS="-C target-cpu=native"
 fi
-bench=$(cargo bench -p scion-bench --bench peers --no-run 2>&1 |
-  sed -n 's/.*Executable .*(\(.*\)).*/\1/p' | tail -n 1)
-[ -x "$bench" ] || { echo "perf-counters: no benchmark executable" >&2; exit 1; }
+bench=$(peers_bench)
 out=target/perf-counters
 mkdir -p "$out"
 
