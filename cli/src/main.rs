@@ -11,6 +11,7 @@
 //! written whole or not at all (`io`).
 
 mod bar;
+mod collide;
 mod gpu;
 mod io;
 mod list;
@@ -50,8 +51,9 @@ enum Command {
     /// comment lines naming the layout and its buffers), to run with `scion trace --device gpu
     /// --ptx` or `scion-gpu` (docs/gpu.md).
     Ptx(PtxArgs),
-    /// Run any algorithm of a known query kind (closest hit, any hit, closest point) compiled
-    /// for a layout on a scene, timed by the paper's method and checked against its reference.
+    /// Run any algorithm of a known query kind (closest hit, any hit, closest point, collision)
+    /// compiled for a layout on a scene, timed by the paper's method and checked against its
+    /// reference.
     Run(RunArgs),
     /// List the library's layouts (library/layouts/*.scion): the name --layout takes, the
     /// layout, the sum type it realizes, the closest hit compiled for it, how it stores boxes.
@@ -70,9 +72,11 @@ pub enum RunBackend {
 /// Arguments of `scion run`.
 #[derive(clap::Args, Debug)]
 pub struct RunArgs {
-    /// What to run: a query kind (closest-hit, any-hit, closest-point: the library's entry of
-    /// that kind over the layout's tree type: closest_hit, occluded, closest_point_query), a
-    /// library function of a known kind (closest_point_best_first), or `PATH.scion[:FUNCTION]`.
+    /// What to run: a query kind (closest-hit, any-hit, closest-point, collide: the library's
+    /// entry of that kind over the layout's tree type: closest_hit, occluded,
+    /// closest_point_query, collide), a library function of a known kind
+    /// (closest_point_best_first), or `PATH.scion[:FUNCTION]`. A collision runs the scene
+    /// against its copy turned by --rotate.
     #[arg(long, value_name = "KIND|FUNCTION|PATH.scion")]
     pub algorithm: String,
     /// The scene: an OBJ file (plain or `.obj.gz`) or a library scene's name.
@@ -109,11 +113,18 @@ pub struct RunArgs {
     /// Largest leaf of the SAH builder (1..=15).
     #[arg(long, default_value_t = 15, value_parser = clap::value_parser!(u32).range(1..=15))]
     pub leaf_size: u32,
-    /// Entries of the traversal's explicit stack (default 64).
+    /// Entries of the traversal's explicit stack (default 64; 1024 for a collision, whose
+    /// stack holds pairs of subtrees).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
     pub stack_size: Option<u32>,
+    /// Collision: the copy of the scene the scene is tested against is turned by these angles
+    /// in degrees about the x, y and z axes through the centre of its box (x first, then y,
+    /// then z), as the paper's evaluation does.
+    #[arg(long, value_name = "X,Y,Z", default_value = "60,70,10", value_parser = parse_angles)]
+    pub rotate: [f64; 3],
     /// Write the result records here: 8 bytes per closest hit (f32 t, u32 id), 4 per any hit
-    /// (u32, nonzero when occluded), 20 per closest point (f32 distance, u32 id, f32 x, y, z).
+    /// (u32, nonzero when occluded), 20 per closest point (f32 distance, u32 id, f32 x, y, z),
+    /// 8 per colliding pair (u32 face id in the scene, u32 in the rotated copy; sorted).
     #[arg(short = 'o', long = "output", value_name = "FILE")]
     pub output: Option<PathBuf>,
 }
@@ -337,6 +348,21 @@ fn check_gpu_cpu(cpu: Option<&str>) -> Result<(), CliError> {
             .map_err(|e| CliError::usage(format!("--cpu {cpu}: {}", e.0))),
         None => Ok(()),
     }
+}
+
+/// `--rotate X,Y,Z`: three finite angles in degrees.
+fn parse_angles(s: &str) -> Result<[f64; 3], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let [x, y, z] = parts[..] else {
+        return Err(format!(
+            "`{s}`: expected three angles in degrees, as 60,70,10"
+        ));
+    };
+    let angle = |a: &str| match a.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(format!("`{a}` is not a finite angle in degrees")),
+    };
+    Ok([angle(x)?, angle(y)?, angle(z)?])
 }
 
 /// What `scion run` checks before the long work: the scene, the threads, the output.

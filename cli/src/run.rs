@@ -67,7 +67,12 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
         kind.name(),
         p.layout
     ));
-    let entries = Entries::compile(p, codegen, args.stack_size).map_err(|e| {
+    // A collision's stack holds pairs of subtrees: deeper than one tree's.
+    let stack_size = match kind {
+        QueryKind::Collide => Some(args.stack_size.unwrap_or(1024)),
+        _ => args.stack_size,
+    };
+    let entries = Entries::compile(p, codegen, stack_size).map_err(|e| {
         CliError::new(format!(
             "cannot compile {} for `{}`: {e}",
             p.algorithm, p.layout
@@ -79,6 +84,9 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
     let scene =
         load_obj(&args.scene).map_err(|e| CliError::new(format!("cannot load the scene: {e}")))?;
     let load_time = t.elapsed();
+    if kind == QueryKind::Collide {
+        return crate::collide::run(args, &resolved, &entries, &scene, load_time);
+    }
     let tree = build_with(&scene, args.builder, args.leaf_size);
     let driver = BatchDriver::new(args.threads).map_err(CliError::new)?;
     let (queries, source) = make_queries(kind, &scene, args)?;
@@ -152,7 +160,7 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
 }
 
 /// 64-bit FNV-1a of `bytes` (the hits checksum's hash, over any result records).
-fn fnv1a(bytes: &[u8]) -> u64 {
+pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
         (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
     })

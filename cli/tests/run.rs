@@ -299,7 +299,15 @@ fn a_tree_beyond_a_layouts_fields_is_an_error_not_a_wrong_tree() {
 fn every_library_layout_traces_teapot_to_the_reference_hits() {
     let dir = scratch("every_layout");
     let common_args = [
-        "trace", "--scene", "teapot", "--n", "4096", "--runs", "1", "--leaf-size", "7",
+        "trace",
+        "--scene",
+        "teapot",
+        "--n",
+        "4096",
+        "--runs",
+        "1",
+        "--leaf-size",
+        "7",
     ];
     let reference = dir.join("ref.hits").display().to_string();
     let o = scion(&[&common_args[..], &["-o", &reference]].concat());

@@ -65,7 +65,7 @@ fn place(
             Some(def) if def.is_record() => def.shared.iter().map(|f| f.ty).collect(),
             _ => return Err(format!("`{name}` has no plain-data layout")),
         },
-        Type::View(_) => {
+        Type::View(_) | Type::Set(_) => {
             if let Some(o) = offs {
                 o.extend([base, base + 8, base + 16]);
             }

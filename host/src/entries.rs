@@ -38,7 +38,7 @@ pub struct Entries {
 
 /// The root reference's C type.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum RootTy {
+pub(crate) enum RootTy {
     Ptr,
     U64,
     U32,
@@ -47,8 +47,8 @@ enum RootTy {
 /// A tree packed by the generated `scion_L_build`: the buffers and the root reference.
 pub struct PackedEntries {
     buffers: Vec<(Vec<u8>, usize, usize)>,
-    root: u64,
-    root_ty: RootTy,
+    pub(crate) root: u64,
+    pub(crate) root_ty: RootTy,
     /// Time of `sizes`, the allocations and `build`.
     pub pack_time: Duration,
     /// False for the empty tree (nothing to traverse: every query keeps its initial result).
@@ -61,7 +61,7 @@ impl PackedEntries {
         self.buffers.iter().map(|b| b.2).sum()
     }
 
-    fn table(&self) -> Vec<*const u8> {
+    pub(crate) fn table(&self) -> Vec<*const u8> {
         self.buffers
             .iter()
             .map(|(b, off, _)| b[*off..].as_ptr())
@@ -208,6 +208,11 @@ impl Entries {
     /// The entries' C signature (records, buffers, logical tree).
     pub fn sig(&self) -> &EntrySig {
         &self.lo.entry
+    }
+
+    /// The address of the exported function `name`.
+    pub(crate) fn function(&self, name: &str) -> Result<*const u8, String> {
+        function(self.code.as_ref(), name)
     }
 
     /// Packs `tree` (its logical nodes filled in the entry's schema) with the generated

@@ -20,6 +20,7 @@
 //!   Cranelift or LLVM, as a [`contract::LayoutCode`].
 //! - [`entries`]: any algorithm's exported C entries called as a C host calls them, over
 //!   query and result records of the sizes the compiler's ABI computed (`scion run`).
+//! - [`collide`]: a collision entry over two packed trees, its pairs through a sink.
 //! - [`gpu_emu`]: the GPU pipeline of `scion-cuda` emulated on the CPU: the GPU kernels
 //!   compiled for the host (`lo-host-kernels`), launched as grids of host threads.
 //! - [`progress`]: how many queries the interpreters have answered, for progress bars.
@@ -27,6 +28,7 @@
 //! - [`quantized`]: how a layout stores its boxes, and the decoded tree a quantized layout
 //!   really traverses (its bit-for-bit reference).
 pub mod backend;
+pub mod collide;
 pub mod contract;
 pub mod entries;
 pub mod gpu_emu;

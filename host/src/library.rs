@@ -6,6 +6,7 @@
 //! files with the prelude to the `tree` level and reads the module's layout records (each
 //! layout with the sum type the type checker chose for it), the entry functions of a known
 //! [`QueryKind`] (by signature: `(ray: Ray, tree: T, best: mut (f32, u32))` is a closest hit,
+//! `(a: T, b: T, pairs: mut set[(u32, u32)])` a collision,
 //! `(ray, tree, hit: mut u32)` an any hit, `(p: f32x3, tree, best: mut (f32, u32, f32x3))` a
 //! closest point; each with the tree type `T` it traverses) and, from a layout's build
 //! functions, how it stores boxes (a build that quantizes with `quant_lo`/`quant_hi` is
@@ -75,11 +76,23 @@ pub enum QueryKind {
     AnyHit,
     /// `(p: f32x3, tree, best: mut (f32, u32, f32x3))`: the nearest surface point.
     ClosestPoint,
+    /// `(a: tree, b: tree, pairs: mut set[(u32, u32)])`: the colliding triangle pairs of two
+    /// trees. One query over two trees, not a batch of queries over one (`scion run`'s
+    /// collision path, `crate::entries::Entries::collide`).
+    Collide,
 }
 
 impl QueryKind {
     /// Every kind.
-    pub const ALL: [QueryKind; 3] = [
+    pub const ALL: [QueryKind; 4] = [
+        QueryKind::ClosestHit,
+        QueryKind::AnyHit,
+        QueryKind::ClosestPoint,
+        QueryKind::Collide,
+    ];
+
+    /// The kinds whose entries answer a batch of queries over one tree (`crate::queries`).
+    pub const BATCHED: [QueryKind; 3] = [
         QueryKind::ClosestHit,
         QueryKind::AnyHit,
         QueryKind::ClosestPoint,
@@ -91,6 +104,7 @@ impl QueryKind {
             QueryKind::ClosestHit => "closest-hit",
             QueryKind::AnyHit => "any-hit",
             QueryKind::ClosestPoint => "closest-point",
+            QueryKind::Collide => "collide",
         }
     }
 
@@ -100,6 +114,7 @@ impl QueryKind {
             QueryKind::ClosestHit => "closest_hit",
             QueryKind::AnyHit => "occluded",
             QueryKind::ClosestPoint => "closest_point_query",
+            QueryKind::Collide => "collide",
         }
     }
 
@@ -109,12 +124,15 @@ impl QueryKind {
             QueryKind::ClosestHit => "(ray: Ray, tree: T, best: mut (f32, u32))",
             QueryKind::AnyHit => "(ray: Ray, tree: T, hit: mut u32)",
             QueryKind::ClosestPoint => "(p: f32x3, tree: T, best: mut (f32, u32, f32x3))",
+            QueryKind::Collide => "(a: T, b: T, pairs: mut set[(u32, u32)])",
         }
     }
 
-    /// The query and result types (as the `tree` level prints them) of this kind.
+    /// The query and result types (as the `tree` level prints them) of this kind (for
+    /// collision, the query is a second tree: `T`).
     fn signature(self) -> (&'static str, &'static str) {
         match self {
+            QueryKind::Collide => ("T", "!tree.ref<set<tuple<u32, u32>>>"),
             QueryKind::ClosestHit => ("!tree.adt<\"Ray\">", "!tree.ref<tuple<f32, u32>>"),
             QueryKind::AnyHit => ("!tree.adt<\"Ray\">", "!tree.ref<u32>"),
             QueryKind::ClosestPoint => {
@@ -213,10 +231,13 @@ fn entries(module: &Module) -> Vec<(String, String, QueryKind)> {
             let Type::Adt(t) = module.types.get(tree) else {
                 return None;
             };
-            let (q, r) = (
-                module.types.display(query).to_string(),
-                module.types.display(out).to_string(),
-            );
+            // Two parameters of one sum type: the query is the second tree (`T`).
+            let q = if query == tree && module.adt(t).is_some_and(|d| !d.is_record()) {
+                "T".to_string()
+            } else {
+                module.types.display(query).to_string()
+            };
+            let r = module.types.display(out).to_string();
             QueryKind::ALL
                 .into_iter()
                 .find(|k| k.signature() == (q.as_str(), r.as_str()))

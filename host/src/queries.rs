@@ -18,6 +18,10 @@ use scion_runtime::reference::closest_hits_tree;
 use scion_runtime::reference::closest_point::{closest_point_brute, ClosestPoint};
 use std::sync::Mutex;
 
+/// Why [`Queries`] never has the kind [`QueryKind::Collide`]: its constructors make hit and
+/// closest-point queries only.
+const NOT_BATCHED: &str = "collision is one query over two trees (crate::collide), not a batch";
+
 /// Queries of one kind, as the entry's query records.
 #[derive(Clone, Debug)]
 pub struct Queries {
@@ -34,7 +38,10 @@ pub struct Queries {
 impl Queries {
     /// Hit queries (closest or any) of `rays`.
     pub fn rays(kind: QueryKind, rays: Vec<Ray>) -> Queries {
-        assert!(kind != QueryKind::ClosestPoint, "rays are hit queries");
+        assert!(
+            matches!(kind, QueryKind::ClosestHit | QueryKind::AnyHit),
+            "rays are hit queries"
+        );
         Queries {
             kind,
             bytes: rays_to_bytes(&rays),
@@ -76,6 +83,7 @@ impl Queries {
             QueryKind::ClosestHit => (32, 8),
             QueryKind::AnyHit => (32, 4),
             QueryKind::ClosestPoint => (12, 20),
+            QueryKind::Collide => unreachable!("{NOT_BATCHED}"),
         }
     }
 
@@ -95,6 +103,7 @@ impl Queries {
             QueryKind::ClosestPoint => (0..self.points.len())
                 .flat_map(|_| closest_point_bytes(&ClosestPoint::start(f32::INFINITY)))
                 .collect(),
+            QueryKind::Collide => unreachable!("{NOT_BATCHED}"),
         }
     }
 
@@ -149,6 +158,7 @@ impl Queries {
                     "identical to brute force on {k} of {n} queries (the first {k})"
                 ))
             }
+            QueryKind::Collide => unreachable!("{NOT_BATCHED}"),
         }
     }
 }

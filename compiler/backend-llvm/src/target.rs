@@ -298,7 +298,12 @@ pub(crate) fn optimize(
     };
     lm.run_passes(&pipeline, tm, opts)
         .map_err(|e| LlvmError(format!("optimization pipeline: {e}")))?;
-    if tm.get_triple().as_str().to_string_lossy().starts_with("x86_64") {
+    if tm
+        .get_triple()
+        .as_str()
+        .to_string_lossy()
+        .starts_with("x86_64")
+    {
         crate::clamps::two_lane_clamps_as_selects(lm);
     }
     Ok(())

@@ -132,7 +132,7 @@ fn check_algorithm(m: &Module, sig: &EntrySig, t: &Tys) -> Result<Algo, Diagnost
     let f = m
         .func_by_name(&sig.algorithm)
         .expect("checked by the caller");
-    let mut want = vec![t.ptr];
+    let mut want = vec![t.ptr; sig.trees()];
     for r in &sig.roles {
         match r {
             Role::Tree => match &t.root_ref {
@@ -274,11 +274,11 @@ fn run_query(
     sig: &EntrySig,
     t: &Tys,
     algo: &Algo,
-    bufs: ValueId,
+    tables: &[ValueId],
     queries: ValueId,
     results: ValueId,
     i: ValueId,
-    root: &[ValueId],
+    roots: &[Vec<ValueId>],
 ) -> Option<ValueId> {
     let q = if sig.query.size > 0 {
         let size = b.lo_int(t.u64, sig.query.size as i128);
@@ -294,10 +294,11 @@ fn run_query(
     } else {
         results
     };
-    let mut args = vec![bufs];
+    let mut args = tables.to_vec();
+    let mut roots = roots.iter();
     for role in &sig.roles {
         match role {
-            Role::Tree => args.extend(root.iter().copied()),
+            Role::Tree => args.extend(roots.next().into_iter().flatten().copied()),
             Role::Result(off) => args.push(if *off == 0 {
                 r
             } else {
@@ -330,12 +331,48 @@ fn root_leaves(b: &mut Builder<'_>, t: &Tys, bufs: ValueId, root: ValueId) -> Ve
     }
 }
 
-/// `@scion_A_L(%B, %queries, %results, %begin, %end, %root) -> (i32)`.
+/// The parameters after the first tree's, for an entry over several trees: `(%B_k, %root_k)`
+/// for each other tree, and their indices.
+fn more_trees(sig: &EntrySig, t: &Tys, first: usize) -> (Vec<TypeId>, Vec<(usize, usize)>) {
+    let mut params = Vec::new();
+    let mut at = Vec::new();
+    for k in 1..sig.trees() {
+        let i = first + 2 * (k - 1);
+        params.extend([t.ptr, t.root]);
+        at.push((i, i + 1));
+    }
+    (params, at)
+}
+
+/// Each tree's buffer table and root leaves: the first from `(table, root)`, the others from
+/// their parameters `more` of the entry's arguments `a`.
+fn tables_and_roots(
+    b: &mut Builder<'_>,
+    t: &Tys,
+    a: &[ValueId],
+    (table, root): (usize, usize),
+    more: &[(usize, usize)],
+) -> (Vec<ValueId>, Vec<Vec<ValueId>>) {
+    let mut tables = Vec::new();
+    let mut roots = Vec::new();
+    for &(bi, ri) in std::iter::once(&(table, root)).chain(more) {
+        tables.push(a[bi]);
+        roots.push(root_leaves(b, t, a[bi], a[ri]));
+    }
+    (tables, roots)
+}
+
+/// `@scion_A_L(%B, %queries, %results, %begin, %end, %root) -> (i32)`, and for an algorithm
+/// over several trees `(%B_k, %root_k)` for each other tree after them.
 fn batch(m: &mut Module, sig: &EntrySig, t: &Tys, algo: &Algo) {
-    let params = [t.ptr, t.ptr, t.ptr, t.u64, t.u64, t.root];
+    let mut params = vec![t.ptr, t.ptr, t.ptr, t.u64, t.u64, t.root];
+    let (extra, more) = more_trees(sig, t, params.len());
+    params.extend(extra);
     let (f, entry, a) = new_func(m, sig.batch_fn(), &params, &[t.i32], false);
-    // The buffer table, the queries and the results do not overlap (docs/c-abi.md).
-    m.funcs[f].attrs.set("noalias", int_list(&[0, 1, 2]));
+    // The buffer tables, the queries and the results do not overlap (docs/c-abi.md).
+    let mut noalias = vec![0, 1, 2];
+    noalias.extend(more.iter().map(|&(bi, _)| bi as i128));
+    m.funcs[f].attrs.set("noalias", int_list(&noalias));
     let body = m.funcs[f].body;
     let head = m.add_block(body, &[t.u64]);
     let run = m.add_block(body, &[]);
@@ -343,13 +380,13 @@ fn batch(m: &mut Module, sig: &EntrySig, t: &Tys, algo: &Algo) {
     let done = m.add_block(body, &[]);
     let i = m.blocks[head].args[0];
     let mut b = Builder::at_end(m, entry);
-    let root = root_leaves(&mut b, t, a[0], a[5]);
+    let (tables, roots) = tables_and_roots(&mut b, t, &a, (0, 5), &more);
     b.lo_br(head, &[a[3]]);
     b.set_insertion_point_to_end(head);
     let more = b.lo_cmp(CmpPred::Lt, i, a[4]);
     b.lo_cond_br(more, (run, &[]), (done, &[]));
     b.set_insertion_point_to_end(run);
-    let status = run_query(&mut b, sig, t, algo, a[0], a[1], a[2], i, &root);
+    let status = run_query(&mut b, sig, t, algo, &tables, a[1], a[2], i, &roots);
     match status {
         Some(s) => {
             let fail = b.m.add_block(body, &[]);
@@ -372,13 +409,18 @@ fn batch(m: &mut Module, sig: &EntrySig, t: &Tys, algo: &Algo) {
     b.lo_ret(&[zero]);
 }
 
-/// `@scion_A_L_kernel(%B, %queries, %results, %n, %root, %status)`: one thread per query.
+/// `@scion_A_L_kernel(%B, %queries, %results, %n, %root, %status)`: one thread per query; over
+/// several trees `(%B_k, %root_k)` for each other tree after them.
 fn batch_kernel(m: &mut Module, sig: &EntrySig, t: &Tys, algo: &Algo) {
-    let params = [t.ptr, t.ptr, t.ptr, t.u64, t.root, t.ptr];
+    let mut params = vec![t.ptr, t.ptr, t.ptr, t.u64, t.root, t.ptr];
+    let (extra, more) = more_trees(sig, t, params.len());
+    params.extend(extra);
     let name = format!("{}_kernel", sig.batch_fn());
     let (f, entry, a) = new_func(m, name, &params, &[], true);
-    // The buffer table, queries, results and status do not overlap (docs/c-abi.md).
-    m.funcs[f].attrs.set("noalias", int_list(&[0, 1, 2, 5]));
+    // The buffer tables, queries, results and status do not overlap (docs/c-abi.md).
+    let mut noalias = vec![0, 1, 2, 5];
+    noalias.extend(more.iter().map(|&(bi, _)| bi as i128));
+    m.funcs[f].attrs.set("noalias", int_list(&noalias));
     let body = m.funcs[f].body;
     let run = m.add_block(body, &[]);
     let exit = m.add_block(body, &[]);
@@ -387,8 +429,8 @@ fn batch_kernel(m: &mut Module, sig: &EntrySig, t: &Tys, algo: &Algo) {
     let inside = b.lo_cmp(CmpPred::Lt, i, a[3]);
     b.lo_cond_br(inside, (run, &[]), (exit, &[]));
     b.set_insertion_point_to_end(run);
-    let root = root_leaves(&mut b, t, a[0], a[4]);
-    let status = run_query(&mut b, sig, t, algo, a[0], a[1], a[2], i, &root);
+    let (tables, roots) = tables_and_roots(&mut b, t, &a, (0, 4), &more);
+    let status = run_query(&mut b, sig, t, algo, &tables, a[1], a[2], i, &roots);
     match status {
         Some(s) => {
             let fail = b.m.add_block(body, &[]);

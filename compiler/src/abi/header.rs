@@ -214,12 +214,24 @@ pub fn render(sig: &EntrySig, root: &Type) -> String {
         sig.layout_fn("build"),
         sig.layout_fn("root")
     );
+    // An algorithm over several trees takes each other tree's table and root after the first's.
+    let more: String = (1..sig.trees())
+        .map(|k| format!(",\n    void *const *B{k}, scion_{l}_ref root{k}"))
+        .collect();
+    let trees_note = if sig.trees() > 1 {
+        format!(
+            "\n * The {} trees of `{a}`, in the order of its parameters: (B, root), then (B1, root1)...",
+            sig.trees()
+        )
+    } else {
+        String::new()
+    };
     let _ = writeln!(
         s,
         "/* Runs queries[begin..end) with results[begin..end) (in/out); stops at the first\n \
-         * nonzero status and returns it, else SCION_OK. Thread-safe on disjoint ranges. */\n\
+         * nonzero status and returns it, else SCION_OK. Thread-safe on disjoint ranges.{trees_note} */\n\
          int32_t {}(void *const *B, const {query} *queries, {result} *results,\n    \
-         uint64_t begin, uint64_t end, scion_{l}_ref root);",
+         uint64_t begin, uint64_t end, scion_{l}_ref root{more});",
         sig.batch_fn()
     );
     let (batch, sizes, build, root) = (
@@ -228,12 +240,15 @@ pub fn render(sig: &EntrySig, root: &Type) -> String {
         sig.layout_fn("build"),
         sig.layout_fn("root"),
     );
+    let kmore: String = (1..sig.trees())
+        .map(|k| format!(", B{k}, root{k}"))
+        .collect();
     let _ = writeln!(
         s,
         "/* The kernels of `scionc --target nvptx64` live in the PTX, not in this object\n \
          * (docs/design/backends.md section 1; the batch kernel with 256 threads per block,\n \
          * the others one thread):\n \
-         * {batch}_kernel(B, queries, results, uint64_t n, scion_{l}_ref root, int32_t *status);\n \
+         * {batch}_kernel(B, queries, results, uint64_t n, scion_{l}_ref root, int32_t *status{kmore});\n \
          * {sizes}_kernel(tree, sizes); {build}_kernel(tree, B, int32_t *status);\n \
          * {root}_kernel(tree, B, scion_{l}_ref *root). */"
     );

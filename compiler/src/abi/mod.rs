@@ -80,6 +80,12 @@ impl EntrySig {
         format!("scion_{}_{}", self.algorithm, self.layout)
     }
 
+    /// How many trees the entry traverses (its parameters of the tree type): the batch entry
+    /// takes a buffer table and a root for each.
+    pub fn trees(&self) -> usize {
+        self.roles.iter().filter(|r| **r == Role::Tree).count()
+    }
+
     /// The largest buffer alignment of the plan (at least 1).
     pub fn buffer_align(&self) -> u64 {
         self.buffers
@@ -201,18 +207,19 @@ pub fn signature(
     let trees: Vec<usize> = (0..func.params.len())
         .filter(|&i| Some(func.params[i]) == tree_ty)
         .collect();
-    if trees.len() != 1 {
-        let what = if trees.is_empty() {
-            format!("takes no parameter of the layout's tree type `{adt}`")
-        } else {
-            format!("takes {} parameters of the tree type `{adt}`", trees.len())
-        };
+    if trees.is_empty() {
         return Err(Diagnostic::error(
             "E0912",
-            format!("`--entry {algorithm}`: the function {what}"),
+            format!(
+                "`--entry {algorithm}`: the function takes no parameter of the layout's tree \
+                 type `{adt}`"
+            ),
         )
         .with_primary(span, "declared here")
-        .with_note("an entry point traverses one tree: exactly one parameter of the tree type")
+        .with_note(
+            "an entry point traverses trees of the layout: at least one parameter of the tree \
+             type (collision takes two)",
+        )
         .with_note(traversals()));
     }
     let returns_value = func

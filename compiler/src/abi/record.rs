@@ -113,6 +113,13 @@ fn push_named(
                 push_named(m, *elem, format!("{name}_{k}"), out)?;
             }
         }
+        Type::Set(_) => {
+            // A sink (docs/c-abi.md): the caller's array, its capacity, the insertions made.
+            let u64t = Type::Int(IntTy::U64);
+            out.push((format!("{name}_data"), Type::Ptr));
+            out.push((format!("{name}_capacity"), u64t.clone()));
+            out.push((format!("{name}_count"), u64t));
+        }
         Type::Adt(adt) => {
             let def = m.adt(adt).ok_or_else(|| format!("unknown type `{adt}`"))?;
             if !def.is_record() {
@@ -195,12 +202,36 @@ mod tests {
     }
 
     #[test]
+    fn a_set_is_a_sink_of_data_capacity_and_count() {
+        let mut m = Module::new();
+        let u32t = m.types.u32();
+        let pair = m.types.tuple(vec![u32t, u32t]);
+        let set = m.types.intern(Type::Set(pair));
+        let mut r = Record::new();
+        assert_eq!(r.push(&m, "pairs", set).unwrap(), (0, 0..3));
+        let names: Vec<(&str, u64)> = r
+            .fields
+            .iter()
+            .map(|f| (f.name.as_str(), f.offset))
+            .collect();
+        assert_eq!(
+            names,
+            [
+                ("pairs_data", 0),
+                ("pairs_capacity", 8),
+                ("pairs_count", 16)
+            ]
+        );
+        assert_eq!((r.size, r.align), (24, 8));
+    }
+
+    #[test]
     fn values_without_a_c_form_are_refused() {
         let mut m = Module::new();
         let f32t = m.types.f32();
-        let set = m.types.intern(Type::Set(f32t));
+        let opt = m.types.intern(Type::Option(f32t));
         let mut r = Record::new();
-        assert!(r.push(&m, "s", set).is_err());
+        assert!(r.push(&m, "s", opt).is_err());
         assert!(r.fields.is_empty());
     }
 }

@@ -40,8 +40,21 @@ pub fn for_level(level: u8) -> Vec<String> {
     let names: &[&str] = match level {
         0 => &[],
         1 => &["const-fold", "dce"],
-        2 => &["const-fold", "mem-cse", "dce", "mem-split-loads", "mem-sink"],
-        _ => &["mem-inline", "const-fold", "mem-cse", "dce", "mem-split-loads", "mem-sink"],
+        2 => &[
+            "const-fold",
+            "mem-cse",
+            "dce",
+            "mem-split-loads",
+            "mem-sink",
+        ],
+        _ => &[
+            "mem-inline",
+            "const-fold",
+            "mem-cse",
+            "dce",
+            "mem-split-loads",
+            "mem-sink",
+        ],
     };
     names.iter().map(|s| s.to_string()).collect()
 }

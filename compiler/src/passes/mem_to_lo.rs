@@ -17,8 +17,10 @@
 //! * **Calls** stay calls (`lo.call` with flattened arguments); intrinsics become scalar ops per
 //!   lane (`mem_to_lo/intrinsics.rs`).
 //!
-//! Functions that cannot be lowered (sum ADTs not yet specialized, sets, slices, options, and
-//! intrinsics without a scalar form) are a user error (E0970) naming the function and the
+//! A `set[T]` that is only inserted into is a sink (`mem_to_lo/sets.rs`).
+//!
+//! Functions that cannot be lowered (sum ADTs not yet specialized, sets read other than by
+//! `insert`, slices, options, and intrinsics without a scalar form) are a user error (E0970) naming the function and the
 //! reason; with the option `mem-to-lo:partial=true` (what `scionc --emit=lo` uses for inputs
 //! without a layout) they are dropped instead, with the functions that call them.
 
@@ -27,6 +29,7 @@ mod intrinsics;
 mod mem_ops;
 mod opmap;
 mod quant;
+mod sets;
 
 use opmap::{lo_of, unsigned};
 
@@ -459,6 +462,13 @@ impl FnLower<'_> {
                     _ => return self.err("`sort` of something other than a fixed array"),
                 };
                 intrinsics::sort(self, cur, &ins[0], n)?
+            }
+            T::Intrinsic if o.str_attr("name") == Some(Intrinsic::SetInsert.name()) => {
+                let Type::Set(elem) = *src.types.get(src.values[o.operands[0]].ty) else {
+                    return self.err("`set_insert` into something other than a set");
+                };
+                let (next, sink) = self.sink_insert(cur, &ins[0], &ins[1], elem)?;
+                return self.bind_results(op, sink, next);
             }
             T::Intrinsic => {
                 let intrinsic = Intrinsic::of(o).map_err(|e| (e, self.span))?;

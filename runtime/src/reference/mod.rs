@@ -2,11 +2,13 @@
 //! bit for bit. [`prelude`] is the Rust image of `library/prelude.scion`'s arithmetic;
 //! [`closest_hit`] is closest-hit ray tracing (paper Figure 4) by brute force and by logical
 //! tree traversal; [`closest_hit_wide`] traverses a wide tree the same way; [`closest_point`]
-//! answers closest point queries by brute force, in the prelude's `f32` arithmetic and in `f64`.
+//! answers closest point queries by brute force, in the prelude's `f32` arithmetic and in `f64`;
+//! [`collide`] finds the colliding triangle pairs of two sets, tree-free.
 
 pub mod closest_hit;
 pub mod closest_hit_wide;
 pub mod closest_point;
+pub mod collide;
 pub mod prelude;
 
 pub use closest_hit::{

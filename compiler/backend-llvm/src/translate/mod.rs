@@ -583,7 +583,11 @@ impl<'c> Fn<'_, 'c> {
                     // tie, a NaN `p` gives `q`), one instruction on every target, and unlike
                     // the compare-and-select no pass rewrites it into a form the vectorizer
                     // splits (`fcmp one` and a select apart).
-                    let name = if kind == L::Max { "llvm.maxnum" } else { "llvm.minnum" };
+                    let name = if kind == L::Max {
+                        "llvm.maxnum"
+                    } else {
+                        "llvm.minnum"
+                    };
                     Some(self.call_intr(name, &[args[0].get_type()], &[args[0], args[1]])?)
                 } else {
                     Some(self.min_max(kind == L::Max, args[0], args[1], signed, form)?)

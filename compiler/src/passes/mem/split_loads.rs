@@ -61,11 +61,7 @@ fn candidate(m: &Module, op: OpId) -> Option<(scion_ir::TypeId, u64, u64)> {
     if o.kind != OpKind::Mem(mem::Op::Load) || o.results.len() != 1 {
         return None;
     }
-    let Type::Array {
-        elem,
-        len: Some(n),
-    } = *m.types.get(m.values[o.results[0]].ty)
-    else {
+    let Type::Array { elem, len: Some(n) } = *m.types.get(m.values[o.results[0]].ty) else {
         return None;
     };
     if n == 0 || !matches!(m.types.get(elem), Type::Int(_) | Type::Float(_)) {
@@ -135,7 +131,11 @@ fn split_func(m: &mut Module, f: FuncId) -> bool {
                     );
                     let addr = b.result(addr, 0);
                     let u64t = b.m.types.int(IntTy::U64);
-                    let k64 = if b.value_type(k) == u64t { k } else { b.cast(k, u64t) };
+                    let k64 = if b.value_type(k) == u64t {
+                        k
+                    } else {
+                        b.cast(k, u64t)
+                    };
                     let len = b.const_int(u64t, i128::from(n));
                     let inside = b.cmp(CmpPred::Lt, k64, len);
                     let zero = b.const_int(u64t, 0);

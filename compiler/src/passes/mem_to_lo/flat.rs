@@ -4,8 +4,9 @@
 //!
 //! Leaves, in order: a scalar is itself; `vector<NxT>` is its N lanes; a tuple, or a record
 //! (an ADT without variants), is its elements or fields in order; `array<N x T>` (fixed) is N
-//! copies of `T`'s leaves; `!tree.ref<T>` is one `ptr` to a cell holding a `T`. The unit tuple
-//! has no leaves. Sum ADTs, slices, sets and options have no scalar form here.
+//! copies of `T`'s leaves; `!tree.ref<T>` is one `ptr` to a cell holding a `T`; a view, and a
+//! set (a sink, `sets.rs`), is three: an address and two `u64`s. The unit tuple has no leaves.
+//! Sum ADTs, slices and options have no scalar form here.
 //!
 //! Memory layout: [`scion_ir::data_layout`] (one model for `mem-to-lo`, the interpreter and the C
 //! ABI), re-exported here as [`layout`].
@@ -42,7 +43,7 @@ fn push_leaves(m: &Module, ty: TypeId, out: &mut Vec<Type>) -> Result<(), String
             }
         }
         Type::Ref(_) => out.push(Type::Ptr),
-        Type::View(_) => {
+        Type::View(_) | Type::Set(_) => {
             let u64t = Type::Int(scion_ir::types::IntTy::U64);
             out.extend([Type::Ptr, u64t.clone(), u64t]);
         }

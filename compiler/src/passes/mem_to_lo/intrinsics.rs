@@ -7,8 +7,8 @@
 //! `lo.mul_rd`): NVPTX has them per instruction, CPU backends expand them
 //! (`scion_ir::lo::directed`). `isnan` is `x != x`; `rsqrt` is `1 / sqrt`; `length`
 //! is `sqrt(dot(v, v))`; `normalize` divides each lane by the length; `with_axis(v, k, x)`
-//! selects `x` into lane `k` (a `k` outside the lanes changes nothing). Sets have no scalar
-//! form here and are reported, never guessed; the quantization builtins are [`super::quant`]'s.
+//! selects `x` into lane `k` (a `k` outside the lanes changes nothing). `insert` into a set is
+//! `super::sets`'s; the quantization builtins are [`super::quant`]'s.
 
 use super::{FnLower, R};
 use scion_ir::attr::Attr;
@@ -182,12 +182,7 @@ pub(super) fn lower(
             ));
         }
         I::Sort => return Err(("`sort` is lowered with its array's length".into(), None)),
-        I::SetInsert => {
-            return Err((
-                "sets (`insert`) have no machine form yet; the interpreters run them".into(),
-                None,
-            ))
-        }
+        I::SetInsert => return Err(("`insert` is lowered with its set's sink".into(), None)),
     })
 }
 

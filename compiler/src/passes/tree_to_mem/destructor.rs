@@ -15,6 +15,12 @@
 //!   references, so `foreach c in children` and `children[k]` give references;
 //! * calls to specialized functions pass `%B` along.
 //!
+//! A function over several trees of the layout (a collision traversal over `a: BVH, b: BVH`)
+//! gets one table per tree parameter, `%B0, %B1, ...` first, in the order of the tree
+//! parameters: every tree value inside the function descends from one of its tree parameters
+//! (a match's bound children, a child array's elements), and its reads use that parameter's
+//! table; a call passes, for each tree argument in order, the table of the tree it descends from.
+//!
 //! Tree values used any other way (built with `tree.ctor`, returned, stored in a cell, put in a
 //! tuple) are reported (E0380), never miscompiled.
 
@@ -167,6 +173,16 @@ fn specialize_func(
         .expect("a function with a body has an entry block");
     // Collect the work before changing types: ops reading tree values.
     let ops = func_ops(m, f, Order::Pre);
+    let tree_of = tree_provenance(m, f, &ops, tree_ty);
+    let unknown = |m: &Module, op: scion_ir::OpId| {
+        unsupported(
+            m.span(op),
+            format!(
+                "a tree value in `@{}` that descends from none of its tree parameters",
+                m.funcs[f].name
+            ),
+        )
+    };
     let mut matches = Vec::new();
     let mut reads = Vec::new();
     let mut calls = Vec::new();
@@ -176,23 +192,37 @@ fn specialize_func(
             .operands
             .first()
             .is_some_and(|&v| m.values[v].ty == tree_ty);
+        let tree = |v: ValueId| {
+            tree_of
+                .get(&scion_ir::rewrite::resolve_value(m, v))
+                .copied()
+        };
         match o.kind {
-            OpKind::Tree(Op::Match) if on_tree => matches.push(op),
-            OpKind::Tree(Op::Field | Op::Is) if on_tree => reads.push(op),
+            OpKind::Tree(Op::Match) if on_tree => {
+                matches.push((op, tree(o.operands[0]).ok_or_else(|| unknown(m, op))?))
+            }
+            OpKind::Tree(Op::Field | Op::Is) if on_tree => {
+                reads.push((op, tree(o.operands[0]).ok_or_else(|| unknown(m, op))?))
+            }
             OpKind::Tree(Op::Call) => {
                 if let Some(s) = o.callee() {
                     if specialized.contains(s) {
-                        calls.push(op);
+                        let mut trees = Vec::new();
+                        for &v in o.operands.iter().filter(|&&v| m.values[v].ty == tree_ty) {
+                            trees.push(tree(v).ok_or_else(|| unknown(m, op))?);
+                        }
+                        calls.push((op, trees));
                     }
                 }
             }
             _ => {}
         }
     }
-    // `%B` first, tree parameters retyped to references.
-    let b = m.add_block_arg(entry, ptr);
+    // One `%B` per tree parameter first, tree parameters retyped to references.
+    let ntrees = m.funcs[f].params.iter().filter(|&&p| p == tree_ty).count();
+    let tables: Vec<ValueId> = (0..ntrees).map(|_| m.add_block_arg(entry, ptr)).collect();
     let args = &mut m.blocks[entry].args;
-    args.rotate_right(1);
+    args.rotate_right(ntrees);
     let args = args.clone();
     for (i, &a) in args.iter().enumerate() {
         m.values[a].def = ValueDef::BlockArg(entry, i as u32);
@@ -202,22 +232,23 @@ fn specialize_func(
     }
     let params: Vec<TypeId> = args.iter().map(|&a| m.values[a].ty).collect();
     m.funcs[f].params = params;
-    // `%B` is parameter 0 now: the ordering parameter moved up by one.
+    // The tables come first now: the ordering parameter moved up.
     if let Some(k) = m.funcs[f].order_by() {
-        m.funcs[f].set_order_by(k + 1);
+        m.funcs[f].set_order_by(k + ntrees);
     }
-    for op in calls {
-        m.ops[op].operands.insert(0, b);
+    for (op, trees) in calls {
+        let bs: Vec<ValueId> = trees.iter().map(|&t| tables[t]).collect();
+        m.ops[op].operands.insert_many(0, bs);
     }
     // Outer matches first (pre-order), so an inner match's operand is already aliased; then
     // the field reads, whose operands (children bound by the matches) are references by then,
     // so the components of a tuple reference can be taken apart.
-    for op in matches {
-        destruct(m, spec, op, b, tree_ty, ref_ty)?;
+    for (op, t) in matches {
+        destruct(m, spec, op, tables[t], tree_ty, ref_ty)?;
         retype_children(m, f, tree_ty);
     }
-    for op in reads {
-        read_op(m, spec, op, b)?;
+    for (op, t) in reads {
+        read_op(m, spec, op, tables[t])?;
     }
     // Whatever still carries a tree value is a use this pass does not know.
     for op in func_ops(m, f, Order::Pre) {
@@ -241,6 +272,55 @@ fn specialize_func(
         }
     }
     Ok(())
+}
+
+/// Which tree parameter (0 for the first parameter of the tree type, 1 for the second, ...)
+/// each tree value of `f` descends from: a parameter is its own tree; the fields a `tree.match`
+/// on a tree value binds, the elements a `tree.foreach` over its children binds and a
+/// `tree.index` reads descend from the tree of the value they come from. `ops` in pre-order.
+fn tree_provenance(
+    m: &Module,
+    f: FuncId,
+    ops: &[scion_ir::OpId],
+    tree_ty: TypeId,
+) -> FxHashMap<ValueId, usize> {
+    let mut tree_of = FxHashMap::default();
+    let entry = m.entry_block(f).expect("a function with a body");
+    let params = m.blocks[entry].args.iter();
+    for (k, &a) in params.filter(|&&a| m.values[a].ty == tree_ty).enumerate() {
+        tree_of.insert(a, k);
+    }
+    for &op in ops {
+        let o = &m.ops[op];
+        let Some(&first) = o.operands.first() else {
+            continue;
+        };
+        let Some(&t) = tree_of.get(&scion_ir::rewrite::resolve_value(m, first)) else {
+            continue;
+        };
+        match o.kind {
+            OpKind::Tree(Op::Match | Op::Foreach) => {
+                for &r in &o.regions {
+                    if let Some(&block) = m.regions[r].blocks.first() {
+                        for &a in &m.blocks[block].args {
+                            if mentions(m, m.values[a].ty, tree_ty) {
+                                tree_of.insert(a, t);
+                            }
+                        }
+                    }
+                }
+            }
+            OpKind::Tree(Op::Index | Op::Field) => {
+                for &r in &o.results {
+                    if mentions(m, m.values[r].ty, tree_ty) {
+                        tree_of.insert(r, t);
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    tree_of
 }
 
 /// An array of children read from the layout is an array of references: the element a
