@@ -238,6 +238,98 @@ fn run_answers_every_query_kind_and_checks_it_against_its_reference() {
 }
 
 #[test]
+fn run_collides_a_scene_with_its_rotated_copy() {
+    use scion_runtime::reference::collide::{collide_sweep, rotated};
+    let dir = scratch("collide");
+    let scene = write(&dir, "soup.obj", &soup(400));
+    let tris = scion_runtime::scene::load_obj(std::path::Path::new(&scene))
+        .unwrap()
+        .triangles;
+    let want = collide_sweep(&tris, &rotated(&tris, [60.0, 70.0, 10.0]));
+    assert!(!want.is_empty());
+    let want_bytes: Vec<u8> = want
+        .iter()
+        .flat_map(|&(a, b)| [a.to_le_bytes(), b.to_le_bytes()])
+        .flatten()
+        .collect();
+    // Both code generators, an exact and a quantized layout: the same pairs file.
+    for (layout, backend) in [("pbrt", "llvm"), ("pbrt-q16", "jit"), ("ptr", "jit")] {
+        let out = dir.join(format!("{layout}.pairs")).display().to_string();
+        let o = scion(&[
+            "run",
+            "--algorithm",
+            "collide",
+            "--scene",
+            &scene,
+            "--layout",
+            layout,
+            "--backend",
+            backend,
+            "--runs",
+            "3",
+            "-o",
+            &out,
+        ]);
+        assert!(o.status.success(), "{layout}: {}", text(&o.stderr));
+        let stdout = text(&o.stdout);
+        assert!(stdout.contains("collide (collide, BVH)"), "{stdout}");
+        assert!(
+            stdout.contains(&format!("pairs        {}", want.len())),
+            "{stdout}"
+        );
+        assert!(stdout.contains("identical to the reference"), "{stdout}");
+        assert_eq!(std::fs::read(&out).unwrap(), want_bytes, "{layout}");
+    }
+    // Another rotation is another copy.
+    let o = scion(&[
+        "run",
+        "--algorithm",
+        "collide",
+        "--scene",
+        &scene,
+        "--rotate",
+        "0,0,90",
+        "--runs",
+        "1",
+    ]);
+    succeeds_with(&o, "rotation     (0, 0, 90) degrees");
+    // Bad requests: two angles, a stack too small for the pairs of subtrees, a layout whose
+    // tree type has no collision entry.
+    let o = scion(&[
+        "run",
+        "--algorithm",
+        "collide",
+        "--scene",
+        &scene,
+        "--rotate",
+        "60,70",
+    ]);
+    fails_with(&o, 2, "expected three angles");
+    let o = scion(&[
+        "run",
+        "--algorithm",
+        "collide",
+        "--scene",
+        &scene,
+        "--stack-size",
+        "1",
+        "--runs",
+        "1",
+    ]);
+    fails_with(&o, 1, "stack overflowed");
+    let o = scion(&[
+        "run",
+        "--algorithm",
+        "collide",
+        "--scene",
+        &scene,
+        "--layout",
+        "bvh8",
+    ]);
+    fails_with(&o, 2, "no collide entry traverses `BVH8`");
+}
+
+#[test]
 fn a_tree_beyond_a_layouts_fields_is_an_error_not_a_wrong_tree() {
     // The hair BVH keeps a leaf's count in 3 bits of its reference: leaves of up to 15
     // triangles (the SAH default) do not fit, leaves of up to 7 do.

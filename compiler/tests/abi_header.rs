@@ -49,6 +49,8 @@ fn generated_headers_compile_as_c_and_cpp() {
     let dop = header_of("closest_hit_dop14", "DopSplit", "dop14_split.scion", &dir);
     // Three variants, two interior, oriented child boxes (260 bytes: the size assertion).
     let hair = header_of("closest_hit_hair", "HairBVH", "hair_bvh.scion", &dir);
+    // An entry over two trees with a set (a sink) as its result, and an empty query record.
+    let collide = header_of("collide", "PbrtAlign16", "pbrt_align16.scion", &dir);
     // The runtime's hand-written header shares the contract's structs with the generated ones.
     let runtime_h = repo().join("runtime/capi/include/scion_runtime.h");
     let mut ran = 0;
@@ -66,10 +68,15 @@ fn generated_headers_compile_as_c_and_cpp() {
             &src,
             format!(
                 "#include \"{}\"\n#include \"{}\"\n#include \"{}\"\n#include \"{}\"\n\
-                 #include \"{}\"\n\
+                 #include \"{}\"\n#include \"{}\"\n\
                  int main(void) {{\n  \
                  scion_closest_hit_query q; scion_closest_hit_result r;\n  \
-                 (void)q; (void)r;\n  \
+                 scion_collide_result pairs = {{0, 0, 0}};\n  \
+                 (void)q; (void)r; (void)pairs;\n  \
+                 int32_t (*collide)(void *const *, const scion_collide_query *,\n    \
+                 scion_collide_result *, uint64_t, uint64_t, scion_PbrtAlign16_ref,\n    \
+                 void *const *, scion_PbrtAlign16_ref) = scion_collide_PbrtAlign16;\n  \
+                 (void)collide;\n  \
                  return (int)sizeof(ScionTreeView) + SCION_LinearBVH_BUFFER_COUNT \
                  + SCION_PtrBVH_BUFFER_ALIGN + (int)sizeof(ScionRay) + SCION_RT_OK \
                  + (int)sizeof(ScionLogical_DopBVH) + (int)sizeof(ScionLogical_Hair) \
@@ -78,7 +85,8 @@ fn generated_headers_compile_as_c_and_cpp() {
                 runtime_h.display(),
                 ptr.display(),
                 dop.display(),
-                hair.display()
+                hair.display(),
+                collide.display()
             ),
         )
         .unwrap();

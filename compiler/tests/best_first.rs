@@ -69,7 +69,7 @@ fn model(n: u32, salt: u32, int_keys: bool) -> (u64, usize) {
     // The key as the queue orders it: a float NaN is +inf.
     let order_key = |i: u32| -> f64 {
         let h = i.wrapping_add(salt).wrapping_mul(2_654_435_761);
-        match (h % 13 == 0, int_keys) {
+        match (h.is_multiple_of(13), int_keys) {
             (true, true) => f64::from(i32::MIN),
             (true, false) => f64::INFINITY,
             (false, _) => f64::from((h >> 20) % 5) - 2.0,

@@ -195,7 +195,7 @@ pub(super) fn sort(
     leaves: &[ValueId],
     n: usize,
 ) -> R<Vec<ValueId>> {
-    if n == 0 || leaves.len() % n != 0 {
+    if n == 0 || !leaves.len().is_multiple_of(n) {
         return Err(("`sort` of a malformed array".into(), None));
     }
     let w = leaves.len() / n;

@@ -174,6 +174,7 @@ fn specialize_func(
     // Collect the work before changing types: ops reading tree values.
     let ops = func_ops(m, f, Order::Pre);
     let tree_of = tree_provenance(m, f, &ops, tree_ty);
+    let ntrees = m.funcs[f].params.iter().filter(|&&p| p == tree_ty).count();
     let unknown = |m: &Module, op: scion_ir::OpId| {
         unsupported(
             m.span(op),
@@ -192,10 +193,13 @@ fn specialize_func(
             .operands
             .first()
             .is_some_and(|&v| m.values[v].ty == tree_ty);
+        // With one tree parameter every tree value is of that tree (a use this pass does not
+        // know is reported below, by what it is).
         let tree = |v: ValueId| {
-            tree_of
+            let t = tree_of
                 .get(&scion_ir::rewrite::resolve_value(m, v))
-                .copied()
+                .copied();
+            t.or((ntrees == 1).then_some(0))
         };
         match o.kind {
             OpKind::Tree(Op::Match) if on_tree => {
@@ -219,7 +223,6 @@ fn specialize_func(
         }
     }
     // One `%B` per tree parameter first, tree parameters retyped to references.
-    let ntrees = m.funcs[f].params.iter().filter(|&&p| p == tree_ty).count();
     let tables: Vec<ValueId> = (0..ntrees).map(|_| m.add_block_arg(entry, ptr)).collect();
     let args = &mut m.blocks[entry].args;
     args.rotate_right(ntrees);
