@@ -39,16 +39,29 @@ pub fn compile_kit(
     stack_size: Option<u32>,
     cpu: Option<&str>,
 ) -> Result<(PtxKit, Duration), CliError> {
-    let start = Instant::now();
     let (program, boxes) = gpu_program(layout)?;
+    let (kit, _, time) = compile_program_kit(&program, boxes, stack_size, cpu)?;
+    Ok((kit, time))
+}
+
+/// Compiles any program (a layout and an algorithm over one tree) to a PTX kit for `cpu`, with
+/// the entries' C signature (its record sizes).
+pub fn compile_program_kit(
+    program: &Program,
+    boxes: Boxes,
+    stack_size: Option<u32>,
+    cpu: Option<&str>,
+) -> Result<(PtxKit, scion_compiler::abi::EntrySig, Duration), CliError> {
+    let start = Instant::now();
     let name = program.layout.as_str();
     let fail = |what: &str, detail: String| {
         CliError::new(format!(
-            "cannot compile closest hit for `{layout}` ({what}): {detail}"
+            "cannot compile {} for `{name}` ({what}): {detail}",
+            program.algorithm
         ))
     };
     let lo = program_lo(
-        &program,
+        program,
         &LoOptions {
             stack_size,
             opt_level: OPT_LEVEL,
@@ -59,7 +72,7 @@ pub fn compile_kit(
     .map_err(|e| fail("front end", e))?;
     let m = lo.module;
     let buffers: Vec<String> = lo.entry.buffers.iter().map(|b| b.name.clone()).collect();
-    let logical = lo.entry.logical;
+    let logical = lo.entry.logical.clone();
     let opts = scion_llvm::Options {
         target: scion_llvm::Target::Nvptx64,
         cpu: cpu.map(String::from),
@@ -69,7 +82,8 @@ pub fn compile_kit(
         .map_err(|e| fail("LLVM", e.to_string()))?;
     let ptx = String::from_utf8(ptx).map_err(|_| fail("LLVM", "PTX is not UTF-8".into()))?;
     Ok((
-        PtxKit::new(name, ALGORITHM, buffers, boxes, logical, &ptx),
+        PtxKit::new(name, &program.algorithm, buffers, boxes, logical, &ptx),
+        lo.entry,
         start.elapsed(),
     ))
 }
@@ -270,7 +284,7 @@ fn gpu_program(layout: &str) -> Result<(Program, Boxes), CliError> {
     Ok((r.program, r.boxes))
 }
 
-fn gpu_err(e: scion_cuda::CudaError) -> CliError {
+pub(crate) fn gpu_err(e: scion_cuda::CudaError) -> CliError {
     CliError::new(format!("GPU: {e}"))
 }
 

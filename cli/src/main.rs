@@ -17,6 +17,7 @@ mod io;
 mod list;
 mod quant_error;
 mod run;
+mod run_gpu;
 mod trace;
 
 use clap::{Parser, Subcommand, ValueEnum};
@@ -113,6 +114,12 @@ pub struct RunArgs {
     /// Largest leaf of the SAH builder (1..=15).
     #[arg(long, default_value_t = 15, value_parser = clap::value_parser!(u32).range(1..=15))]
     pub leaf_size: u32,
+    /// Where to run: this CPU (with --backend and --threads), an NVIDIA GPU (the algorithm
+    /// compiled to PTX, one thread per query, through CUDA) or the GPU's kernels emulated on
+    /// this CPU. Every answer is checked against the reference either way. Collision runs on
+    /// the CPU only.
+    #[arg(long, value_enum, default_value = "cpu")]
+    pub device: DeviceArg,
     /// Entries of the traversal's explicit stack (default 64; 1024 for a collision, whose
     /// stack holds pairs of subtrees).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]

@@ -11,7 +11,7 @@
 
 use crate::io::outln;
 use crate::trace::{build_with, progress, secs, significant, timed};
-use crate::{CliError, RunArgs};
+use crate::{CliError, DeviceArg, RunArgs};
 use scion_host::entries::Entries;
 use scion_host::jit::Codegen;
 use scion_host::library::{resolve_kind, QueryKind, Resolved};
@@ -20,6 +20,7 @@ use scion_host::queries::{points_from_bytes, uniform_points, Queries};
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::query::{axis_rays, primary_rays_n, read_rays, secondary_rays};
 use scion_runtime::scene::{load_obj, Scene};
+use scion_runtime::timing::Timing;
 use std::time::Instant;
 
 /// How many closest-point answers are checked against brute force (each costs a pass over
@@ -61,56 +62,67 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
         crate::RunBackend::Jit => Codegen::Cranelift,
         crate::RunBackend::Llvm => Codegen::Llvm(3),
     };
-    progress(&format!(
-        "compiling {} ({}) for layout `{}`",
-        p.algorithm,
-        kind.name(),
-        p.layout
-    ));
     // A collision's stack holds pairs of subtrees: deeper than one tree's.
     let stack_size = match kind {
         QueryKind::Collide => Some(args.stack_size.unwrap_or(1024)),
         _ => args.stack_size,
     };
-    let entries = Entries::compile(p, codegen, stack_size).map_err(|e| {
-        CliError::new(format!(
-            "cannot compile {} for `{}`: {e}",
-            p.algorithm, p.layout
-        ))
-    })?;
-    let sig = entries.sig();
+    if kind == QueryKind::Collide && args.device != DeviceArg::Cpu {
+        return Err(CliError::usage(
+            "--algorithm collide runs on the CPU: the GPU path runs batches of queries over one tree",
+        ));
+    }
+    // On the CPU, the entries compiled for this machine; on a GPU, run_gpu compiles its own.
+    let entries = if args.device == DeviceArg::Cpu {
+        progress(&format!(
+            "compiling {} ({}) for layout `{}`",
+            p.algorithm,
+            kind.name(),
+            p.layout
+        ));
+        Some(Entries::compile(p, codegen, stack_size).map_err(|e| {
+            CliError::new(format!(
+                "cannot compile {} for `{}`: {e}",
+                p.algorithm, p.layout
+            ))
+        })?)
+    } else {
+        None
+    };
     progress(&format!("loading {}", args.scene.display()));
     let t = Instant::now();
     let scene =
         load_obj(&args.scene).map_err(|e| CliError::new(format!("cannot load the scene: {e}")))?;
     let load_time = t.elapsed();
     if kind == QueryKind::Collide {
-        return crate::collide::run(args, &resolved, &entries, &scene, load_time);
+        let entries = entries.as_ref().expect("collision runs on the CPU");
+        return crate::collide::run(args, &resolved, entries, &scene, load_time);
     }
     let tree = build_with(&scene, args.builder, args.leaf_size);
     let driver = BatchDriver::new(args.threads).map_err(CliError::new)?;
     let (queries, source) = make_queries(kind, &scene, args)?;
     let n = queries.len();
     let init = queries.initial_results();
-    if queries.record_sizes() != (sig.query.size, sig.result.size) {
-        return Err(CliError::new(format!(
-            "`{}`'s records are {} and {} bytes, not those of a {} query",
-            p.algorithm,
-            sig.query.size,
-            sig.result.size,
-            kind.name()
-        )));
-    }
-    progress(&format!("packing the tree into layout `{}`", p.layout));
-    let packed = entries.pack(&tree).map_err(CliError::new)?;
-    progress(&format!("running {n} queries"));
-    let (results, timing) = timed(args.runs, || {
-        let mut r = init.clone();
-        entries
-            .run(&packed, &queries.bytes, &mut r, &driver)
-            .map_err(|e| CliError::new(format!("{}: {e}", p.algorithm)))?;
-        Ok(r)
-    })?;
+    let (results, timing, ran) = match &entries {
+        Some(entries) => run_cpu(entries, &queries, &init, &tree, &driver, args, kind)?,
+        None => {
+            let g = crate::run_gpu::run(
+                args,
+                &resolved,
+                stack_size,
+                &tree,
+                (&queries.bytes, &init),
+                queries.record_sizes(),
+            )?;
+            let ran = Ran {
+                compile_time: g.compile_time,
+                pack_time: g.pack_time,
+                bytes: g.bytes as usize,
+                device: g.device,
+            };
+            (g.results, g.timing, ran)
+        }
+    };
     progress("checking the answers against the reference");
     let traversed = resolved.boxes.decoded_tree(&tree);
     let check = queries
@@ -131,14 +143,11 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
         kind.name(),
         resolved.tree_type
     );
-    outln!(
-        "layout       {} ({} bytes packed)",
-        p.layout,
-        packed.bytes()
-    );
+    outln!("layout       {} ({} bytes packed)", p.layout, ran.bytes);
+    outln!("device       {}", ran.device);
     outln!("load time    {}", secs(load_time));
-    outln!("compile time {}", secs(entries.compile_time));
-    outln!("pack time    {}", secs(packed.pack_time));
+    outln!("compile time {}", secs(ran.compile_time));
+    outln!("pack time    {}", secs(ran.pack_time));
     outln!("queries      {n} {source}");
     outln!(
         "time         {} (mean of the middle runs, paper method)",
@@ -157,6 +166,56 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
         outln!("output       {} ({} bytes)", path.display(), results.len());
     }
     Ok(())
+}
+
+/// Where and how a run went, for the report.
+struct Ran {
+    compile_time: std::time::Duration,
+    pack_time: std::time::Duration,
+    bytes: usize,
+    device: String,
+}
+
+/// The CPU path: the entries' records checked against the kind's, the tree packed by the
+/// generated builder, the batch entry run on the driver's threads by the paper's method.
+fn run_cpu(
+    entries: &Entries,
+    queries: &Queries,
+    init: &[u8],
+    tree: &scion_runtime::bvh::LogicalTree,
+    driver: &BatchDriver,
+    args: &RunArgs,
+    kind: QueryKind,
+) -> Result<(Vec<u8>, Timing, Ran), CliError> {
+    let sig = entries.sig();
+    let p = (&sig.algorithm, &sig.layout);
+    if queries.record_sizes() != (sig.query.size, sig.result.size) || sig.trees() != 1 {
+        return Err(CliError::new(format!(
+            "`{}`'s records are {} and {} bytes over {} trees, not those of a {} query",
+            p.0,
+            sig.query.size,
+            sig.result.size,
+            sig.trees(),
+            kind.name()
+        )));
+    }
+    progress(&format!("packing the tree into layout `{}`", p.1));
+    let packed = entries.pack(tree).map_err(CliError::new)?;
+    progress(&format!("running {} queries", queries.len()));
+    let (results, timing) = timed(args.runs, || {
+        let mut r = init.to_vec();
+        entries
+            .run(&packed, &queries.bytes, &mut r, driver)
+            .map_err(|e| CliError::new(format!("{}: {e}", p.0)))?;
+        Ok(r)
+    })?;
+    let ran = Ran {
+        compile_time: entries.compile_time,
+        pack_time: packed.pack_time,
+        bytes: packed.bytes(),
+        device: format!("this CPU ({} thread(s))", driver.threads()),
+    };
+    Ok((results, timing, ran))
 }
 
 /// 64-bit FNV-1a of `bytes` (the hits checksum's hash, over any result records).

@@ -154,6 +154,44 @@ fn run_answers_every_query_kind_and_checks_it_against_its_reference() {
     }
     assert_eq!(files[0].len(), 500 * 20);
     assert_eq!(files[0], files[1]);
+    // The same queries through the GPU pipeline, its kernels emulated on this CPU.
+    let out = dir.join("gpu.points").display().to_string();
+    let o = scion(&[
+        "run",
+        "--algorithm",
+        "closest-point",
+        "--scene",
+        &scene,
+        "--n",
+        "500",
+        "--runs",
+        "3",
+        "--device",
+        "gpu-emulated",
+        "-o",
+        &out,
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let stdout = text(&o.stdout);
+    assert!(
+        stdout.contains("device       emulated on the CPU"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("identical to brute force on 500 of 500"),
+        "{stdout}"
+    );
+    assert_eq!(std::fs::read(&out).unwrap(), files[0]);
+    let o = scion(&[
+        "run",
+        "--algorithm",
+        "collide",
+        "--scene",
+        &scene,
+        "--device",
+        "gpu-emulated",
+    ]);
+    fails_with(&o, 2, "collide runs on the CPU");
     // The best-first traversal by its name, points from a file.
     let points = dir.join("in.points");
     let bytes: Vec<u8> = [[0.5f32, 0.5, 0.5], [2.0, -1.0, 3.0]]

@@ -11,7 +11,8 @@
 //!   parameters, launch grids;
 //! * [`launcher`]: what the pipeline needs of a device ([`Launcher`]), done by CUDA
 //!   ([`CudaLauncher`]) or by `scion-host`'s emulation on the CPU;
-//! * [`trace`]: the closest-hit pipeline (pack the logical tree on the device, trace rays);
+//! * [`trace`]: the pipeline (pack the logical tree on the device, run the batch kernel over
+//!   query records of any kind; closest hit's rays and hits);
 //! * [`kit`]: self-describing PTX for machines without the compiler (`scion-gpu`);
 //! * [`compare`]: GPU hits against the CPU reference, bit for bit;
 //! * [`ptxas`]: NVIDIA's offline assembler, to check PTX where there is no GPU.
@@ -33,7 +34,7 @@ pub use device::{Device, DeviceBuffer};
 pub use error::CudaError;
 pub use launcher::{CudaLauncher, Launcher};
 pub use module::{Kernel, Module};
-pub use trace::{GpuPipeline, GpuTrace, PackedTree};
+pub use trace::{DeviceQueries, GpuPipeline, GpuTrace, PackedTree};
 
 /// Opens device 0, or says why not: the reason a GPU test skips. `Err` carries the one-line
 /// reason (`no CUDA driver: ...`).

@@ -248,6 +248,14 @@ pub struct PackedTree<B> {
 /// Rays on the device, uploaded once for several traces.
 pub struct DeviceRays<B> {
     rays: Vec<Ray>,
+    records: DeviceQueries<B>,
+}
+
+/// Queries of any kind on the device, uploaded once for several runs: `n` query records of
+/// `query_size` bytes, room for as many result records of `result_size` bytes, the status word.
+pub struct DeviceQueries<B> {
+    n: usize,
+    result_size: usize,
     queries: B,
     results: B,
     status: B,
@@ -419,40 +427,66 @@ impl<L: Launcher> GpuPipeline<L> {
 
     /// Uploads `rays` with room for their results and the status word.
     pub fn upload_rays(&self, rays: &[Ray]) -> Result<DeviceRays<L::Buffer>, CudaError> {
-        let dev = &self.launcher;
+        let bytes = scion_runtime::query::io::rays_to_bytes(rays);
         Ok(DeviceRays {
             rays: rays.to_vec(),
-            queries: dev.upload("rays", rays)?,
-            results: dev.alloc("results", 8 * rays.len() as u64)?,
-            status: dev.alloc("trace status", 4)?,
+            records: self.upload_queries(&bytes, 32, 8)?,
         })
     }
 
-    /// Traces the uploaded rays through the packed tree: results initialized to
-    /// `(ray.tmax, 0xFFFFFFFF)`, status zeroed, the batch kernel over `ceil(n / 256)` blocks of
-    /// 256 threads, then the results and status downloaded. Status 1 is a traversal stack
-    /// overflow.
-    pub fn trace(
+    /// Uploads query records (`queries`, records of `query_size` bytes, back to back) with room
+    /// for their result records of `result_size` bytes and the status word.
+    pub fn upload_queries(
+        &self,
+        queries: &[u8],
+        query_size: usize,
+        result_size: usize,
+    ) -> Result<DeviceQueries<L::Buffer>, CudaError> {
+        if query_size == 0 || result_size == 0 || queries.len() % query_size != 0 {
+            return Err(CudaError::Host(format!(
+                "{} bytes of queries are not whole {query_size}-byte records (results of \
+                 {result_size} bytes)",
+                queries.len()
+            )));
+        }
+        let dev = &self.launcher;
+        let n = queries.len() / query_size;
+        Ok(DeviceQueries {
+            n,
+            result_size,
+            queries: dev.upload("queries", queries)?,
+            results: dev.alloc("results", (result_size * n.max(1)) as u64)?,
+            status: dev.alloc("batch status", 4)?,
+        })
+    }
+
+    /// Runs the batch kernel over the uploaded queries through the packed tree: results set to
+    /// `initial` (one record per query), status zeroed, the kernel over `ceil(n / 256)` blocks
+    /// of 256 threads, then the results and status downloaded. An empty tree leaves every
+    /// result as it started. Status 1 is a traversal stack overflow.
+    pub fn run_queries(
         &self,
         tree: &PackedTree<L::Buffer>,
-        rays: &DeviceRays<L::Buffer>,
-    ) -> Result<GpuTrace, CudaError> {
+        q: &DeviceQueries<L::Buffer>,
+        initial: &[u8],
+    ) -> Result<(Vec<u8>, Duration), CudaError> {
         let dev = &self.launcher;
-        let n = rays.rays.len();
+        let n = q.n;
+        if initial.len() != n * q.result_size {
+            return Err(CudaError::Host(format!(
+                "{} bytes of initial results for {n} records of {} bytes",
+                initial.len(),
+                q.result_size
+            )));
+        }
         let Some(table) = &tree.table else {
-            return Ok(GpuTrace {
-                hits: vec![Hit::MISS; n],
-                kernel_time: Duration::ZERO,
-            });
+            return Ok((initial.to_vec(), Duration::ZERO));
         };
         let Some(grid) = Grid::for_queries(n as u64, THREADS_PER_BLOCK)? else {
-            return Ok(GpuTrace {
-                hits: Vec::new(),
-                kernel_time: Duration::ZERO,
-            });
+            return Ok((Vec::new(), Duration::ZERO));
         };
-        dev.write(&rays.results, &initial_results(&rays.rays))?;
-        dev.write(&rays.status, &[0i32])?;
+        dev.write(&q.results, initial)?;
+        dev.write(&q.status, &[0i32])?;
         let root = match self.root {
             RootRef::U32 => KernelArg::U32(tree.root as u32),
             RootRef::U64 => KernelArg::U64(tree.root),
@@ -462,21 +496,44 @@ impl<L: Launcher> GpuPipeline<L> {
             grid,
             &[
                 KernelArg::Ptr(dev.address(table)),
-                KernelArg::Ptr(dev.address(&rays.queries)),
-                KernelArg::Ptr(dev.address(&rays.results)),
+                KernelArg::Ptr(dev.address(&q.queries)),
+                KernelArg::Ptr(dev.address(&q.results)),
                 KernelArg::U64(n as u64),
                 root,
-                KernelArg::Ptr(dev.address(&rays.status)),
+                KernelArg::Ptr(dev.address(&q.status)),
             ],
         )?;
-        let status: Vec<i32> = dev.download(&rays.status, 1)?;
+        let status: Vec<i32> = dev.download(&q.status, 1)?;
         if status[0] != 0 {
             return Err(CudaError::Status {
                 kernel: self.names.batch.clone(),
                 status: status[0],
             });
         }
-        let results: Vec<[u32; 2]> = dev.download(&rays.results, n)?;
+        let results: Vec<u8> = dev.download(&q.results, n * q.result_size)?;
+        Ok((results, kernel_time))
+    }
+
+    /// Traces the uploaded rays through the packed tree ([`GpuPipeline::run_queries`] with
+    /// results starting at `(ray.tmax, 0xFFFFFFFF)`).
+    pub fn trace(
+        &self,
+        tree: &PackedTree<L::Buffer>,
+        rays: &DeviceRays<L::Buffer>,
+    ) -> Result<GpuTrace, CudaError> {
+        let initial: Vec<u8> = initial_results(&rays.rays)
+            .iter()
+            .flatten()
+            .flat_map(|w| w.to_le_bytes())
+            .collect();
+        let (bytes, kernel_time) = self.run_queries(tree, &rays.records, &initial)?;
+        let results: Vec<[u32; 2]> = bytes
+            .chunks_exact(8)
+            .map(|r| {
+                let w = |i: usize| u32::from_le_bytes(r[i..i + 4].try_into().expect("4 bytes"));
+                [w(0), w(4)]
+            })
+            .collect();
         Ok(GpuTrace {
             hits: hits_of(&results),
             kernel_time,

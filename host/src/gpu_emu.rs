@@ -59,6 +59,10 @@ pub struct EmulatedGpu {
     stack_limit: AtomicUsize,
     workers: usize,
     layout: String,
+    /// The algorithm whose batch kernel this is (closest hit for a bare module).
+    algorithm: String,
+    /// The entries' C signature, when compiled from a program.
+    entry: Option<scion_compiler::abi::EntrySig>,
     buffers: Vec<String>,
     logical: Schema,
     codegen: Codegen,
@@ -87,7 +91,8 @@ impl EmulatedGpu {
         EmulatedGpu::compile_program(&program, opts, codegen, workers)
     }
 
-    /// [`EmulatedGpu::compile`] for any closest-hit program (a layout file's, say).
+    /// [`EmulatedGpu::compile`] for any program: a layout file's closest hit, or any
+    /// algorithm whose entry answers a batch of queries over one tree.
     pub fn compile_program(
         program: &crate::mem_interp::Program,
         opts: &LoOptions,
@@ -105,6 +110,8 @@ impl EmulatedGpu {
         let buffers = lo.entry.buffers.iter().map(|b| b.name.clone()).collect();
         let mut gpu = EmulatedGpu::from_module(lo.module, codegen, workers)?;
         gpu.layout = lo.entry.layout.clone();
+        gpu.algorithm = lo.entry.algorithm.clone();
+        gpu.entry = Some(lo.entry.clone());
         gpu.buffers = buffers;
         gpu.logical = lo.entry.logical.clone();
         gpu.compile_time = start.elapsed();
@@ -168,6 +175,8 @@ impl EmulatedGpu {
             stack_limit: AtomicUsize::new(1024),
             workers,
             layout: String::new(),
+            algorithm: ALGORITHM.to_string(),
+            entry: None,
             buffers: Vec::new(),
             logical: scion_runtime::bvh::schema::binary_bvh(),
             codegen,
@@ -180,6 +189,11 @@ impl EmulatedGpu {
         &self.layout
     }
 
+    /// The entries' C signature (records, buffers), when compiled from a program.
+    pub fn entry(&self) -> Option<&scion_compiler::abi::EntrySig> {
+        self.entry.as_ref()
+    }
+
     /// The layout's buffers in plan order.
     pub fn buffers(&self) -> &[String] {
         &self.buffers
@@ -190,11 +204,11 @@ impl EmulatedGpu {
         self.kernels.keys().map(String::as_str).collect()
     }
 
-    /// The pipeline of closest hit over these kernels (`scion_cuda::trace`).
+    /// The pipeline over these kernels (`scion_cuda::trace`).
     pub fn into_pipeline(self) -> Result<GpuPipeline<EmulatedGpu>, String> {
         let (layout, buffers) = (self.layout.clone(), self.buffers.clone());
-        let logical = self.logical.clone();
-        GpuPipeline::with_launcher(self, &layout, ALGORITHM, buffers, logical)
+        let (logical, algorithm) = (self.logical.clone(), self.algorithm.clone());
+        GpuPipeline::with_launcher(self, &layout, &algorithm, buffers, logical)
             .map_err(|e| e.to_string())
     }
 

@@ -93,3 +93,52 @@ fn every_kind_layout_and_backend_answers_as_its_reference() {
     // 3 kinds × 9 BVH layouts × 2 generators × scenes × 2 trees.
     assert!(rows >= 3 * 9 * 2 * 2 * 10, "{rows} rows");
 }
+
+/// The GPU pipeline over every kind: the GPU entries (`scion_A_L_kernel` and the packing
+/// kernels) compiled for this CPU and launched as grids of host threads
+/// (`scion_host::gpu_emu`), the tree packed on the emulated device, the query records uploaded
+/// and the batch kernel run through `scion_cuda`'s own pipeline (`run_queries`): the same
+/// answers as the reference, for each kind on layouts with exact, quantized and pointer
+/// references.
+#[test]
+fn every_kind_runs_through_the_gpu_pipeline_as_its_reference() {
+    use scion_compiler::abi::EntryTarget;
+    use scion_host::gpu_emu::EmulatedGpu;
+    use scion_host::jit::LoOptions;
+    let mut scenes = scenes();
+    scenes.truncate(3);
+    scenes.push(real_scene("teapot").unwrap());
+    let driver = BatchDriver::new(2).unwrap();
+    let mut rows = 0;
+    for kind in QueryKind::BATCHED {
+        for stem in ["pbrt", "ptr", "pbrt-q16"] {
+            let resolved = resolve_kind(stem, None, kind).unwrap();
+            let opts = LoOptions {
+                stack_size: Some(4096),
+                opt_level: 3,
+                dsl_opt: true,
+                target: EntryTarget::Gpu,
+            };
+            let gpu = EmulatedGpu::compile_program(&resolved.program, &opts, Codegen::Llvm(3), 2)
+                .unwrap_or_else(|e| panic!("{stem} {kind:?}: {e}"));
+            let sig = gpu.entry().unwrap().clone();
+            let pipeline = gpu.into_pipeline().unwrap();
+            for (i, scene) in scenes.iter().enumerate() {
+                let tree = TreeKind::Sah4.build(scene);
+                let q = queries(kind, scene, i as u64 + 7);
+                assert_eq!(q.record_sizes(), (sig.query.size, sig.result.size));
+                let packed = pipeline.pack(&tree, tree.stats().depth).unwrap();
+                let (qs, rs) = (sig.query.size as usize, sig.result.size as usize);
+                let on_device = pipeline.upload_queries(&q.bytes, qs, rs).unwrap();
+                let (results, _) = pipeline
+                    .run_queries(&packed, &on_device, &q.initial_results())
+                    .unwrap_or_else(|e| panic!("{stem} {kind:?} {}: {e}", scene.name));
+                let traversed = resolved.boxes.decoded_tree(&tree);
+                q.check(&scene.triangles, &traversed, &results, usize::MAX, &driver)
+                    .unwrap_or_else(|e| panic!("{stem} {} {}: {e}", kind.name(), scene.name));
+                rows += 1;
+            }
+        }
+    }
+    assert_eq!(rows, 3 * 3 * 4);
+}
