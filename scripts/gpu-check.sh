@@ -153,6 +153,32 @@ for layout in $LAYOUTS; do
 done
 trace_secs=$(( $(date +%s) - start ))
 
+# The other query kinds through `scion run --device` (mode scion only: they are compiled on the
+# spot), pbrt on the two smallest scenes: any hit over primary rays, closest point over points
+# uniform in the box; every answer checked against the reference on the CPU.
+kinds_failed=0
+if [ "$mode" = scion ] && [ $no_device -eq 0 ]; then
+  say ""
+  say "== Other query kinds (scion run --device $DEVICE, pbrt) =="
+  for obj in "${objs[@]:0:2}"; do
+    scene=$(basename "$obj" .obj)
+    for kind in any-hit closest-point; do
+      log=$RESULTS/logs/run-$scene-$kind.log
+      n=$([ "$kind" = closest-point ] && echo 16384 || echo 65536)
+      cmd=("$KIT/bin/scion" run --device "$DEVICE" --algorithm "$kind" --scene "$obj" --layout pbrt
+           --n "$n" --runs "$RUNS")
+      echo "\$ ${cmd[*]}" > "$log"
+      timeout "$TIMEOUT" "${cmd[@]}" >> "$log" 2>&1
+      rc=$?
+      check=$(sed -n 's/^check[[:space:]]\{1,\}//p' "$log" | head -1)
+      speed=$(awk '/^throughput/ {print $2, $3}' "$log" | head -1)
+      if [ $rc -eq 0 ] && [[ "$check" == identical* ]]; then v="ok: $check"
+      else v="FAILED (rc $rc): ${check:-$(grep -m1 '^error' "$log" || tail -1 "$log")}"; kinds_failed=$((kinds_failed + 1)); fi
+      say "$(printf '%-18s %-14s %8s  %-16s %s' "$scene" "$kind" "$n" "${speed:--}" "$v")"
+    done
+  done
+fi
+
 say ""
 say "== GPU tests of scion-cuda =="
 tests_failed=0
@@ -176,7 +202,7 @@ for r in "${rows[@]}"; do say "$r"; done
 say ""
 total=${#rows[@]}
 ran=$((total - not_run))
-say "gpu-check: $identical of $ran traces identical to the reference; $not_run not run (budget spent; a failure for pbrt and ptr); $tests_failed test binaries failed"
+say "gpu-check: $identical of $ran traces identical to the reference; $not_run not run (budget spent; a failure for pbrt and ptr); $tests_failed test binaries failed; $kinds_failed runs of other query kinds failed"
 # The Mrays/s as the Markdown table of docs/benchmarks.md: one row per scene and ray kind, the
 # kernel's throughput per layout, and each other layout as a ratio to pbrt in the same run.
 awk -F'\t' -v device="$(printf '%s' "$info" | head -1)" -v layouts="$LAYOUTS" -v rays="$N" '
@@ -207,4 +233,4 @@ if [ "$total" -gt 0 ]; then
 fi
 say ""
 say "gpu-check: logs in $RESULTS/logs, traces.tsv and this summary in $RESULTS"
-[ $no_device -eq 0 ] && [ $total -gt 0 ] && [ $failures -eq 0 ] && [ $tests_failed -eq 0 ]
+[ $no_device -eq 0 ] && [ $total -gt 0 ] && [ $failures -eq 0 ] && [ $tests_failed -eq 0 ] && [ $kinds_failed -eq 0 ]

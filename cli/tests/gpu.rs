@@ -333,7 +333,8 @@ fn device_gpu_emulated_traces_like_the_cpu() {
 /// scripts/gpu-check.sh, the one command of the GPU check, run end to end without a GPU
 /// (`GPU_CHECK_DEVICE=gpu-emulated`) on a kit of the `scion` under test and two small scenes:
 /// every trace is found identical (its `check` line read, not the `checksum:` line before it),
-/// and the summary and the table for docs/benchmarks.md are written.
+/// any hit and closest point run through `scion run --device` and check, and the summary and
+/// the table for docs/benchmarks.md are written.
 #[test]
 fn gpu_check_script_passes_on_the_emulated_device() {
     let dir = scratch("gpu-check");
@@ -379,10 +380,18 @@ fn gpu_check_script_passes_on_the_emulated_device() {
     assert!(
         summary.contains(
             "gpu-check: 16 of 16 traces identical to the reference; 0 not run (budget spent; \
-             a failure for pbrt and ptr); 0 test binaries failed"
+             a failure for pbrt and ptr); 0 test binaries failed; 0 runs of other query kinds \
+             failed"
         ),
         "{summary}"
     );
+    // Any hit and closest point through `scion run --device`, on both scenes.
+    let kinds: Vec<&str> = summary
+        .lines()
+        .filter(|l| l.contains(" any-hit ") || l.contains(" closest-point "))
+        .collect();
+    assert_eq!(kinds.len(), 4, "{summary}");
+    assert!(kinds.iter().all(|l| l.contains("ok: identical")), "{summary}");
     assert!(
         summary.contains("gpu-check: emulated on the CPU"),
         "{summary}"
