@@ -391,7 +391,10 @@ fn gpu_check_script_passes_on_the_emulated_device() {
         .filter(|l| l.contains(" any-hit ") || l.contains(" closest-point "))
         .collect();
     assert_eq!(kinds.len(), 4, "{summary}");
-    assert!(kinds.iter().all(|l| l.contains("ok: identical")), "{summary}");
+    assert!(
+        kinds.iter().all(|l| l.contains("ok: identical")),
+        "{summary}"
+    );
     assert!(
         summary.contains("gpu-check: emulated on the CPU"),
         "{summary}"

@@ -18,6 +18,8 @@ use scion_runtime::reference::closest_hits_tree;
 use scion_runtime::reference::closest_point::{closest_point_brute, ClosestPoint};
 use std::sync::Mutex;
 
+pub use scion_runtime::query::points::uniform_points;
+
 /// Why [`Queries`] never has the kind [`QueryKind::Collide`]: its constructors make hit and
 /// closest-point queries only.
 const NOT_BATCHED: &str = "collision is one query over two trees (crate::collide), not a batch";
@@ -229,25 +231,4 @@ pub fn points_from_bytes(bytes: &[u8]) -> Result<Vec<Vec3>, String> {
         Some(i) => Err(format!("point {i} is not finite: {:?}", points[i])),
         None => Ok(points),
     }
-}
-
-/// `n` points uniform in the box `[low, high]` (xorshift64 seeded by `seed`, 53-bit fractions).
-pub fn uniform_points(low: Vec3, high: Vec3, n: usize, seed: u64) -> Vec<Vec3> {
-    let mut x = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
-    let mut unit = move || {
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        (x >> 11) as f64 / (1u64 << 53) as f64
-    };
-    let lerp = |a: f32, b: f32, t: f64| (f64::from(a) + (f64::from(b) - f64::from(a)) * t) as f32;
-    (0..n)
-        .map(|_| {
-            Vec3::new(
-                lerp(low.x, high.x, unit()),
-                lerp(low.y, high.y, unit()),
-                lerp(low.z, high.z, unit()),
-            )
-        })
-        .collect()
 }

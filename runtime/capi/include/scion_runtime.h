@@ -95,6 +95,15 @@ typedef struct ScionHit {
 } ScionHit;
 SCION_STATIC_ASSERT(sizeof(ScionHit) == 8, "ScionHit is 8 bytes");
 
+/* A closest point (20 bytes): the result record `scion_closest_point_query_result` of the
+ * closest-point entry points. */
+typedef struct ScionClosestPoint {
+    float distance;
+    uint32_t prim; /* UINT32_MAX: none */
+    float point[3];
+} ScionClosestPoint;
+SCION_STATIC_ASSERT(sizeof(ScionClosestPoint) == 20, "ScionClosestPoint is 20 bytes");
+
 /* Status codes. */
 #define SCION_RT_OK 0
 #define SCION_RT_ERR_ARGUMENT 1 /* a NULL pointer or a value out of range */
@@ -132,6 +141,32 @@ int32_t scion_primary_rays(const ScionScene *scene, uint64_t n, uint64_t seed, S
 int32_t scion_reference_closest_hits(const ScionTree *tree, const ScionRay *rays, uint64_t n,
                                      uint32_t threads, ScionHit *hits, char *err,
                                      size_t err_len);
+
+/* Writes the `n` points of `scion run --algorithm closest-point --n N --seed S` for `scene`
+ * (uniform in its box) to points[0..3n) as x, y, z. */
+int32_t scion_uniform_points(const ScionScene *scene, uint64_t n, uint64_t seed, float *points,
+                             char *err, size_t err_len);
+
+/* The closest point of the scene to each of points[0..3n) (x, y, z), by float32 brute force
+ * over its triangles on `threads` threads (0: one per core): the answers every layout's
+ * closest_point_query returns, bit for bit (distance, then the smaller id on ties). */
+int32_t scion_reference_closest_points(const ScionScene *scene, const float *points, uint64_t n,
+                                       uint32_t threads, ScionClosestPoint *out, char *err,
+                                       size_t err_len);
+
+/* A new scene: `scene` turned by x, y, z degrees about the axes through the centre of its box
+ * (x first, then y, then z; computed in double, rounded to float; ids kept), as
+ * `scion run --algorithm collide --rotate X,Y,Z` makes its copy. Free it with
+ * scion_scene_free. */
+int32_t scion_scene_rotated(const ScionScene *scene, double x, double y, double z,
+                            ScionScene **out, char *err, size_t err_len);
+
+/* The pairs (id in a, id in b) of triangles of `a` and `b` whose boxes overlap and that the
+ * prelude's separating-axis test does not separate: what `collide` returns on every layout.
+ * Sorted, no repeats; a sink like the entries' sets: *count is the number of pairs, the first
+ * min(count, capacity) are written to pairs. */
+int32_t scion_reference_collide(const ScionScene *a, const ScionScene *b, uint32_t (*pairs)[2],
+                                uint64_t capacity, uint64_t *count, char *err, size_t err_len);
 
 /* The hit of a closest-hit result record (best t, best id): a miss when id is UINT32_MAX. */
 ScionHit scion_hit_from_best(float t, uint32_t prim);

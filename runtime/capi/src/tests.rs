@@ -176,3 +176,144 @@ fn errors_are_statuses_with_messages() {
         hits_checksum(&[])
     );
 }
+
+#[test]
+fn closest_points_and_collision_match_the_rust_path() {
+    use rt::reference::closest_point::closest_point_brute;
+    use rt::reference::collide::{collide_sweep, rotated};
+    let path = scene_path();
+    let cpath = CString::new(path.to_str().unwrap()).unwrap();
+    let mut err = [0 as c_char; 256];
+    let mut scene: *mut ScionScene = std::ptr::null_mut();
+    // SAFETY: valid string, out pointer and buffer.
+    let s = unsafe { scion_scene_load(cpath.as_ptr(), &mut scene, err.as_mut_ptr(), err.len()) };
+    assert_eq!(s, SCION_RT_OK, "{}", msg(&err));
+    let rust = load_obj(&path).unwrap();
+
+    // Points uniform in the box, and their closest points by brute force.
+    let n = 300usize;
+    let mut points = vec![0f32; 3 * n];
+    // SAFETY: room for `n` points.
+    let s = unsafe {
+        scion_uniform_points(
+            scene,
+            n as u64,
+            5,
+            points.as_mut_ptr(),
+            err.as_mut_ptr(),
+            err.len(),
+        )
+    };
+    assert_eq!(s, SCION_RT_OK, "{}", msg(&err));
+    let b = rust.bounds();
+    let want_points = rt::query::points::uniform_points(b.low, b.high, n, 5);
+    let flat: Vec<f32> = want_points.iter().flat_map(|p| p.to_array()).collect();
+    assert_eq!(points, flat);
+    let mut out = vec![ScionClosestPoint::default(); n];
+    // SAFETY: `points` and `out` hold `n` elements.
+    let s = unsafe {
+        scion_reference_closest_points(
+            scene,
+            points.as_ptr(),
+            n as u64,
+            2,
+            out.as_mut_ptr(),
+            err.as_mut_ptr(),
+            err.len(),
+        )
+    };
+    assert_eq!(s, SCION_RT_OK, "{}", msg(&err));
+    for (o, p) in out.iter().zip(&want_points) {
+        let w = closest_point_brute(&rust.triangles, *p, f32::INFINITY);
+        assert_eq!(
+            (o.distance.to_bits(), o.prim, o.point),
+            (w.distance.to_bits(), w.prim, w.point.to_array())
+        );
+    }
+
+    // The rotated copy and the pairs, through a sink too small at first.
+    let mut copy: *mut ScionScene = std::ptr::null_mut();
+    // SAFETY: a live handle and an out pointer.
+    let s = unsafe {
+        scion_scene_rotated(
+            scene,
+            60.0,
+            70.0,
+            10.0,
+            &mut copy,
+            err.as_mut_ptr(),
+            err.len(),
+        )
+    };
+    assert_eq!(s, SCION_RT_OK, "{}", msg(&err));
+    let want = collide_sweep(
+        &rust.triangles,
+        &rotated(&rust.triangles, [60.0, 70.0, 10.0]),
+    );
+    assert!(!want.is_empty());
+    let mut count = 0u64;
+    let mut pairs = vec![[0u32; 2]; 2];
+    // SAFETY: live handles; `pairs` has room for 2.
+    let s = unsafe {
+        scion_reference_collide(
+            scene,
+            copy,
+            pairs.as_mut_ptr(),
+            2,
+            &mut count,
+            err.as_mut_ptr(),
+            err.len(),
+        )
+    };
+    assert_eq!(s, SCION_RT_OK, "{}", msg(&err));
+    assert_eq!(count, want.len() as u64);
+    pairs.resize(count as usize, [0; 2]);
+    // SAFETY: as above, `pairs` now has room for all.
+    let s = unsafe {
+        scion_reference_collide(
+            scene,
+            copy,
+            pairs.as_mut_ptr(),
+            count,
+            &mut count,
+            err.as_mut_ptr(),
+            err.len(),
+        )
+    };
+    assert_eq!(s, SCION_RT_OK, "{}", msg(&err));
+    let got: Vec<(u32, u32)> = pairs.iter().map(|p| (p[0], p[1])).collect();
+    assert_eq!(got, want);
+    // Bad arguments are statuses with messages.
+    // SAFETY: NULL is reported, never dereferenced.
+    let s = unsafe {
+        scion_reference_collide(
+            scene,
+            std::ptr::null(),
+            pairs.as_mut_ptr(),
+            1,
+            &mut count,
+            err.as_mut_ptr(),
+            err.len(),
+        )
+    };
+    assert_eq!(s, SCION_RT_ERR_ARGUMENT);
+    assert!(msg(&err).contains("must not be NULL"), "{}", msg(&err));
+    // SAFETY: as above.
+    let s = unsafe {
+        scion_scene_rotated(
+            scene,
+            f64::NAN,
+            0.0,
+            0.0,
+            &mut copy,
+            err.as_mut_ptr(),
+            err.len(),
+        )
+    };
+    assert_eq!(s, SCION_RT_ERR_ARGUMENT);
+    // SAFETY: live handles, freed once.
+    unsafe {
+        scion_scene_free(copy);
+        scion_scene_free(scene);
+    }
+}

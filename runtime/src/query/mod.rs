@@ -1,9 +1,11 @@
-//! Queries: ray generators ([`rays`]) and the binary query/result files ([`io`]).
+//! Queries: ray generators ([`rays`]), closest-point query points ([`points`]) and the binary
+//! query/result files ([`io`]).
 //!
 //! Input: a scene box and a seed, or a file; output: `Vec<Ray>` / `Vec<Hit>`. These are the
 //! workloads of the paper's evaluation (§9: primary and secondary rays).
 
 pub mod io;
+pub mod points;
 pub mod rays;
 
 pub use io::{
