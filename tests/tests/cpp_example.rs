@@ -3,7 +3,8 @@
 //! a real scene, and the checksum it prints must equal the Rust path's (the runtime's
 //! reference closest hits of the same tree and rays, `hits_checksum`, what `scion trace`
 //! prints), for pbrt and ptr. The program also checks every hit against the reference itself
-//! and exits nonzero on a mismatch.
+//! and exits nonzero on a mismatch. The collision program (`collide.cpp`, two trees and a sink
+//! of pairs through the C ABI) finds the Rust reference's pairs on the same layouts.
 //!
 //! It builds `scionc` and the runtime's static library with the `cargo` that runs the test
 //! (release profile). Skips with a clear line when g++ or make is missing.
@@ -12,6 +13,7 @@ use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::{build_sah_binned, SahOptions};
 use scion_runtime::query::{hits_checksum, primary_rays_n};
 use scion_runtime::reference::closest_hits_tree;
+use scion_runtime::reference::collide::{collide_sweep, rotated};
 use scion_runtime::scene::{load_obj, manifest::scenes_dir};
 use std::path::Path;
 use std::process::Command;
@@ -78,6 +80,34 @@ fn cpp_example_prints_the_rust_checksum() {
             printed,
             rust_checksum(&scene),
             "{layout}: the C++ checksum differs from the Rust path's\n{stdout}"
+        );
+        assert!(stdout.contains("mismatches: 0"), "{stdout}");
+        // The collision program over the same layout: two trees, a sink of pairs too small at
+        // first (so the entry runs twice), the pairs equal to the Rust reference.
+        let out = Command::new("make")
+            .current_dir(repo().join("examples/cpp"))
+            .arg("run-collide")
+            .arg(format!("BUILD={}", build.display()))
+            .arg(format!("SCIONC={}", target.join("scionc").display()))
+            .arg(format!("RUNTIME_LIB_DIR={}", target.display()))
+            .arg(format!("LAYOUT={layout}"))
+            .arg(format!("LAYOUT_FILE={file}"))
+            .arg(format!("SCENE={}", scene.display()))
+            .arg("CAPACITY=7")
+            .arg("CXX=g++")
+            .output()
+            .expect("runs make");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            out.status.success(),
+            "{layout}: make run-collide failed\n{stdout}\n{stderr}"
+        );
+        let tris = load_obj(&scene).unwrap().triangles;
+        let want = collide_sweep(&tris, &rotated(&tris, [60.0, 70.0, 10.0]));
+        assert!(
+            stdout.contains(&format!("pairs: {} (2 calls", want.len())),
+            "{layout}: {stdout}"
         );
         assert!(stdout.contains("mismatches: 0"), "{stdout}");
     }
