@@ -439,6 +439,12 @@ pub fn resolve_kind(
 }
 
 /// The library's algorithm files, as (name, text).
+/// Every entry of a known kind the library's algorithm files declare: name, tree type, kind
+/// (`closest_hit`, `closest_point_query`, `closest_point_best_first`, `collide`, ...).
+pub fn library_entries() -> Result<Vec<(String, String, QueryKind)>, String> {
+    Ok(declared(&library_algorithms())?.entries)
+}
+
 fn library_algorithms() -> Vec<(String, String)> {
     ALGORITHM_FILES
         .iter()
