@@ -3,7 +3,9 @@
 //! larger, by surface area and by volume; that every decoded box contains its exact box, i.e.
 //! quantization is conservative and can lose no hit), and the extra work per ray the larger
 //! boxes cause (box tests, node visits, triangle tests of the reference traversal over the
-//! decoded tree against the same traversal over the exact tree).
+//! decoded tree against the same traversal over the exact tree). For an eight-wide layout that
+//! quantizes each node's children in the node's frame, the same over the wide tree's child
+//! boxes and the wide reference traversal.
 
 use scion_runtime::bvh::LogicalTree;
 use scion_runtime::reference::closest_hit::TraversalStats;
@@ -49,6 +51,39 @@ pub fn inflation(exact: &LogicalTree, decoded: &LogicalTree) -> Inflation {
         volume: ratio(dv, ev),
         contained,
         nodes: exact.nodes.len().min(decoded.nodes.len()),
+    }
+}
+
+/// `decoded` (a wide tree with its child boxes as a layout decodes them) against `exact`, over
+/// every occupied child slot.
+pub fn inflation_wide<const W: usize>(
+    exact: &scion_runtime::bvh::wide::WideTree<W>,
+    decoded: &scion_runtime::bvh::wide::WideTree<W>,
+) -> Inflation {
+    let (mut ea, mut da, mut ev, mut dv, mut contained, mut nodes) = (0.0, 0.0, 0.0, 0.0, 0, 0);
+    for (e, d) in exact.nodes.iter().zip(&decoded.nodes) {
+        for (e, d) in e
+            .bounds
+            .iter()
+            .zip(&d.bounds)
+            .filter(|(e, _)| !e.is_empty())
+        {
+            let (e, d) = (e.to_array(), d.to_array());
+            ea += half_area(&e);
+            da += half_area(&d);
+            ev += volume(&e);
+            dv += volume(&d);
+            let holds = (0..3).all(|a| d[a] <= e[a] && d[a + 3] >= e[a + 3]);
+            contained += usize::from(holds);
+            nodes += 1;
+        }
+    }
+    let ratio = |d: f64, e: f64| if e > 0.0 { d / e } else { 1.0 };
+    Inflation {
+        area: ratio(da, ea),
+        volume: ratio(dv, ev),
+        contained,
+        nodes,
     }
 }
 
@@ -104,6 +139,24 @@ mod tests {
         let q16 = inflation(&tree, &Boxes::GlobalQ16.decoded_tree(&tree));
         let q10 = inflation(&tree, &Boxes::SnappedQ10.decoded_tree(&tree));
         assert!(q10.area > q16.area, "{} {}", q10.area, q16.area);
+        // Eight-wide nodes quantized in their own frames: conservative, q8 wider than q16.
+        let w8 = scion_runtime::bvh::wide::collapse::<8>(&tree);
+        let i8 = inflation_wide(
+            &w8,
+            &scion_host::quantized::decoded_wide(Boxes::NodeQ8, &w8),
+        );
+        let i16 = inflation_wide(
+            &w8,
+            &scion_host::quantized::decoded_wide(Boxes::NodeQ16, &w8),
+        );
+        assert_eq!((i8.contained, i16.contained), (i8.nodes, i16.nodes));
+        assert!(
+            i8.area > i16.area && i16.area >= 1.0,
+            "{} {}",
+            i8.area,
+            i16.area
+        );
+        assert_eq!(inflation_wide(&w8, &w8).area, 1.0);
         // A box that does not contain its exact one is reported.
         let mut shrunk = tree.clone();
         shrunk.nodes[0].bounds[0] += 0.01;

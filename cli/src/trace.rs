@@ -280,6 +280,8 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     outln!("hits         {hit_count} of {} rays", rays.len());
     if args.stats {
         let traversed = boxes.decoded_tree(&tree);
+        // Quantized boxes of the binary tree (not per wide node, reported below).
+        let binary_quantized = !matches!(boxes, Boxes::Exact) && boxes.node_codes().is_none();
         let driver = BatchDriver::new(threads).map_err(CliError::new)?;
         let s = closest_hits_tree_stats(&traversed, &rays, &driver);
         let per = |x: u64| x as f64 / rays.len().max(1) as f64;
@@ -290,9 +292,9 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
             per(s.nodes_pruned),
             per(s.triangles_tested),
             s.max_pending,
-            if matches!(boxes, Boxes::Exact) { "" } else { " of the decoded boxes" }
+            if binary_quantized { " of the decoded boxes" } else { "" }
         );
-        if !matches!(boxes, Boxes::Exact) {
+        if binary_quantized {
             // What the quantized boxes cost: inflation and extra work against the exact tree.
             let exact = closest_hits_tree_stats(&tree, &rays, &driver);
             let i = crate::quant_error::inflation(&tree, &traversed);
@@ -304,6 +306,17 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         // traversal would do (nearest first, scion_runtime::reference::closest_hit_wide).
         let w4 = collapse::<4>(&traversed);
         let w8 = collapse::<8>(&traversed);
+        if boxes.node_codes().is_some() {
+            // An eight-wide layout quantizing each node's children in the node's frame: its
+            // decoded child boxes against the exact ones, and the wide traversal's extra work.
+            let decoded = scion_host::quantized::decoded_wide(boxes, &w8);
+            let exact = closest_hits_wide_stats(&w8, &traversed.primitives, &rays, &driver);
+            let s = closest_hits_wide_stats(&decoded, &traversed.primitives, &rays, &driver);
+            let i = crate::quant_error::inflation_wide(&w8, &decoded);
+            for line in crate::quant_error::report(&i, &s, &exact) {
+                outln!("{line}");
+            }
+        }
         let s4 = closest_hits_wide_stats(&w4, &traversed.primitives, &rays, &driver);
         let s8 = closest_hits_wide_stats(&w8, &traversed.primitives, &rays, &driver);
         for (w, n, s) in [(4, w4.nodes.len(), s4), (8, w8.nodes.len(), s8)] {

@@ -178,7 +178,7 @@ pub fn declared(files: &[(String, String)]) -> Result<Declared, String> {
             .map(|l| DeclaredLayout {
                 name: l.name.clone(),
                 tree_type: l.adt.clone(),
-                boxes: build_boxes(&module, &l.name),
+                boxes: build_boxes(&module, &l.name, l.adt.as_deref()),
             })
             .collect(),
         entries: entries(&module),
@@ -187,32 +187,74 @@ pub fn declared(files: &[(String, String)]) -> Result<Declared, String> {
 
 /// How layout `layout` stores boxes, as far as its bit-for-bit reference goes: quantized
 /// against one frame its `build root` writes from the root's box ([`Boxes::GlobalQ16`] when
-/// that build calls `frame_step`, [`Boxes::SnappedQ10`] when it calls `sg_bins`), else
-/// [`Boxes::Exact`] (a layout quantizing each node against its own frame, as the eight-wide
-/// `-q8`/`-q16` ones, is checked against the exact tree's reference; its boxes are
-/// conservative).
-fn build_boxes(module: &Module, layout: &str) -> Boxes {
+/// that build calls `frame_step`, [`Boxes::SnappedQ10`] when it calls `sg_bins`); quantized per
+/// node when another of its builds, or a function they call, calls `frame_step` (with codes up
+/// to 255: [`Boxes::NodeQ8`], else [`Boxes::NodeQ16`]: the eight-wide `-q8`/`-q16` layouts,
+/// whose decoded boxes are those of the wide tree's children, when its tree type has one interior
+/// and one leaf variant: the hair BVH quantizes the oriented boxes of a second interior variant,
+/// which its own test decodes); else [`Boxes::Exact`].
+fn build_boxes(module: &Module, layout: &str, tree_type: Option<&str>) -> Boxes {
+    use scion_ir::tree::Op as T;
+    let intrinsics = |f: scion_ir::FuncId| {
+        scion_ir::walk::region_ops(module, module.funcs[f].body)
+            .into_iter()
+            .filter(|&op| matches!(module.ops[op].kind, OpKind::Tree(T::Intrinsic)))
+            .collect::<Vec<_>>()
+    };
     let mut boxes = Boxes::Exact;
+    let mut others = Vec::new();
     for &f in &module.func_order {
         let func = &module.funcs[f];
-        if func.attrs.get("build_of").and_then(|a| a.as_str()) != Some(layout)
-            || func.attrs.get("variant").and_then(|a| a.as_str()) != Some("root")
-        {
+        if func.attrs.get("build_of").and_then(|a| a.as_str()) != Some(layout) {
             continue;
         }
-        for op in scion_ir::walk::region_ops(module, func.body) {
-            let op = &module.ops[op];
-            if !matches!(op.kind, OpKind::Tree(scion_ir::tree::Op::Intrinsic)) {
-                continue;
-            }
-            match op.str_attr("name") {
+        if func.attrs.get("variant").and_then(|a| a.as_str()) != Some("root") {
+            others.push(f);
+            continue;
+        }
+        for op in intrinsics(f) {
+            match module.ops[op].str_attr("name") {
                 Some("frame_step") => boxes = Boxes::GlobalQ16,
                 Some("sg_bins") => boxes = Boxes::SnappedQ10,
                 _ => {}
             }
         }
     }
-    boxes
+    if boxes != Boxes::Exact {
+        return boxes;
+    }
+    let two_variants = tree_type
+        .and_then(|t| module.adt(t))
+        .is_some_and(|d| d.variants.len() == 2);
+    if !two_variants {
+        return Boxes::Exact;
+    }
+    // The other builds and everything they call.
+    let mut seen: std::collections::BTreeSet<scion_ir::FuncId> = others.iter().copied().collect();
+    while let Some(f) = others.pop() {
+        for op in scion_ir::walk::region_ops(module, module.funcs[f].body) {
+            let o = &module.ops[op];
+            if let Some(callee) = o.callee().and_then(|c| module.func_by_name(c)) {
+                if seen.insert(callee) {
+                    others.push(callee);
+                }
+            }
+            if matches!(o.kind, OpKind::Tree(T::Intrinsic))
+                && o.str_attr("name") == Some("frame_step")
+            {
+                let m = o.operands.get(2).and_then(|&v| match module.values[v].def {
+                    scion_ir::module::ValueDef::Result(d, _) => module.ops[d].int_attr("value"),
+                    _ => None,
+                });
+                return if m == Some(255) {
+                    Boxes::NodeQ8
+                } else {
+                    Boxes::NodeQ16
+                };
+            }
+        }
+    }
+    Boxes::Exact
 }
 
 /// The module's entry functions of a known [`QueryKind`]: name, tree type, kind.
@@ -492,6 +534,9 @@ mod tests {
             ("sg-eq", "SgEq", "closest_hit", Boxes::SnappedQ10),
             ("dop14-split", "DopSplit", "closest_hit_dop14", Boxes::Exact),
             ("hair-bvh", "HairBVH", "closest_hit_hair", Boxes::Exact),
+            ("bvh8", "Bvh8", "closest_hit8", Boxes::Exact),
+            ("bvh8-q8-ci", "Bvh8Q8CI", "closest_hit8", Boxes::NodeQ8),
+            ("bvh8-q16", "Bvh8Q16", "closest_hit8", Boxes::NodeQ16),
         ];
         for (name, layout, entry, boxes) in want {
             let r = resolve(name, None).unwrap_or_else(|e| panic!("{name}: {e}"));

@@ -10,9 +10,10 @@
 use scion_host::contract::{LayoutCode, Packed};
 use scion_host::jit::{Codegen, JitClosestHit, JIT_OPT_LEVEL};
 use scion_host::mem_interp::Program;
+use scion_host::quantized::Boxes;
 use scion_runtime::batch::BatchDriver;
-use scion_runtime::bvh::wide::{collapse, WideNode};
-use scion_runtime::geom::{Aabb, Hit, Vec3};
+use scion_runtime::bvh::wide::collapse;
+use scion_runtime::geom::Hit;
 use scion_runtime::reference::closest_hit_wide;
 use scion_runtime::scene::gen;
 use scion_tests::cases::{real_scene, RayKind, TreeKind};
@@ -47,33 +48,6 @@ fn records(tree: &scion_runtime::bvh::LogicalTree, width: usize, every_node: boo
     }
 }
 
-/// The boxes a `bvh8-q8*` or `bvh8-q16*` layout stores for a node's children: its frame over
-/// the occupied slots (codes up to `m`: 255 or 65535) and each slot's codes decoded (`scion_ir::tree::quant`, the builtins' exact
-/// semantics); empty slots stay empty.
-fn decoded8(node: &WideNode<8>, m: u32) -> [Aabb; 8] {
-    use scion_ir::tree::quant::{decode, frame_origin, frame_step, quant_hi, quant_lo};
-    let mut lo = [f32::INFINITY; 3];
-    let mut hi = [f32::NEG_INFINITY; 3];
-    for b in &node.bounds {
-        let (l, h) = (b.low.to_array(), b.high.to_array());
-        for a in 0..3 {
-            lo[a] = lo[a].min(l[a]);
-            hi[a] = hi[a].max(h[a]);
-        }
-    }
-    let o = lo.map(frame_origin);
-    let s = [0, 1, 2].map(|a| frame_step(o[a], hi[a], m));
-    node.bounds.map(|b| {
-        if b.is_empty() {
-            return b;
-        }
-        let (l, h) = (b.low.to_array(), b.high.to_array());
-        let dl = [0, 1, 2].map(|a| decode(quant_lo(l[a], o[a], s[a], m), o[a], s[a]));
-        let dh = [0, 1, 2].map(|a| decode(quant_hi(h[a], o[a], s[a], m), o[a], s[a]));
-        Aabb::new(Vec3::from_array(dl), Vec3::from_array(dh))
-    })
-}
-
 /// The wide reference's hits over `tree` collapsed to `width` children, over the boxes the
 /// layout stores (decoded with codes up to `quantized` when it quantizes per node).
 fn wide_reference(
@@ -90,12 +64,13 @@ fn wide_reference(
                 .collect()
         }
         8 => {
-            let mut w = collapse::<8>(tree);
-            if let Some(m) = quantized {
-                for n in &mut w.nodes {
-                    n.bounds = decoded8(n, m);
-                }
-            }
+            let exact = collapse::<8>(tree);
+            let boxes = match quantized {
+                Some(255) => Boxes::NodeQ8,
+                Some(_) => Boxes::NodeQ16,
+                None => Boxes::Exact,
+            };
+            let w = scion_host::quantized::decoded_wide(boxes, &exact);
             rays.iter()
                 .map(|r| closest_hit_wide(&w, &tree.primitives, r))
                 .collect()
@@ -155,13 +130,17 @@ fn wide_programs() -> Vec<Wide> {
         let node_bytes = nodes
             .unwrap_or_else(|| panic!("{stem}: no nodes buffer"))
             .stride;
-        let code_max = if stem.contains("_q8") {
+        // How the registry says the layout stores boxes (read from its builds), against what
+        // its name says.
+        let code_max = r.boxes.node_codes();
+        let named = if stem.contains("_q8") {
             Some(255)
         } else if stem.contains("_q16") {
             Some(65535)
         } else {
             None
         };
+        assert_eq!(code_max, named, "{stem}: {:?}", r.boxes);
         out.push(Wide {
             program: r.program,
             node_bytes: node_bytes as usize,

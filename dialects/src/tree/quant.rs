@@ -152,6 +152,14 @@ pub enum Boxes {
     /// `wlo = root.low`, `whi = root.high`, `bins = sg_bins(wlo, whi, 1023)`, each box
     /// `sg_code_up(low)` / `sg_code_down(high)`, decoded with directed rounding.
     SnappedQ10,
+    /// 8-bit codes of a wide node's child boxes against the node's own frame over its occupied
+    /// slots (`bvh8-q8*`, Embree's `QuantizedNode_t`): `o = frame_origin(lo)`,
+    /// `s = frame_step(o, hi, 255)` of the union of the children's boxes, each child
+    /// `quant_lo(low)` / `quant_hi(high)` ([`decode_children`]). The binary tree's boxes are
+    /// not quantized ([`Boxes::decoder`] is `None`); the wide tree's child boxes are.
+    NodeQ8,
+    /// As [`Boxes::NodeQ8`] with 16-bit codes (`bvh8-q16*`).
+    NodeQ16,
 }
 
 /// A map from a node's exact box to the box a layout's traversal sees ([`Boxes::decoder`]).
@@ -164,27 +172,46 @@ const Q16: u32 = 65535;
 const Q10: u32 = 1023;
 
 impl Boxes {
-    /// The name in PTX kits and messages: `exact`, `global-q16`, `snapped-q10`.
+    /// The name in PTX kits and messages: `exact`, `global-q16`, `snapped-q10`, `node-q8`,
+    /// `node-q16`.
     pub fn name(self) -> &'static str {
         match self {
             Boxes::Exact => "exact",
             Boxes::GlobalQ16 => "global-q16",
             Boxes::SnappedQ10 => "snapped-q10",
+            Boxes::NodeQ8 => "node-q8",
+            Boxes::NodeQ16 => "node-q16",
+        }
+    }
+
+    /// The largest code of a layout that quantizes each wide node's children against the
+    /// node's own frame (255 or 65535), `None` for the others.
+    pub fn node_codes(self) -> Option<u32> {
+        match self {
+            Boxes::NodeQ8 => Some(255),
+            Boxes::NodeQ16 => Some(Q16),
+            _ => None,
         }
     }
 
     /// The boxes named `name` (see [`Boxes::name`]).
     pub fn from_name(name: &str) -> Option<Boxes> {
-        [Boxes::Exact, Boxes::GlobalQ16, Boxes::SnappedQ10]
-            .into_iter()
-            .find(|b| b.name() == name)
+        [
+            Boxes::Exact,
+            Boxes::GlobalQ16,
+            Boxes::SnappedQ10,
+            Boxes::NodeQ8,
+            Boxes::NodeQ16,
+        ]
+        .into_iter()
+        .find(|b| b.name() == name)
     }
 
     /// For a tree whose root box is `root`, the map from a node's exact box to the box a
     /// traversal of this layout sees; `None` when that is the exact box itself.
     pub fn decoder(self, root: &[f32; 6]) -> Option<BoxMap> {
         match self {
-            Boxes::Exact => None,
+            Boxes::Exact | Boxes::NodeQ8 | Boxes::NodeQ16 => None,
             Boxes::GlobalQ16 => {
                 let origin: [f32; 3] = std::array::from_fn(|k| frame_origin(root[k]));
                 let step: [f32; 3] =
@@ -222,9 +249,74 @@ impl Boxes {
     }
 }
 
+/// The boxes a wide node quantized against its own frame stores for its children (codes up to
+/// `m`): the frame over the occupied slots' boxes (an empty box, `low > high`, is skipped and
+/// stays as it is), then each box's codes decoded. Conservative: each decoded box contains its
+/// exact box.
+pub fn decode_children(boxes: &[[f32; 6]], m: u32) -> Vec<[f32; 6]> {
+    let empty = |b: &[f32; 6]| (0..3).any(|a| b[a] > b[a + 3]);
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for b in boxes.iter().filter(|b| !empty(b)) {
+        for a in 0..3 {
+            lo[a] = lo[a].min(b[a]);
+            hi[a] = hi[a].max(b[a + 3]);
+        }
+    }
+    let o = lo.map(frame_origin);
+    let s: [f32; 3] = std::array::from_fn(|a| frame_step(o[a], hi[a], m));
+    boxes
+        .iter()
+        .map(|b| {
+            if empty(b) {
+                return *b;
+            }
+            std::array::from_fn(|i| {
+                let a = i % 3;
+                let q = if i < 3 {
+                    quant_lo(b[i], o[a], s[a], m)
+                } else {
+                    quant_hi(b[i], o[a], s[a], m)
+                };
+                decode(q, o[a], s[a])
+            })
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn children_decode_conservatively_in_their_frame() {
+        let boxes = [
+            [0.0, 0.0, 0.0, 1.0, 1.0, 1.0],
+            [0.3, -2.5, 0.1, 0.7, -2.0, 0.1],
+            [
+                f32::INFINITY,
+                f32::INFINITY,
+                f32::INFINITY,
+                -f32::INFINITY,
+                -f32::INFINITY,
+                -f32::INFINITY,
+            ],
+            [1e-3, 0.5, 0.99, 1e-3, 0.75, 1.0],
+        ];
+        for m in [255, 65535] {
+            let d = decode_children(&boxes, m);
+            assert_eq!(d[2], boxes[2], "an empty slot stays empty");
+            for (e, d) in boxes.iter().zip(&d).filter(|(e, _)| e[0] <= e[3]) {
+                assert!(
+                    (0..3).all(|a| d[a] <= e[a] && d[a + 3] >= e[a + 3]),
+                    "{e:?} {d:?}"
+                );
+            }
+        }
+        // Fewer bits, wider boxes.
+        let (q8, q16) = (decode_children(&boxes, 255), decode_children(&boxes, 65535));
+        assert!(q8[1][3] - q8[1][0] >= q16[1][3] - q16[1][0]);
+    }
 
     fn encloses(lo: f32, hi: f32, wlo: f32, whi: f32) {
         let o = frame_origin(wlo);
