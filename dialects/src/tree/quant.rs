@@ -363,6 +363,63 @@ mod tests {
         assert_eq!(quant_hi(f32::NAN, 0.0, 1.0, 9), 9);
     }
 
+    /// Property: children decoded in their node's frame (`decode_children`, codes up to 255 and
+    /// 65535) contain their exact boxes, for nodes of flat, degenerate (a point), huge, tiny and
+    /// far-from-origin boxes and mixes of them, seeded xorshift draws.
+    #[test]
+    fn children_of_every_kind_of_box_decode_conservatively() {
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        let mut unit = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut cases = 0;
+        for round in 0..400 {
+            let kind = round % 6;
+            let (centre, scale) = match kind {
+                0 => (0.0, 1.0),   // ordinary
+                1 => (0.0, 1e-30), // tiny
+                2 => (0.0, 1e37),  // huge
+                3 => (1e7, 1e-2),  // far from the origin, small
+                4 => (-3e5, 10.0), // far, negative
+                _ => (unit() * 100.0, unit() * 1e3),
+            };
+            let slots = 1 + (round % 8);
+            let mut boxes = Vec::new();
+            for k in 0..slots {
+                let mut b = [0f32; 6];
+                for a in 0..3 {
+                    let lo = centre + (unit() * 2.0 - 1.0) * scale;
+                    let ext = match (k + round) % 4 {
+                        0 => 0.0,                   // flat on this axis
+                        1 => unit() * scale * 1e-6, // thin
+                        _ => unit() * scale,
+                    };
+                    b[a] = lo;
+                    b[a + 3] = lo + ext;
+                }
+                if (k + round) % 5 == 0 {
+                    // Degenerate: a point.
+                    b = [b[0], b[1], b[2], b[0], b[1], b[2]];
+                }
+                boxes.push(b);
+            }
+            for m in [255, 65535] {
+                let d = decode_children(&boxes, m);
+                for (e, d) in boxes.iter().zip(&d) {
+                    assert!(
+                        (0..3).all(|a| d[a] <= e[a] && d[a + 3] >= e[a + 3]),
+                        "round {round} m {m}: {e:?} decoded as {d:?}"
+                    );
+                    cases += 1;
+                }
+            }
+        }
+        assert!(cases > 3000, "{cases}");
+    }
+
     #[test]
     fn codes_are_tight_on_an_exact_grid() {
         // Step 1, origin 0: every integer plane is its own code.
