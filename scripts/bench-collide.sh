@@ -1,0 +1,85 @@
+#!/usr/bin/env bash
+# Collision against FCL (issue 16): every library scene against its copy turned by (60°, 70°,
+# 10°) about the centre of its box, one thread, the paper's timing method (1 warm-up, 9 runs,
+# the middle 5 averaged) on each side, in the same run:
+#   - Scion: `scion run --algorithm collide` (library/algorithms/collide.scion over the pbrt
+#     layout, LLVM -O3; binned SAH trees, leaves of up to 15 triangles);
+#   - FCL 0.7 (Debian's libfcl-dev, installed when missing): bench/fcl/fcl_collide.cpp with OBBRSS
+#     and with AABB bounding volumes (its default builder: mean split, one triangle per leaf),
+#     built with g++ -O3 here, on the same triangles (bench/src/bin/collide_inputs.rs).
+# Each side's pairs are compared: the table says whether the three sets are equal, and if not,
+# how many pairs only Scion or only FCL reports. Writes the table into docs/benchmarks.md between
+# `<!-- bench-collide:begin -->` and `<!-- bench-collide:end -->` (BENCH_NO_DOC=1: print only).
+#
+# Usage: scripts/bench-collide.sh [SCENE_NAME...]   (default: the ten library scenes)
+#   Environment: BENCH_RUNS (timed runs, default 9), BENCH_LAYOUT (default pbrt).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+. scripts/bench-lib.sh
+./scripts/setup.sh >/dev/null
+if [ ! -e /usr/include/fcl/fcl.h ]; then
+  echo "bench-collide: installing libfcl-dev (Debian package)" >&2
+  sudo=""; [ "$(id -u)" -eq 0 ] || sudo=sudo
+  $sudo apt-get update -q >/dev/null
+  $sudo apt-get install -y -q libfcl-dev >/dev/null
+fi
+cargo build --release -q -p scion-cli -p scion-bench --bin collide_inputs
+target=${CARGO_TARGET_DIR:-target}
+bin="$target/release/scion"
+out=$target/bench-collide
+mkdir -p "$out"
+g++ -O3 -std=c++17 -I/usr/include/eigen3 bench/fcl/fcl_collide.cpp -lfcl -o "$out/fcl_collide"
+runs=${BENCH_RUNS:-9}
+layout=${BENCH_LAYOUT:-pbrt}
+if [ $# -gt 0 ]; then names=("$@"); else names=("${LIBRARY_SCENES[@]}"); fi
+
+table=$out/table.md
+{
+  cpu=$(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //')
+  fcl=$(dpkg-query -W -f='${Version}' libfcl-dev 2>/dev/null || echo "?")
+  echo "Measured $(date -u '+%Y-%m-%d %H:%M UTC') on $cpu, $(nproc) CPUs; commit $(git rev-parse --short HEAD); FCL $fcl (g++ -O3); Scion \`$layout\`, LLVM -O3; 1 thread; the paper's method ($runs runs); \`scripts/bench-collide.sh\`."
+  echo
+  echo "| scene | triangles | pairs (Scion) | Scion ms | FCL OBBRSS ms | FCL AABB ms | faster FCL / Scion | pairs equal (OBBRSS, AABB) |"
+  echo "|---|---:|---:|---:|---:|---:|---:|---|"
+  for name in "${names[@]}"; do
+    f=$(scene_file "$name")
+    "$bin" run --algorithm collide --scene "$f" --layout "$layout" --runs "$runs" \
+      -o "$out/scion.pairs" > "$out/scion.txt" 2>/dev/null
+    tris=$(awk '$1 == "triangles" { print $2 }' "$out/scion.txt")
+    pairs=$(awk '$1 == "pairs" { print $2 }' "$out/scion.txt")
+    ms=$(awk '$1 == "time" { printf "%.4f", $2 * 1000 }' "$out/scion.txt")
+    "$target/release/collide_inputs" "$f" "$out/a.tris" "$out/b.tris"
+    "$out/fcl_collide" "$out/a.tris" "$out/b.tris" "$runs" "$out/fcl" > "$out/fcl.txt"
+    obb=$(awk '$1 == "fcl-obbrss" { print $5 }' "$out/fcl.txt")
+    aabb=$(awk '$1 == "fcl-aabb" { print $5 }' "$out/fcl.txt")
+    same=$(python3 - "$out/scion.pairs" "$out/fcl-obbrss.pairs" "$out/fcl-aabb.pairs" <<'PY'
+import struct, sys
+def pairs(p):
+    b = open(p, "rb").read()
+    return set(struct.iter_unpack("<II", b))
+s, o, a = (pairs(p) for p in sys.argv[1:4])
+def cmp(x):
+    if x == s:
+        return "yes"
+    return f"{len(s - x)} only Scion, {len(x - s)} only FCL"
+print(f"{cmp(o)}; {cmp(a)}")
+PY
+)
+    awk -v n="$name" -v t="$tris" -v p="$pairs" -v s="$ms" -v o="$obb" -v a="$aabb" -v same="$same" \
+      'BEGIN { f = (o < a ? o : a); printf "| %s | %s | %s | %.3f | %.3f | %.3f | %.2f | %s |\n", n, t, p, s, o, a, f / s, same }'
+  done
+} > "$table"
+cat "$table"
+if [ "${BENCH_NO_DOC:-0}" != 1 ]; then
+  python3 - "$table" <<'PY'
+import sys, re
+table = open(sys.argv[1]).read()
+p = "docs/benchmarks.md"
+s = open(p).read()
+begin, end = "<!-- bench-collide:begin -->", "<!-- bench-collide:end -->"
+if begin not in s:
+    s += "\n## Collision against FCL (`scripts/bench-collide.sh`)\n\n" + begin + "\n" + end + "\n"
+s = re.sub(re.escape(begin) + ".*?" + re.escape(end), lambda m: begin + "\n" + table + end, s, flags=re.S)
+open(p, "w").write(s)
+PY
+fi
