@@ -2,8 +2,8 @@
 //! whose triangles' boxes overlap (closed intervals) and that the prelude's separating-axis
 //! test (`intersects(Triangle, Triangle)` in `library/prelude.scion`) does not separate.
 //!
-//! [`triangles_intersect`] is that test in the prelude's `f32` arithmetic (same operations, same
-//! order, IEEE minNum/maxNum), so it answers as generated code does, bit for bit. The set does
+//! [`triangles_intersect`] is that test in the prelude's `f64` arithmetic (same operations), so
+//! it answers as generated code does. The set does
 //! not depend on any tree: a tree's boxes contain its triangles' boxes, so a traversal that
 //! prunes on box overlap and tests every pair of triangles in overlapping leaves, box first,
 //! finds exactly these pairs. [`collide_sweep`] finds them without a tree (sort and sweep on
@@ -22,38 +22,53 @@ pub fn boxes_overlap(a: &Aabb, b: &Aabb) -> bool {
         && b.low.z <= a.high.z
 }
 
-/// The prelude's `separated_on(axis, a, b)`.
-fn separated_on(axis: Vec3, a: &Triangle, b: &Triangle) -> bool {
-    let (a0, a1, a2) = (axis.dot(a.p0), axis.dot(a.p1), axis.dot(a.p2));
-    let (b0, b1, b2) = (axis.dot(b.p0), axis.dot(b.p1), axis.dot(b.p2));
-    let amin = a0.min(a1.min(a2));
-    let amax = a0.max(a1.max(a2));
-    let bmin = b0.min(b1.min(b2));
-    let bmax = b0.max(b1.max(b2));
-    amax < bmin || bmax < amin
-}
-
 /// The prelude's `intersects(Triangle, Triangle)`: no candidate axis separates them (face
-/// normals, the nine edge-edge cross products, the six in-plane edge normals, in that order).
+/// normals, the nine edge-edge cross products, the six in-plane edge normals), in `f64`: every
+/// corner widened exactly, every difference, product and sum rounded to `f64` (finite `f32`
+/// inputs cannot overflow it, so nothing is NaN and the order of the `min`/`max` folds does not
+/// matter). Generated code computes exactly this.
 pub fn triangles_intersect(a: &Triangle, b: &Triangle) -> bool {
-    let ea = [a.p1 - a.p0, a.p2 - a.p1, a.p0 - a.p2];
-    let eb = [b.p1 - b.p0, b.p2 - b.p1, b.p0 - b.p2];
-    let na = ea[0].cross(ea[1]);
-    let nb = eb[0].cross(eb[1]);
-    if separated_on(na, a, b) || separated_on(nb, a, b) {
-        return false;
-    }
+    type V = [f64; 3];
+    let v = |p: Vec3| [f64::from(p.x), f64::from(p.y), f64::from(p.z)];
+    let sub = |x: V, y: V| [x[0] - y[0], x[1] - y[1], x[2] - y[2]];
+    let cross = |x: V, y: V| {
+        [
+            x[1] * y[2] - x[2] * y[1],
+            x[2] * y[0] - x[0] * y[2],
+            x[0] * y[1] - x[1] * y[0],
+        ]
+    };
+    let dot = |x: V, y: V| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+    let pa = [v(a.p0), v(a.p1), v(a.p2)];
+    let pb = [v(b.p0), v(b.p1), v(b.p2)];
+    let separated = |axis: V| {
+        let (amin, amax) = pa
+            .iter()
+            .map(|&p| dot(axis, p))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), d| {
+                (l.min(d), h.max(d))
+            });
+        let (bmin, bmax) = pb
+            .iter()
+            .map(|&p| dot(axis, p))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), d| {
+                (l.min(d), h.max(d))
+            });
+        amax < bmin || bmax < amin
+    };
+    let ea = [sub(pa[1], pa[0]), sub(pa[2], pa[1]), sub(pa[0], pa[2])];
+    let eb = [sub(pb[1], pb[0]), sub(pb[2], pb[1]), sub(pb[0], pb[2])];
+    let na = cross(ea[0], ea[1]);
+    let nb = cross(eb[0], eb[1]);
+    let mut axes = vec![na, nb];
     for ei in ea {
         for ej in eb {
-            if separated_on(ei.cross(ej), a, b) {
-                return false;
-            }
+            axes.push(cross(ei, ej));
         }
     }
-    if ea.iter().any(|&e| separated_on(na.cross(e), a, b)) {
-        return false;
-    }
-    !eb.iter().any(|&e| separated_on(nb.cross(e), a, b))
+    axes.extend(ea.iter().map(|&e| cross(na, e)));
+    axes.extend(eb.iter().map(|&e| cross(nb, e)));
+    !axes.into_iter().any(separated)
 }
 
 /// Whether the pair collides as the collision traversal decides it: boxes first, then the
@@ -194,6 +209,18 @@ mod tests {
         assert!(!triangles_intersect(&a, &above));
         assert!(!triangles_intersect(&a, &beside));
         assert!(boxes_overlap(&a.bounds(), &beside.bounds()));
+    }
+
+    #[test]
+    fn a_hair_apart_is_apart() {
+        let a = tri([[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]], 0);
+        let pierce = tri([[0.5, 0.5, -1.0], [0.5, 0.5, 1.0], [1.0, 0.2, 1.0]], 1);
+        let above = tri([[0.0, 0.0, 1.0], [2.0, 0.0, 1.0], [0.0, 2.0, 1.0]], 3);
+        assert!(triangles_intersect(&a, &pierce));
+        assert!(!triangles_intersect(&a, &above));
+        // A triangle a hair above the plane of `a`: f32's products cannot tell, f64's can.
+        let hair = tri([[0.5, 0.5, 1e-7], [1.0, 0.5, 1e-7], [0.5, 1.0, 2e-7]], 4);
+        assert!(!triangles_intersect(&a, &hair));
     }
 
     #[test]
