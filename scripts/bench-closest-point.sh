@@ -1,0 +1,74 @@
+#!/usr/bin/env bash
+# Closest points against parry3d and FCPW (issue 16): on each library scene, the points of
+# `scion run --algorithm closest-point` (uniform in the scene's box), one thread each, the paper's
+# timing method (1 warm-up, 9 runs, the middle 5 averaged), in the same run:
+#   - Scion: library/algorithms/closest_point.scion's closest_point_query over pbrt, LLVM -O3
+#     (bench/benches/closest_point.rs, through its C entries on one thread);
+#   - parry3d 0.31 (crate): its TriMesh's point projection, in the same process;
+#   - FCPW (Python package `fcpw`, its C++ core; installed with numpy when missing): its
+#     surface-area BVH, vectorized and scalar, `find_closest_points` over all points, pinned to
+#     one core with `taskset -c 0` (it runs queries on every core otherwise);
+# and each side's answers on the first 2048 points against float64 brute force (the largest
+# distance error; answers naming another triangle than float64's at a distance more than 1e-6
+# of the scene's size away from it). Writes the table into docs/benchmarks.md between
+# `<!-- bench-closest-point:begin -->` and `<!-- bench-closest-point:end -->` (BENCH_NO_DOC=1:
+# print only).
+#
+# Usage: scripts/bench-closest-point.sh [SCENE_NAME...]   (default: the ten library scenes)
+#   Environment: BENCH_N (points, default 65536), BENCH_RUNS (9).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+. scripts/bench-lib.sh
+./scripts/setup.sh >/dev/null
+python3 -c 'import numpy, fcpw' 2>/dev/null || {
+  echo "bench-closest-point: installing numpy and fcpw (Python packages)" >&2
+  python3 -m pip install --quiet numpy fcpw
+}
+command -v taskset >/dev/null || { echo "bench-closest-point: taskset (util-linux) is needed" >&2; exit 1; }
+cargo bench -q -p scion-bench --bench closest_point --no-run 2>/dev/null
+target=${CARGO_TARGET_DIR:-target}
+bin=$(ls -t "$target"/release/deps/closest_point-* | grep -v '\.d$' | head -1)
+out=$target/bench-closest-point
+mkdir -p "$out"
+n=${BENCH_N:-65536}
+runs=${BENCH_RUNS:-9}
+if [ $# -gt 0 ]; then names=("$@"); else names=("${LIBRARY_SCENES[@]}"); fi
+
+table=$out/table.md
+{
+  cpu=$(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //')
+  fcpw=$(python3 -c 'import importlib.metadata as m; print(m.version("fcpw"))')
+  echo "Measured $(date -u '+%Y-%m-%d %H:%M UTC') on $cpu, $(nproc) CPUs; commit $(git rev-parse --short HEAD); $n points per scene (seed 1); 1 thread; Scion pbrt, LLVM -O3; parry3d 0.31; FCPW $fcpw (pip); the paper's method ($runs runs); \`scripts/bench-closest-point.sh\`."
+  echo
+  echo "| scene | triangles | Scion Mq/s | parry3d Mq/s | FCPW vectorized Mq/s | FCPW scalar Mq/s | Scion / fastest peer | largest error vs float64 (Scion, parry3d, FCPW) | wrong triangles (Scion, parry3d, FCPW) |"
+  echo "|---|---:|---:|---:|---:|---:|---:|---|---|"
+  for name in "${names[@]}"; do
+    f=$(scene_file "$name")
+    "$bin" --scene "$f" --n "$n" --inputs "$out"
+    fv=$(taskset -c 0 python3 bench/fcpw/fcpw_closest.py "$out/tris.bin" "$out/points.bin" "$runs" "$out/fcpw.out" | awk '{ print $3 }')
+    fs=$(taskset -c 0 python3 bench/fcpw/fcpw_closest.py "$out/tris.bin" "$out/points.bin" "$runs" "$out/fcpw-scalar.out" scalar | awk '{ print $3 }')
+    "$bin" --scene "$f" --n "$n" --runs "$runs" --peer "fcpw=$out/fcpw.out" > "$out/run.txt"
+    awk -v s="$name" -v n="$n" -v fv="$fv" -v fs="$fs" '
+      $1 == "triangles" { t = $2 } $1 == "scion_ms" { sm = $2 } $1 == "parry_ms" { pm = $2 }
+      $1 == "scion_error" { se = $2; sw = $4 "/" $6 } $1 == "parry_error" { pe = $2; pw = $4 "/" $6 }
+      $1 == "fcpw_error" { fe = $2; fw = $4 "/" $6 }
+      END {
+        q = n / 1000.0
+        best = pm; if (fv < best) best = fv; if (fs < best) best = fs
+        printf "| %s | %d | %.3f | %.3f | %.3f | %.3f | %.2f | %s, %s, %s | %s, %s, %s |\n",
+          s, t, q / sm, q / pm, q / fv, q / fs, best / sm, se, pe, fe, sw, pw, fw
+      }' "$out/run.txt"
+  done
+} > "$table"
+cat "$table"
+if [ "${BENCH_NO_DOC:-0}" != 1 ]; then
+  python3 - "$table" <<'PY'
+import sys, re
+table = open(sys.argv[1]).read()
+p = "docs/benchmarks.md"
+s = open(p).read()
+begin, end = "<!-- bench-closest-point:begin -->", "<!-- bench-closest-point:end -->"
+s = re.sub(re.escape(begin) + ".*?" + re.escape(end), lambda m: begin + "\n" + table + end, s, flags=re.S)
+open(p, "w").write(s)
+PY
+fi
