@@ -1,7 +1,8 @@
 //! Closest point queries by brute force: the reference of `library/algorithms/closest_point.scion`.
 //!
-//! [`closest_point_brute`] runs the prelude's arithmetic in `f32` ([`triangle_distance`] is the
-//! algorithm's `triangle_distance`, operation for operation) over every triangle with the tie
+//! [`closest_point_brute`] runs the prelude's arithmetic ([`triangle_distance`] is the
+//! algorithm's `triangle_distance`, operation for operation: the closest point on the triangle in
+//! `f64`, rounded to `f32`, clamped into the triangle's box, its squared distance in `f32`) over every triangle with the tie
 //! rule (smaller squared distance, then smaller id). Both traversals of the algorithm must return
 //! exactly its answer on every layout whose boxes contain their triangles: their pruning is exact
 //! (a triangle's squared distance is never below its box's, see the algorithm file).
@@ -58,44 +59,71 @@ pub fn box_distance_squared(p: Vec3, b: &Aabb) -> f32 {
     length_squared(clamp_to_box(p, b) - p)
 }
 
-fn closest_point_on_segment(p: Vec3, a: Vec3, b: Vec3) -> Vec3 {
-    let ab = b - a;
-    let len2 = ab.dot(ab);
+type P64 = [f64; 3];
+
+fn sub3(a: P64, b: P64) -> P64 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn add3(a: P64, b: P64) -> P64 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+/// The prelude's `dot` in `f64`: left to right, no fusing.
+fn dot3(a: P64, b: P64) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// The prelude's `scale64(v, s)`.
+fn scale3(v: P64, s: f64) -> P64 {
+    [v[0] * s, v[1] * s, v[2] * s]
+}
+
+fn closest_point_on_segment(p: P64, a: P64, b: P64) -> P64 {
+    let ab = sub3(b, a);
+    let len2 = dot3(ab, ab);
     if len2 == 0.0 {
         return a;
     }
-    let t = min_num(max_num((p - a).dot(ab) / len2, 0.0), 1.0);
-    a + ab * t
+    // minNum/maxNum, as the prelude's `min`/`max`.
+    let t = (dot3(sub3(p, a), ab) / len2).max(0.0).min(1.0);
+    add3(a, scale3(ab, t))
 }
 
-fn nearer(p: Vec3, x: Vec3, y: Vec3) -> Vec3 {
-    if length_squared(y - p) < length_squared(x - p) {
+fn nearer(p: P64, x: P64, y: P64) -> P64 {
+    if dot3(sub3(y, p), sub3(y, p)) < dot3(sub3(x, p), sub3(x, p)) {
         y
     } else {
         x
     }
 }
 
-/// The prelude's `closest_point(p, tri)` (Ericson §5.1.5, edges for a zero-area triangle).
+/// The prelude's `closest_point(p, tri)`: Ericson §5.1.5 (edges for a zero-area triangle) in
+/// `f64` on the widened corners, rounded to `f32` at the end.
 pub fn closest_point_on_triangle(p: Vec3, tri: &Triangle) -> Vec3 {
-    let (a, b, c) = (tri.p0, tri.p1, tri.p2);
-    let ab = b - a;
-    let ac = c - a;
-    let ap = p - a;
-    let d1 = ab.dot(ap);
-    let d2 = ac.dot(ap);
+    let w = |v: Vec3| [f64::from(v.x), f64::from(v.y), f64::from(v.z)];
+    let c = closest_point_f64_ericson(w(p), w(tri.p0), w(tri.p1), w(tri.p2));
+    Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32)
+}
+
+fn closest_point_f64_ericson(p: P64, a: P64, b: P64, c: P64) -> P64 {
+    let ab = sub3(b, a);
+    let ac = sub3(c, a);
+    let ap = sub3(p, a);
+    let d1 = dot3(ab, ap);
+    let d2 = dot3(ac, ap);
     if d1 <= 0.0 && d2 <= 0.0 {
         return a;
     }
-    let bp = p - b;
-    let d3 = ab.dot(bp);
-    let d4 = ac.dot(bp);
+    let bp = sub3(p, b);
+    let d3 = dot3(ab, bp);
+    let d4 = dot3(ac, bp);
     if d3 >= 0.0 && d4 <= d3 {
         return b;
     }
-    let cp = p - c;
-    let d5 = ab.dot(cp);
-    let d6 = ac.dot(cp);
+    let cp = sub3(p, c);
+    let d5 = dot3(ab, cp);
+    let d6 = dot3(ac, cp);
     if d6 >= 0.0 && d5 <= d6 {
         return c;
     }
@@ -110,16 +138,16 @@ pub fn closest_point_on_triangle(p: Vec3, tri: &Triangle) -> Vec3 {
         return nearer(p, nearer(p, e0, e1), e2);
     }
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return a + ab * (d1 / (d1 - d3));
+        return add3(a, scale3(ab, d1 / (d1 - d3)));
     }
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return a + ac * (d2 / (d2 - d6));
+        return add3(a, scale3(ac, d2 / (d2 - d6)));
     }
     if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
-        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+        return add3(b, scale3(sub3(c, b), (d4 - d3) / ((d4 - d3) + (d5 - d6))));
     }
     let inv = 1.0 / sum;
-    a + ab * (vb * inv) + ac * (vc * inv)
+    add3(add3(a, scale3(ab, vb * inv)), scale3(ac, vc * inv))
 }
 
 /// The prelude's `bounds(tri)`.
