@@ -61,14 +61,4 @@ table=$out/table.md
   done
 } > "$table"
 cat "$table"
-if [ "${BENCH_NO_DOC:-0}" != 1 ]; then
-  python3 - "$table" <<'PY'
-import sys, re
-table = open(sys.argv[1]).read()
-p = "docs/benchmarks.md"
-s = open(p).read()
-begin, end = "<!-- bench-closest-point:begin -->", "<!-- bench-closest-point:end -->"
-s = re.sub(re.escape(begin) + ".*?" + re.escape(end), lambda m: begin + "\n" + table + end, s, flags=re.S)
-open(p, "w").write(s)
-PY
-fi
+doc_table "$table" bench-closest-point

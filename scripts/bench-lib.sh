@@ -6,6 +6,8 @@
 #   peers_bench          builds the peers benchmark (cargo bench -p scion-bench --bench peers)
 #                        with the caller's CARGO_TARGET_DIR and RUSTFLAGS, prints its path.
 #   need_valgrind        installs valgrind (Debian package) when it is missing.
+#   doc_table FILE NAME  puts FILE's text into docs/benchmarks.md between `<!-- NAME:begin -->`
+#                        and `<!-- NAME:end -->` (nothing when BENCH_NO_DOC=1).
 
 scenes=${scenes:-${SCION_SCENES:-scenes}}
 
@@ -34,4 +36,19 @@ need_valgrind() {
   [ "$(id -u)" -eq 0 ] || sudo=sudo
   $sudo apt-get update -q >/dev/null
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -q valgrind >/dev/null
+}
+
+doc_table() {
+  [ "${BENCH_NO_DOC:-0}" != 1 ] || return 0
+  python3 - "$1" "$2" <<'PY'
+import re, sys
+table, name = open(sys.argv[1]).read(), sys.argv[2]
+p = "docs/benchmarks.md"
+s = open(p).read()
+begin, end = f"<!-- {name}:begin -->", f"<!-- {name}:end -->"
+if begin not in s or end not in s:
+    sys.exit(f"docs/benchmarks.md has no {begin} ... {end}")
+s = re.sub(re.escape(begin) + ".*?" + re.escape(end), lambda m: begin + "\n" + table + end, s, flags=re.S)
+open(p, "w").write(s)
+PY
 }

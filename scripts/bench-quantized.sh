@@ -15,6 +15,7 @@
 #   Environment: BENCH_N (rays per run, default 65536).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/bench-lib.sh
 ./scripts/setup.sh >/dev/null
 cargo build --release -q -p scion-cli
 bin="${CARGO_TARGET_DIR:-target}/release/scion"
@@ -71,14 +72,4 @@ PY
   done
 } > "$table"
 cat "$table"
-if [ "${BENCH_NO_DOC:-0}" != 1 ]; then
-  python3 - "$table" <<'PY'
-import sys, re
-table = open(sys.argv[1]).read()
-p = "docs/benchmarks.md"
-s = open(p).read()
-begin, end = "<!-- bench-quantized:begin -->", "<!-- bench-quantized:end -->"
-s = re.sub(re.escape(begin) + ".*?" + re.escape(end), lambda m: begin + "\n" + table + end, s, flags=re.S)
-open(p, "w").write(s)
-PY
-fi
+doc_table "$table" bench-quantized

@@ -29,7 +29,6 @@ use scion_host::library::{resolve_kind, QueryKind};
 use scion_host::queries::{closest_point_from, Queries};
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::{build_sah_binned, SahOptions};
-use scion_runtime::geom::Triangle;
 use scion_runtime::query::points::uniform_points;
 use scion_runtime::reference::closest_point::closest_point_f64;
 use scion_runtime::scene::load_obj;
@@ -96,20 +95,6 @@ fn plan(runs: usize) -> TimingPlan {
     }
 }
 
-fn tri_bytes(tris: &[Triangle]) -> Vec<u8> {
-    tris.iter()
-        .flat_map(|t| {
-            let mut r: Vec<u8> = [t.p0, t.p1, t.p2]
-                .iter()
-                .flat_map(|p| p.to_array())
-                .flat_map(f32::to_le_bytes)
-                .collect();
-            r.extend_from_slice(&t.id.to_le_bytes());
-            r
-        })
-        .collect()
-}
-
 /// (distance, face id) answers of one contender.
 type Answers = Vec<(f32, u32)>;
 
@@ -150,8 +135,11 @@ fn run() -> Result<(), String> {
             .flat_map(|p| p.to_array())
             .flat_map(f32::to_le_bytes)
             .collect();
-        std::fs::write(dir.join("tris.bin"), tri_bytes(&scene.triangles))
-            .map_err(|e| e.to_string())?;
+        std::fs::write(
+            dir.join("tris.bin"),
+            scion_bench::records::triangle_records(&scene.triangles),
+        )
+        .map_err(|e| e.to_string())?;
         std::fs::write(dir.join("points.bin"), pts).map_err(|e| e.to_string())?;
         return Ok(());
     }

@@ -14,6 +14,7 @@
 
 pub mod foreign_tree;
 pub mod pbrt_kernel;
+pub mod records;
 
 use scion_runtime::bvh::{build_sah_binned, LogicalTree, SahOptions};
 use scion_runtime::geom::{Hit, Ray, Triangle};

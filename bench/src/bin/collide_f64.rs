@@ -5,24 +5,16 @@
 //! Usage: collide_f64 A.tris B.tris SCION.pairs PEER.pairs
 //! Prints: `N only Scion (f64: k collide), M only the peer (f64: j collide)`.
 
-use scion_runtime::geom::{Triangle, Vec3};
+use scion_bench::records::triangles_from_records;
+use scion_runtime::geom::Triangle;
 use scion_runtime::reference::collide::triangles_intersect;
 use std::collections::{BTreeSet, HashMap};
 use std::process::ExitCode;
 
 fn tris(path: &str) -> Result<HashMap<u32, Triangle>, String> {
     let b = std::fs::read(path).map_err(|e| format!("{path}: {e}"))?;
-    if b.len() % 40 != 0 {
-        return Err(format!("{path}: not whole 40-byte triangles"));
-    }
-    let f = |r: &[u8], i: usize| f32::from_le_bytes(r[4 * i..4 * i + 4].try_into().unwrap());
-    Ok(b.chunks_exact(40)
-        .map(|r| {
-            let p = |k: usize| Vec3::new(f(r, 3 * k), f(r, 3 * k + 1), f(r, 3 * k + 2));
-            let id = u32::from_le_bytes(r[36..40].try_into().unwrap());
-            (id, Triangle::new(p(0), p(1), p(2), id))
-        })
-        .collect())
+    let t = triangles_from_records(&b).map_err(|e| format!("{path}: {e}"))?;
+    Ok(t.into_iter().map(|t| (t.id, t)).collect())
 }
 
 fn pairs(path: &str) -> Result<BTreeSet<(u32, u32)>, String> {

@@ -5,24 +5,10 @@
 //!
 //! Usage: collide_inputs SCENE A.tris B.tris [X,Y,Z degrees]
 
-use scion_runtime::geom::Triangle;
+use scion_bench::records::triangle_records;
 use scion_runtime::reference::collide::rotated;
 use scion_runtime::scene::load_obj;
 use std::process::ExitCode;
-
-fn bytes(tris: &[Triangle]) -> Vec<u8> {
-    tris.iter()
-        .flat_map(|t| {
-            let mut r: Vec<u8> = [t.p0, t.p1, t.p2]
-                .iter()
-                .flat_map(|p| p.to_array())
-                .flat_map(f32::to_le_bytes)
-                .collect();
-            r.extend_from_slice(&t.id.to_le_bytes());
-            r
-        })
-        .collect()
-}
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().collect();
@@ -51,7 +37,7 @@ fn main() -> ExitCode {
     };
     let copy = rotated(&scene.triangles, angles);
     for (file, tris) in [(&args[2], &scene.triangles), (&args[3], &copy)] {
-        if let Err(e) = std::fs::write(file, bytes(tris)) {
+        if let Err(e) = std::fs::write(file, triangle_records(tris)) {
             eprintln!("collide_inputs: cannot write {file}: {e}");
             return ExitCode::from(1);
         }

@@ -142,32 +142,9 @@ pub fn rotated(triangles: &[Triangle], degrees: [f64; 3]) -> Vec<Triangle> {
         (f64::from(bounds.low.y) + f64::from(bounds.high.y)) / 2.0,
         (f64::from(bounds.low.z) + f64::from(bounds.high.z)) / 2.0,
     ];
-    let [a, b, g] = degrees.map(f64::to_radians);
-    let rx = [
-        [1.0, 0.0, 0.0],
-        [0.0, a.cos(), -a.sin()],
-        [0.0, a.sin(), a.cos()],
-    ];
-    let ry = [
-        [b.cos(), 0.0, b.sin()],
-        [0.0, 1.0, 0.0],
-        [-b.sin(), 0.0, b.cos()],
-    ];
-    let rz = [
-        [g.cos(), -g.sin(), 0.0],
-        [g.sin(), g.cos(), 0.0],
-        [0.0, 0.0, 1.0],
-    ];
-    let mul = |x: [[f64; 3]; 3], y: [[f64; 3]; 3]| {
-        let mut r = [[0.0; 3]; 3];
-        for i in 0..3 {
-            for j in 0..3 {
-                r[i][j] = (0..3).map(|k| x[i][k] * y[k][j]).sum();
-            }
-        }
-        r
-    };
-    let r = mul(rz, mul(ry, rx));
+    // `Rz(γ) Ry(β) Rx(α)`, as scene transforms build it.
+    let [a, b, g] = degrees;
+    let r = crate::scene::transform::Transform::rotation(a, b, g).rotation_matrix();
     let turn = |p: Vec3| {
         let d = [
             f64::from(p.x) - c[0],
