@@ -120,11 +120,7 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
         return run_emulated(args);
     }
     // The device first: without one there is nothing to compile for.
-    let device = Device::open(args.gpu).map_err(|e| {
-        CliError::new(e.to_string())
-            .note("--device gpu needs an NVIDIA GPU and its driver")
-            .note("--device gpu-emulated runs the same kernels on this CPU")
-    })?;
+    let device = open_device(args.gpu)?;
     let layout = args.layout.as_deref().unwrap_or("pbrt");
     if args.backend != BackendArg::Reference {
         eprintln!(
@@ -148,10 +144,8 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
                 "compiling closest hit for layout `{layout}` to PTX"
             ));
             // Without --cpu, the device's own architecture when LLVM knows it.
-            let (major, minor) = device.compute_capability;
-            let own = format!("sm_{major}{minor}");
-            let known = scion_llvm::target::cpus::NVPTX64_CPUS.contains(&own.as_str());
-            let cpu = args.cpu.as_deref().or(known.then_some(own.as_str()));
+            let own = own_cpu(&device);
+            let cpu = args.cpu.as_deref().or(own.as_deref());
             let (kit, t) = compile_kit(layout, args.stack_size, cpu)?;
             (kit, Some(t))
         }
@@ -195,6 +189,24 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
         buffers: kit.buffers.clone(),
     };
     trace_and_report(&pipeline, args, &input, &report)
+}
+
+/// Opens GPU `ordinal`, or says why not and what to do instead.
+pub(crate) fn open_device(ordinal: i32) -> Result<Device, CliError> {
+    Device::open(ordinal).map_err(|e| {
+        CliError::new(e.to_string())
+            .note("--device gpu needs an NVIDIA GPU and its driver")
+            .note("--device gpu-emulated runs the same kernels on this CPU")
+    })
+}
+
+/// The device's own architecture (`sm_90`) when LLVM knows it.
+pub(crate) fn own_cpu(device: &Device) -> Option<String> {
+    let (major, minor) = device.compute_capability;
+    let own = format!("sm_{major}{minor}");
+    scion_llvm::target::cpus::NVPTX64_CPUS
+        .contains(&own.as_str())
+        .then_some(own)
 }
 
 /// `scion trace --device gpu-emulated`: the kernels of `--device gpu` compiled for this CPU

@@ -6,12 +6,12 @@
 //! and `--runs` more times, timed by the kernel (CUDA events, or the wall clock of the emulated
 //! launch). The caller checks the answers as on the CPU.
 
-use crate::gpu::{compile_program_kit, gpu_err};
+use crate::gpu::{compile_program_kit, gpu_err, open_device, own_cpu};
 use crate::trace::progress;
 use crate::{CliError, DeviceArg, RunArgs};
 use scion_compiler::abi::{EntrySig, EntryTarget};
 use scion_cuda::trace::GpuPipeline;
-use scion_cuda::{Device, Launcher};
+use scion_cuda::Launcher;
 use scion_host::gpu_emu::EmulatedGpu;
 use scion_host::jit::{Codegen, LoOptions};
 use scion_host::library::Resolved;
@@ -103,20 +103,14 @@ pub fn run(
             )
         }
         DeviceArg::Gpu => {
-            let device = Device::open(0).map_err(|e| {
-                CliError::new(e.to_string())
-                    .note("--device gpu needs an NVIDIA GPU and its driver")
-                    .note("--device gpu-emulated runs the same kernels on this CPU")
-            })?;
+            let device = open_device(0)?;
             progress(&format!(
                 "compiling {} for layout `{}` to PTX",
                 p.algorithm, p.layout
             ));
-            let (major, minor) = device.compute_capability;
-            let own = format!("sm_{major}{minor}");
-            let known = scion_llvm::target::cpus::NVPTX64_CPUS.contains(&own.as_str());
+            let own = own_cpu(&device);
             let (kit, sig, compile_time) =
-                compile_program_kit(p, resolved.boxes, stack_size, known.then_some(own.as_str()))?;
+                compile_program_kit(p, resolved.boxes, stack_size, own.as_deref())?;
             let sizes = check(&sig)?;
             let pipeline = GpuPipeline::new(
                 &device,
@@ -127,6 +121,7 @@ pub fn run(
                 kit.logical.clone(),
             )
             .map_err(gpu_err)?;
+            let (major, minor) = device.compute_capability;
             let name = format!("{} (sm_{major}{minor}, CUDA events)", device.name);
             launch(
                 &pipeline,

@@ -50,21 +50,30 @@ fn cpp_example_prints_the_rust_checksum() {
         let scene = scion_runtime::scene::manifest::find(scene)
             .unwrap()
             .path(&scenes);
-        let out = Command::new("make")
-            .current_dir(repo().join("examples/cpp"))
-            .arg("run")
-            .arg(format!("BUILD={}", build.display()))
-            .arg(format!("SCIONC={}", target.join("scionc").display()))
-            .arg(format!("RUNTIME_LIB_DIR={}", target.display()))
-            .arg(format!("LAYOUT={layout}"))
-            .arg(format!("LAYOUT_FILE={file}"))
-            .arg(format!("SCENE={}", scene.display()))
-            .arg(format!("N={RAYS}"))
-            .arg(format!("SEED={SEED}"))
-            .arg("THREADS=3")
-            .arg("CXX=g++")
-            .output()
-            .expect("runs make");
+        // `make TARGET` in examples/cpp with the tools under test, this layout and scene.
+        let make = |target_name: &str, more: &[String]| {
+            Command::new("make")
+                .current_dir(repo().join("examples/cpp"))
+                .arg(target_name)
+                .arg(format!("BUILD={}", build.display()))
+                .arg(format!("SCIONC={}", target.join("scionc").display()))
+                .arg(format!("RUNTIME_LIB_DIR={}", target.display()))
+                .arg(format!("LAYOUT={layout}"))
+                .arg(format!("LAYOUT_FILE={file}"))
+                .arg(format!("SCENE={}", scene.display()))
+                .arg("CXX=g++")
+                .args(more)
+                .output()
+                .expect("runs make")
+        };
+        let out = make(
+            "run",
+            &[
+                format!("N={RAYS}"),
+                format!("SEED={SEED}"),
+                "THREADS=3".into(),
+            ],
+        );
         let stdout = String::from_utf8_lossy(&out.stdout);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(
@@ -84,19 +93,7 @@ fn cpp_example_prints_the_rust_checksum() {
         assert!(stdout.contains("mismatches: 0"), "{stdout}");
         // The collision program over the same layout: two trees, a sink of pairs too small at
         // first (so the entry runs twice), the pairs equal to the Rust reference.
-        let out = Command::new("make")
-            .current_dir(repo().join("examples/cpp"))
-            .arg("run-collide")
-            .arg(format!("BUILD={}", build.display()))
-            .arg(format!("SCIONC={}", target.join("scionc").display()))
-            .arg(format!("RUNTIME_LIB_DIR={}", target.display()))
-            .arg(format!("LAYOUT={layout}"))
-            .arg(format!("LAYOUT_FILE={file}"))
-            .arg(format!("SCENE={}", scene.display()))
-            .arg("CAPACITY=7")
-            .arg("CXX=g++")
-            .output()
-            .expect("runs make");
+        let out = make("run-collide", &["CAPACITY=7".into()]);
         let stdout = String::from_utf8_lossy(&out.stdout);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(
