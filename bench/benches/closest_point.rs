@@ -16,7 +16,8 @@
 //! 1e-6 of the scene's size away from float64's (a wrong triangle, not a tie).
 //!
 //! Options: `--scene PATH|NAME` (default bunny), `--n N` (65536), `--seed S` (1), `--runs R`
-//! (9), `--layout L` (pbrt), `--check K` (2048), `--inputs DIR` (write `DIR/tris.bin` and
+//! (9), `--layout L` (pbrt), `--check K` (2048), `--max-leaf M` (Scion's tree's largest leaf,
+//! 15), `--inputs DIR` (write `DIR/tris.bin` and
 //! `DIR/points.bin` and stop), `--peer NAME=FILE` (also check a peer's 20-byte answers, e.g.
 //! FCPW's; repeatable). Prints `key value` lines.
 
@@ -45,6 +46,7 @@ struct Args {
     check: usize,
     inputs: Option<PathBuf>,
     peers: Vec<(String, PathBuf)>,
+    max_leaf: usize,
 }
 
 fn parse() -> Result<Args, String> {
@@ -57,6 +59,7 @@ fn parse() -> Result<Args, String> {
         check: 2048,
         inputs: None,
         peers: Vec::new(),
+        max_leaf: SahOptions::default().max_leaf,
     };
     let mut it = std::env::args().skip(1).filter(|s| s != "--bench");
     while let Some(flag) = it.next() {
@@ -73,6 +76,7 @@ fn parse() -> Result<Args, String> {
             "--layout" => a.layout = value()?,
             "--check" => a.check = num(value()?)?,
             "--inputs" => a.inputs = Some(PathBuf::from(value()?)),
+            "--max-leaf" => a.max_leaf = num(value()?)?.clamp(1, 15),
             "--peer" => {
                 let v = value()?;
                 let (name, file) = v.split_once('=').ok_or("--peer NAME=FILE")?;
@@ -149,7 +153,13 @@ fn run() -> Result<(), String> {
     // Scion.
     let resolved = resolve_kind(&a.layout, None, QueryKind::ClosestPoint)?;
     let entries = Entries::compile(&resolved.program, Codegen::Llvm(3), None)?;
-    let tree = build_sah_binned(&scene.triangles, &SahOptions::default());
+    let tree = build_sah_binned(
+        &scene.triangles,
+        &SahOptions {
+            max_leaf: a.max_leaf,
+            ..SahOptions::default()
+        },
+    );
     let packed = entries.pack(&tree)?;
     let q = Queries::points(points.clone());
     let init = q.initial_results();

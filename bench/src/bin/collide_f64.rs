@@ -35,7 +35,7 @@ fn main() -> ExitCode {
         let decide = |set: Vec<&(u32, u32)>| -> Result<(usize, usize), String> {
             let mut yes = 0;
             for &(i, j) in &set {
-                let (Some(ta), Some(tb)) = (a.get(&i), b.get(&j)) else {
+                let (Some(ta), Some(tb)) = (a.get(i), b.get(j)) else {
                     return Err(format!("pair ({i}, {j}) names no triangle of the inputs"));
                 };
                 yes += usize::from(triangles_intersect(ta, tb));

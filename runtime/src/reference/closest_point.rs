@@ -85,7 +85,8 @@ fn closest_point_on_segment(p: P64, a: P64, b: P64) -> P64 {
     if len2 == 0.0 {
         return a;
     }
-    // minNum/maxNum, as the prelude's `min`/`max`.
+    // minNum/maxNum, as the prelude's `min`/`max` (not `clamp`, which keeps a NaN).
+    #[allow(clippy::manual_clamp)]
     let t = (dot3(sub3(p, a), ab) / len2).max(0.0).min(1.0);
     add3(a, scale3(ab, t))
 }
