@@ -202,6 +202,17 @@ impl Aabb {
             && o.high.z <= self.high.z
     }
 
+    /// True when `self` and `o` share a point (closed intervals on every axis): the prelude's
+    /// `intersects(AABB, AABB)`.
+    pub fn overlaps(self, o: Aabb) -> bool {
+        self.low.x <= o.high.x
+            && o.low.x <= self.high.x
+            && self.low.y <= o.high.y
+            && o.low.y <= self.high.y
+            && self.low.z <= o.high.z
+            && o.low.z <= self.high.z
+    }
+
     /// The flat form of the logical tree: `[lo.x, lo.y, lo.z, hi.x, hi.y, hi.z]`.
     pub fn to_array(self) -> [f32; 6] {
         [

@@ -12,16 +12,6 @@
 
 use crate::geom::{Aabb, Triangle, Vec3};
 
-/// The prelude's `intersects(AABB, AABB)`: closed intervals overlap on every axis.
-pub fn boxes_overlap(a: &Aabb, b: &Aabb) -> bool {
-    a.low.x <= b.high.x
-        && b.low.x <= a.high.x
-        && a.low.y <= b.high.y
-        && b.low.y <= a.high.y
-        && a.low.z <= b.high.z
-        && b.low.z <= a.high.z
-}
-
 /// The prelude's `intersects(Triangle, Triangle)`: no candidate axis separates them (face
 /// normals, the nine edge-edge cross products, the six in-plane edge normals), in `f64`: every
 /// corner widened exactly, every difference, product and sum rounded to `f64` (finite `f32`
@@ -74,7 +64,7 @@ pub fn triangles_intersect(a: &Triangle, b: &Triangle) -> bool {
 /// Whether the pair collides as the collision traversal decides it: boxes first, then the
 /// separating-axis test.
 pub fn pair_collides(a: &Triangle, b: &Triangle) -> bool {
-    boxes_overlap(&a.bounds(), &b.bounds()) && triangles_intersect(a, b)
+    a.bounds().overlaps(b.bounds()) && triangles_intersect(a, b)
 }
 
 /// Every colliding pair `(a.id, b.id)`, by testing all pairs: sorted, without repeats.
@@ -112,14 +102,14 @@ pub fn collide_sweep(a: &[Triangle], b: &[Triangle]) -> Vec<(u32, u32)> {
         active_b.retain(|&k| boxes_b[k].high.x >= x);
         if in_b {
             for &k in &active_a {
-                if boxes_overlap(&boxes_a[k], &boxes_b[i]) && triangles_intersect(&a[k], &b[i]) {
+                if boxes_a[k].overlaps(boxes_b[i]) && triangles_intersect(&a[k], &b[i]) {
                     out.push((a[k].id, b[i].id));
                 }
             }
             active_b.push(i);
         } else {
             for &k in &active_b {
-                if boxes_overlap(&boxes_a[i], &boxes_b[k]) && triangles_intersect(&a[i], &b[k]) {
+                if boxes_a[i].overlaps(boxes_b[k]) && triangles_intersect(&a[i], &b[k]) {
                     out.push((a[i].id, b[k].id));
                 }
             }
@@ -185,7 +175,7 @@ mod tests {
         assert!(triangles_intersect(&a, &touch));
         assert!(!triangles_intersect(&a, &above));
         assert!(!triangles_intersect(&a, &beside));
-        assert!(boxes_overlap(&a.bounds(), &beside.bounds()));
+        assert!(a.bounds().overlaps(beside.bounds()));
     }
 
     #[test]
