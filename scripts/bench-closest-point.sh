@@ -2,8 +2,9 @@
 # Closest points against parry3d and FCPW (issue 16): on each library scene, the points of
 # `scion run --algorithm closest-point` (uniform in the scene's box), one thread each, the paper's
 # timing method (1 warm-up, 9 runs, the middle 5 averaged), in the same run:
-#   - Scion: library/algorithms/closest_point.scion's closest_point_query over pbrt, LLVM -O3
-#     (bench/benches/closest_point.rs, through its C entries on one thread);
+#   - Scion: library/algorithms/closest_point.scion's closest_point_query over pbrt and
+#     closest_point8.scion's closest_point8 over the eight-wide bvh8, LLVM -O3
+#     (bench/benches/closest_point.rs, through their C entries on one thread);
 #   - parry3d 0.31 (crate): its TriMesh's point projection, in the same process;
 #   - FCPW (Python package `fcpw`, its C++ core; installed with numpy when missing): its
 #     surface-area BVH, vectorized and scalar, `find_closest_points` over all points, pinned to
@@ -38,10 +39,10 @@ table=$out/table.md
 {
   cpu=$(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //')
   fcpw=$(python3 -c 'import importlib.metadata as m; print(m.version("fcpw"))')
-  echo "Measured $(date -u '+%Y-%m-%d %H:%M UTC') on $cpu, $(nproc) CPUs; commit $(git rev-parse --short HEAD); $n points per scene (seed 1); 1 thread; Scion pbrt, LLVM -O3; parry3d 0.31; FCPW $fcpw (pip); the paper's method ($runs runs); \`scripts/bench-closest-point.sh\`."
+  echo "Measured $(date -u '+%Y-%m-%d %H:%M UTC') on $cpu, $(nproc) CPUs; commit $(git rev-parse --short HEAD); $n points per scene (seed 1); 1 thread; Scion pbrt and bvh8, LLVM -O3; parry3d 0.31; FCPW $fcpw (pip); the paper's method ($runs runs); \`scripts/bench-closest-point.sh\`."
   echo
-  echo "| scene | triangles | Scion Mq/s | parry3d Mq/s | FCPW vectorized Mq/s | FCPW scalar Mq/s | Scion / fastest peer | largest error vs float64 (Scion, parry3d, FCPW) | wrong triangles (Scion, parry3d, FCPW) |"
-  echo "|---|---:|---:|---:|---:|---:|---:|---|---|"
+  echo "| scene | triangles | Scion pbrt Mq/s | Scion bvh8 Mq/s | parry3d Mq/s | FCPW vectorized Mq/s | FCPW scalar Mq/s | pbrt / fastest peer | bvh8 / fastest peer | largest error vs float64 (Scion, parry3d, FCPW) | wrong triangles (Scion, parry3d, FCPW) |"
+  echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---|"
   for name in "${names[@]}"; do
     f=$(scene_file "$name")
     "$bin" --scene "$f" --n "$n" --inputs "$out"
@@ -49,14 +50,16 @@ table=$out/table.md
     fs=$(taskset -c 0 python3 bench/fcpw/fcpw_closest.py "$out/tris.bin" "$out/points.bin" "$runs" "$out/fcpw-scalar.out" scalar | awk '{ print $3 }')
     "$bin" --scene "$f" --n "$n" --runs "$runs" --peer "fcpw=$out/fcpw.out" > "$out/run.txt"
     awk -v s="$name" -v n="$n" -v fv="$fv" -v fs="$fs" '
-      $1 == "triangles" { t = $2 } $1 == "scion_ms" { sm = $2 } $1 == "parry_ms" { pm = $2 }
-      $1 == "scion_error" { se = $2; sw = $4 "/" $6 } $1 == "parry_error" { pe = $2; pw = $4 "/" $6 }
+      $1 == "triangles" { t = $2 } $1 == "scion_ms" { sm[$2] = $3 } $1 == "parry_ms" { pm = $2 }
+      $1 == "scion_layouts_differ" && $2 != 0 { print "bench-closest-point: the layouts differ on " $2 " answers" > "/dev/stderr"; bad = 1 }
+      $1 == "scion:bvh8_error" { se = $2; sw = $4 "/" $6 } $1 == "parry_error" { pe = $2; pw = $4 "/" $6 }
       $1 == "fcpw_error" { fe = $2; fw = $4 "/" $6 }
       END {
         q = n / 1000.0
         best = pm; if (fv < best) best = fv; if (fs < best) best = fs
-        printf "| %s | %d | %.3f | %.3f | %.3f | %.3f | %.2f | %s, %s, %s | %s, %s, %s |\n",
-          s, t, q / sm, q / pm, q / fv, q / fs, best / sm, se, pe, fe, sw, pw, fw
+        if (bad) exit 1
+        printf "| %s | %d | %.3f | %.3f | %.3f | %.3f | %.3f | %.2f | %.2f | %s, %s, %s | %s, %s, %s |\n",
+          s, t, q / sm["pbrt"], q / sm["bvh8"], q / pm, q / fv, q / fs, best / sm["pbrt"], best / sm["bvh8"], se, pe, fe, sw, pw, fw
       }' "$out/run.txt"
   done
 } > "$table"

@@ -4,9 +4,11 @@
 //! package) runs from scripts/bench-closest-point.sh on the inputs this writes, and its answers
 //! are read back here to be checked with the others.
 //!
-//! Scion: `library/algorithms/closest_point.scion`'s `closest_point_query` over `--layout`
-//! (pbrt), LLVM -O3, through its C entries on the batch driver with one thread, the tree built by
-//! the runtime's binned SAH (leaves of up to 15 triangles). parry3d: `TriMesh::new` over the same
+//! Scion: the library's closest-point entry over each layout of `--layouts` (default
+//! `pbrt,bvh8`: `closest_point.scion`'s `closest_point_query` over the binary pbrt layout,
+//! `closest_point8.scion`'s `closest_point8` over the eight-wide bvh8), LLVM -O3, through its C
+//! entries on the batch driver with one thread, the tree built by the runtime's binned SAH
+//! (leaves of up to 15 triangles; collapsed to eight children for the wide layouts). parry3d: `TriMesh::new` over the same
 //! triangles (three vertices each), `project_local_point_and_get_location(p, false)` per point.
 //! Points: `scion run --algorithm closest-point`'s, uniform in the scene's box (`--n`, `--seed`).
 //!
@@ -16,10 +18,10 @@
 //! 1e-6 of the scene's size away from float64's (a wrong triangle, not a tie).
 //!
 //! Options: `--scene PATH|NAME` (default bunny), `--n N` (65536), `--seed S` (1), `--runs R`
-//! (9), `--layout L` (pbrt), `--check K` (2048), `--max-leaf M` (Scion's tree's largest leaf,
+//! (9), `--layouts L,L...` (pbrt,bvh8), `--check K` (2048), `--max-leaf M` (Scion's tree's largest leaf,
 //! 15), `--inputs DIR` (write `DIR/tris.bin` and
 //! `DIR/points.bin` and stop), `--peer NAME=FILE` (also check a peer's 20-byte answers, e.g.
-//! FCPW's; repeatable). Prints `key value` lines.
+//! FCPW's; repeatable). Prints `key value` lines (`scion_ms LAYOUT MS` per layout).
 
 use parry3d::math::Vec3 as PVec3;
 use parry3d::query::PointQueryWithLocation;
@@ -42,7 +44,7 @@ struct Args {
     n: usize,
     seed: u64,
     runs: usize,
-    layout: String,
+    layouts: Vec<String>,
     check: usize,
     inputs: Option<PathBuf>,
     peers: Vec<(String, PathBuf)>,
@@ -55,7 +57,7 @@ fn parse() -> Result<Args, String> {
         n: 65536,
         seed: 1,
         runs: 9,
-        layout: "pbrt".into(),
+        layouts: vec!["pbrt".into(), "bvh8".into()],
         check: 2048,
         inputs: None,
         peers: Vec::new(),
@@ -73,7 +75,7 @@ fn parse() -> Result<Args, String> {
             "--n" => a.n = num(value()?)?,
             "--seed" => a.seed = num(value()?)? as u64,
             "--runs" => a.runs = num(value()?)?.max(1),
-            "--layout" => a.layout = value()?,
+            "--layouts" | "--layout" => a.layouts = value()?.split(',').map(String::from).collect(),
             "--check" => a.check = num(value()?)?,
             "--inputs" => a.inputs = Some(PathBuf::from(value()?)),
             "--max-leaf" => a.max_leaf = num(value()?)?.clamp(1, 15),
@@ -150,9 +152,7 @@ fn run() -> Result<(), String> {
     let driver = BatchDriver::new(1)?;
     let plan = plan(a.runs);
 
-    // Scion.
-    let resolved = resolve_kind(&a.layout, None, QueryKind::ClosestPoint)?;
-    let entries = Entries::compile(&resolved.program, Codegen::Llvm(3), None)?;
+    // Scion, each layout.
     let tree = build_sah_binned(
         &scene.triangles,
         &SahOptions {
@@ -160,23 +160,29 @@ fn run() -> Result<(), String> {
             ..SahOptions::default()
         },
     );
-    let packed = entries.pack(&tree)?;
     let q = Queries::points(points.clone());
     let init = q.initial_results();
-    let mut results = init.clone();
-    let scion_time = measure_with(&plan, || {
-        results.copy_from_slice(&init);
-        entries
-            .run(&packed, &q.bytes, &mut results, &driver)
-            .expect("the closest-point entry runs");
-    });
-    let scion: Answers = results
-        .chunks_exact(20)
-        .map(|r| {
-            let c = closest_point_from(r);
-            (c.distance, c.prim)
-        })
-        .collect();
+    let mut scion = Vec::new();
+    for layout in &a.layouts {
+        let resolved = resolve_kind(layout, None, QueryKind::ClosestPoint)?;
+        let entries = Entries::compile(&resolved.program, Codegen::Llvm(3), None)?;
+        let packed = entries.pack(&tree)?;
+        let mut results = init.clone();
+        let time = measure_with(&plan, || {
+            results.copy_from_slice(&init);
+            entries
+                .run(&packed, &q.bytes, &mut results, &driver)
+                .expect("the closest-point entry runs");
+        });
+        let answers: Answers = results
+            .chunks_exact(20)
+            .map(|r| {
+                let c = closest_point_from(r);
+                (c.distance, c.prim)
+            })
+            .collect();
+        scion.push((layout.clone(), time, answers));
+    }
 
     // parry3d.
     let mut vertices = Vec::with_capacity(3 * scene.len());
@@ -209,9 +215,25 @@ fn run() -> Result<(), String> {
     let ms = |t: std::time::Duration| t.as_secs_f64() * 1e3;
     println!("triangles {}", scene.len());
     println!("points {}", points.len());
-    println!("scion_ms {:.4}", ms(scion_time.mean));
+    // Every layout's answers are brute force's, so they are equal to each other bit for bit.
+    let differing = scion
+        .iter()
+        .skip(1)
+        .map(|(_, _, ans)| {
+            ans.iter()
+                .zip(&scion[0].2)
+                .filter(|(x, y)| x.0.to_bits() != y.0.to_bits() || x.1 != y.1)
+                .count()
+        })
+        .sum::<usize>();
+    println!("scion_layouts_differ {differing}");
+    let mut rows = Vec::new();
+    for (layout, time, answers) in scion {
+        println!("scion_ms {layout} {:.4}", ms(time.mean));
+        rows.push((format!("scion:{layout}"), answers));
+    }
     println!("parry_ms {:.4}", ms(parry_time.mean));
-    let mut rows = vec![("scion".to_string(), scion), ("parry".to_string(), parry)];
+    rows.push(("parry".to_string(), parry));
     for (name, file) in &a.peers {
         let b = std::fs::read(file).map_err(|e| format!("{}: {e}", file.display()))?;
         let ans: Answers = b

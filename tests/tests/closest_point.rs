@@ -1,7 +1,8 @@
 //! Closest point queries (`library/algorithms/closest_point.scion`) through the C ABI: the
 //! depth-first traversal (nearer child first) and the best-first one (`order by d`, a priority
 //! queue), compiled for every library layout by Cranelift and LLVM -O3 to their exported entries
-//! and called as a C host does. Every answer must be brute force's bit for bit
+//! and called as a C host does; on the eight-wide layouts, `closest_point8.scion`'s nearest-first
+//! traversal of `BVH8`. Every answer must be brute force's bit for bit
 //! (`scion_runtime::reference::closest_point_brute`, the same f32 arithmetic): the pruning is
 //! exact on every layout whose boxes contain their triangles, quantized ones included. The f32
 //! answers are then checked against float64 brute force: the distance within a bound relative to
@@ -10,28 +11,21 @@
 mod c_entries;
 
 use scion_host::jit::Codegen;
-use scion_host::mem_interp::{layout_source, Program};
+use scion_host::library::{resolve_kind, QueryKind};
+use scion_host::mem_interp::Program;
 use scion_runtime::geom::{Triangle, Vec3};
 use scion_runtime::reference::closest_point::{
     closest_point_brute, closest_point_f64, triangle_distance_f64, ClosestPoint,
 };
 use scion_runtime::scene::{gen, Scene};
 use scion_tests::cases::{real_scene, TreeKind};
-use std::path::PathBuf;
 
-fn program(stem: &str, layout: &str, entry: &str) -> Program {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../library/algorithms");
-    let alg = std::fs::read_to_string(dir.join("closest_point.scion")).expect("closest_point");
+/// The library program answering closest points over layout `stem` with `entry`.
+fn program(stem: &str, entry: &str) -> Program {
+    let r = resolve_kind(stem, None, QueryKind::ClosestPoint).expect("a closest-point entry");
     Program {
-        files: vec![
-            ("closest_point.scion".to_string(), alg),
-            (
-                format!("{stem}.scion"),
-                layout_source(stem).expect("a library layout").to_string(),
-            ),
-        ],
-        layout: layout.to_string(),
         algorithm: entry.to_string(),
+        ..r.program
     }
 }
 
@@ -85,14 +79,10 @@ fn scenes() -> Vec<Scene> {
 
 /// Runs `entry` compiled for `layout` by `codegen` on every scene; returns the answers per
 /// scene.
-fn run(
-    stem: &str,
-    layout: &str,
-    entry: &str,
-    codegen: Codegen,
-    cases: &[Case],
-) -> Vec<Vec<ClosestPoint>> {
-    let lo = c_entries::host_lo(&program(stem, layout, entry));
+fn run(stem: &str, entry: &str, codegen: Codegen, cases: &[Case]) -> Vec<Vec<ClosestPoint>> {
+    let program = program(stem, entry);
+    let layout = &program.layout;
+    let lo = c_entries::host_lo(&program);
     assert_eq!(lo.entry.query.size, 12, "the query is the point");
     assert_eq!(
         lo.entry.result.size, 20,
@@ -172,20 +162,32 @@ fn both_traversals_are_brute_force_on_every_layout() {
     let cases = cases();
     assert!(cases.len() >= 10, "{} scenes", cases.len());
     let mut checked = 0;
-    // Every library layout of the prelude's BVH (the registry's, so a new file is covered).
-    for &(stem, layout, _) in scion_host::mem_interp::library_layouts() {
-        for entry in ["closest_point_best_first", "closest_point_query"] {
+    let mut wide = 0;
+    // Every library layout with a closest-point entry over its type (the registry's, so a new
+    // file is covered): both traversals of the prelude's BVH, `closest_point8` of BVH8.
+    for &(stem, _) in scion_host::library::LAYOUT_FILES {
+        let Ok(r) = resolve_kind(stem, None, QueryKind::ClosestPoint) else {
+            continue;
+        };
+        let entries: &[&str] = match r.tree_type.as_str() {
             // The depth-first traversal on the two unquantized layouts of each reference type.
-            if entry == "closest_point_query" && !matches!(stem, "pbrt" | "ptr") {
-                continue;
+            "BVH" if matches!(stem, "pbrt" | "ptr") => {
+                &["closest_point_best_first", "closest_point_query"]
             }
+            "BVH" => &["closest_point_best_first"],
+            _ => {
+                wide += 1;
+                &[r.program.algorithm.as_str()][..]
+            }
+        };
+        for &entry in entries {
             for codegen in [Codegen::Cranelift, Codegen::Llvm(3)] {
-                let got = run(stem, layout, entry, codegen, &cases);
+                let got = run(stem, entry, codegen, &cases);
                 for (case, got) in cases.iter().zip(&got) {
                     for (k, (g, w)) in got.iter().zip(&case.want).enumerate() {
                         assert!(
                             g.bit_eq(w),
-                            "{layout} {entry} {codegen:?} scene {} point {k} {:?}: got {g:?}, \
+                            "{stem} {entry} {codegen:?} scene {} point {k} {:?}: got {g:?}, \
                              brute force {w:?}",
                             case.scene.name,
                             case.points[k]
@@ -196,6 +198,10 @@ fn both_traversals_are_brute_force_on_every_layout() {
             }
         }
     }
+    assert!(
+        wide >= 3,
+        "{wide} eight-wide layouts with a closest-point entry"
+    );
     assert!(checked > 10_000, "{checked} answers");
 }
 
