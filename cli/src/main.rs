@@ -120,7 +120,8 @@ pub struct RunArgs {
     /// the CPU only.
     #[arg(long, value_enum, default_value = "cpu")]
     pub device: DeviceArg,
-    /// Entries of the traversal's explicit stack (default 64; 1024 for a collision, whose
+    /// Entries of the traversal's explicit stack (default 64, 512 for a traversal whose visits
+    /// push all their calls such as the eight-wide ones; 1024 for a collision, whose
     /// stack holds pairs of subtrees).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
     pub stack_size: Option<u32>,
@@ -175,7 +176,8 @@ pub struct PtxArgs {
     /// The GPU architecture (`sm_XX`; default sm_90).
     #[arg(long, value_name = "sm_XX")]
     pub cpu: Option<String>,
-    /// Entries of the generated traversal's explicit stack (default 64).
+    /// Entries of the generated traversal's explicit stack (default 64; 512 for a traversal whose
+    /// visits push all their calls, such as the eight-wide ones).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
     pub stack_size: Option<u32>,
 }
@@ -286,9 +288,9 @@ pub struct TraceArgs {
     #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub runs: u32,
     /// Entries of the generated traversal's explicit stack (`--backend jit|llvm`, `--device
-    /// gpu|gpu-emulated`; the compiler's `recursion-to-stack:stack-size`, default 64). A tree
-    /// too deep for it is an error naming the first ray that overflowed (on the GPU, the
-    /// kernel's overflow status).
+    /// gpu|gpu-emulated`; the compiler's `recursion-to-stack:stack-size`, default 64, or 512
+    /// where visits push all their calls). A tree too deep for it is an error naming the first
+    /// ray that overflowed (on the GPU, the kernel's overflow status).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
     pub stack_size: Option<u32>,
     /// Where to trace: the CPU (`--backend`), an NVIDIA GPU (`--layout` compiled to PTX,

@@ -176,7 +176,8 @@ pub struct Options {
     #[arg(long, value_enum, value_name = "ENGINE")]
     pub run: Option<RunEngine>,
 
-    /// Entries of the traversal's fixed software stack (default 64); overflow is reported.
+    /// Entries of the traversal's fixed software stack (default 64; 512 for a traversal whose
+    /// visits push all their calls: eight-wide, best first); overflow is reported.
     #[arg(long, value_name = "N")]
     pub stack_size: Option<u32>,
 

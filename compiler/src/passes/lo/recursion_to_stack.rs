@@ -45,8 +45,14 @@ use scion_ir::tree::CmpPred;
 use scion_ir::types::{IntTy, Type};
 use scion_ir::{Builder, Module, Pass, PassCx, PassError};
 
-/// The default number of stack entries.
+/// The default number of stack entries of a traversal whose calls end its visit in sequence
+/// (at most one pending entry per level of the tree for a binary one).
 pub const DEFAULT_STACK_SIZE: u32 = 64;
+
+/// The default number of entries of a traversal whose visits push all their calls (deferred
+/// calls, best-first queues): a visit of a node with `w` children can leave `w - 1` entries per
+/// level, so an eight-wide tree of depth 10 needs 70 (`closest_point8` with no radius).
+pub const DEFAULT_DEFERRED_STACK_SIZE: u32 = 512;
 
 /// The largest explicit stack, in bytes: it lives in the frame of the thread that runs the
 /// traversal (a worker thread has 2 MiB in all), so a larger one is an error, not a crash.
@@ -66,9 +72,9 @@ impl Pass for RecursionToStack {
 
     fn run(&mut self, m: &mut Module, cx: &mut PassCx) -> Result<bool, PassError> {
         let size = match cx.option("recursion-to-stack", "stack-size") {
-            None => DEFAULT_STACK_SIZE,
+            None => None,
             Some(s) => match s.parse::<u32>() {
-                Ok(n) if n > 0 => n,
+                Ok(n) if n > 0 => Some(n),
                 _ => {
                     let d = Diagnostic::error(
                         "E0962",
@@ -94,8 +100,12 @@ fn callee_of(m: &Module, op: OpId) -> Option<&str> {
     o.callee()
 }
 
-/// Rewrites every qualifying function of the `lo` module `m`; returns whether anything changed.
-pub fn run(m: &mut Module, stack_size: u32) -> Result<bool, Diagnostic> {
+/// Rewrites every qualifying function of the `lo` module `m` with stacks of `stack_size`
+/// entries (`None`: [`DEFAULT_STACK_SIZE`], or [`DEFAULT_DEFERRED_STACK_SIZE`] for a function
+/// whose visits push all their calls); returns whether anything changed.
+pub fn run(m: &mut Module, stack_size: Option<u32>) -> Result<bool, Diagnostic> {
+    let deferred = stack_size.unwrap_or(DEFAULT_DEFERRED_STACK_SIZE);
+    let stack_size = stack_size.unwrap_or(DEFAULT_STACK_SIZE);
     let mut with_status: Vec<FuncId> = Vec::new();
     for f in m.func_order.clone() {
         if m.is_declaration(f) {
@@ -112,11 +122,11 @@ pub fn run(m: &mut Module, stack_size: u32) -> Result<bool, Diagnostic> {
             continue;
         }
         if let Some(key) = m.funcs[f].order_by() {
-            super::best_first::rewrite(m, f, key, &calls, stack_size)?;
+            super::best_first::rewrite(m, f, key, &calls, deferred)?;
         } else if tail_shape(m, &calls).is_ok() {
             rewrite(m, f, &calls, stack_size)?;
         } else {
-            super::deferred_calls::rewrite(m, f, &calls, stack_size)?;
+            super::deferred_calls::rewrite(m, f, &calls, deferred)?;
         }
         with_status.push(f);
     }
