@@ -3,8 +3,10 @@
 # `scion run --algorithm closest-point` (uniform in the scene's box), one thread each, the paper's
 # timing method (1 warm-up, 9 runs, the middle 5 averaged), in the same run:
 #   - Scion: library/algorithms/closest_point.scion's closest_point_query over pbrt and
-#     closest_point8.scion's closest_point8 over the eight-wide bvh8, LLVM -O3
-#     (bench/benches/closest_point.rs, through their C entries on one thread);
+#     closest_point8.scion's closest_point8 over the eight-wide bvh8, on Scion's binned SAH
+#     tree, and closest_point_query over pbrt on FCPW's tree (runtime/src/bvh/fcpw.rs, the
+#     paper's set-up), LLVM -O3 (bench/benches/closest_point.rs, through their C entries on one
+#     thread);
 #   - parry3d 0.31 (crate): its TriMesh's point projection, in the same process;
 #   - FCPW (Python package `fcpw`, its C++ core; installed with numpy when missing): its
 #     surface-area BVH, vectorized and scalar, `find_closest_points` over all points, pinned to
@@ -39,10 +41,10 @@ table=$out/table.md
 {
   cpu=$(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //')
   fcpw=$(python3 -c 'import importlib.metadata as m; print(m.version("fcpw"))')
-  echo "Measured $(date -u '+%Y-%m-%d %H:%M UTC') on $cpu, $(nproc) CPUs; commit $(git rev-parse --short HEAD); $n points per scene (seed 1); 1 thread; Scion pbrt and bvh8, LLVM -O3; parry3d 0.31; FCPW $fcpw (pip); the paper's method ($runs runs); \`scripts/bench-closest-point.sh\`."
+  echo "Measured $(date -u '+%Y-%m-%d %H:%M UTC') on $cpu, $(nproc) CPUs; commit $(git rev-parse --short HEAD); $n points per scene (seed 1); 1 thread; Scion pbrt and bvh8 on its binned SAH tree and pbrt on FCPW's tree, LLVM -O3; parry3d 0.31; FCPW $fcpw (pip); the paper's method ($runs runs); \`scripts/bench-closest-point.sh\`."
   echo
-  echo "| scene | triangles | Scion pbrt Mq/s | Scion bvh8 Mq/s | parry3d Mq/s | FCPW vectorized Mq/s | FCPW scalar Mq/s | pbrt / fastest peer | bvh8 / fastest peer | largest error vs float64 (Scion, parry3d, FCPW) | wrong triangles (Scion, parry3d, FCPW) |"
-  echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---|"
+  echo "| scene | triangles | Scion pbrt Mq/s | Scion bvh8 Mq/s | Scion pbrt, FCPW's tree Mq/s | parry3d Mq/s | FCPW vectorized Mq/s | FCPW scalar Mq/s | pbrt / fastest peer | bvh8 / fastest peer | pbrt on FCPW's tree / fastest peer | largest error vs float64 (Scion, parry3d, FCPW) | wrong triangles (Scion, parry3d, FCPW) |"
+  echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|"
   for name in "${names[@]}"; do
     f=$(scene_file "$name")
     "$bin" --scene "$f" --n "$n" --inputs "$out"
@@ -58,8 +60,8 @@ table=$out/table.md
         q = n / 1000.0
         best = pm; if (fv < best) best = fv; if (fs < best) best = fs
         if (bad) exit 1
-        printf "| %s | %d | %.3f | %.3f | %.3f | %.3f | %.3f | %.2f | %.2f | %s, %s, %s | %s, %s, %s |\n",
-          s, t, q / sm["pbrt"], q / sm["bvh8"], q / pm, q / fv, q / fs, best / sm["pbrt"], best / sm["bvh8"], se, pe, fe, sw, pw, fw
+        printf "| %s | %d | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.2f | %.2f | %.2f | %s, %s, %s | %s, %s, %s |\n",
+          s, t, q / sm["pbrt"], q / sm["bvh8"], q / sm["pbrt@fcpw"], q / pm, q / fv, q / fs, best / sm["pbrt"], best / sm["bvh8"], best / sm["pbrt@fcpw"], se, pe, fe, sw, pw, fw
       }' "$out/run.txt"
   done
 } > "$table"

@@ -3,7 +3,9 @@
 # 10°) about the centre of its box, one thread, the paper's timing method (1 warm-up, 9 runs,
 # the middle 5 averaged) on each side, in the same run:
 #   - Scion: `scion run --algorithm collide` (library/algorithms/collide.scion over the pbrt
-#     layout, LLVM -O3; binned SAH trees, leaves of up to 15 triangles);
+#     layout, LLVM -O3; binned SAH trees, leaves of up to 15 triangles; the explicit-stack
+#     `collide` and the `collide_recursive` variant, calls on the machine stack as FCL, whose
+#     pairs must be the same);
 #   - FCL 0.7 (Debian's libfcl-dev, installed when missing): bench/fcl/fcl_collide.cpp with OBBRSS
 #     and with AABB bounding volumes (its default builder: mean split, one triangle per leaf),
 #     built with g++ -O3 here, on the same triangles (bench/src/bin/collide_inputs.rs).
@@ -40,8 +42,8 @@ table=$out/table.md
   fcl=$(dpkg-query -W -f='${Version}' libfcl-dev 2>/dev/null || echo "?")
   echo "Measured $(date -u '+%Y-%m-%d %H:%M UTC') on $cpu, $(nproc) CPUs; commit $(git rev-parse --short HEAD); FCL $fcl (g++ -O3); Scion \`$layout\`, LLVM -O3; 1 thread; the paper's method ($runs runs); \`scripts/bench-collide.sh\`."
   echo
-  echo "| scene | triangles | pairs (Scion) | Scion ms | FCL OBBRSS ms | FCL AABB ms | faster FCL / Scion | pairs equal to FCL's (float64 verdict where not) |"
-  echo "|---|---:|---:|---:|---:|---:|---:|---|"
+  echo "| scene | triangles | pairs (Scion) | Scion ms | Scion recursive ms | FCL OBBRSS ms | FCL AABB ms | faster FCL / Scion | faster FCL / Scion recursive | pairs equal to FCL's (float64 verdict where not) |"
+  echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|"
   for name in "${names[@]}"; do
     f=$(scene_file "$name")
     "$bin" run --algorithm collide --scene "$f" --layout "$layout" --runs "$runs" \
@@ -49,6 +51,11 @@ table=$out/table.md
     tris=$(awk '$1 == "triangles" { print $2 }' "$out/scion.txt")
     pairs=$(awk '$1 == "pairs" { print $2 }' "$out/scion.txt")
     ms=$(awk '$1 == "time" { printf "%.4f", $2 * 1000 }' "$out/scion.txt")
+    # The recursive variant (calls on the machine stack, as FCL): the same pairs.
+    "$bin" run --algorithm collide_recursive --scene "$f" --layout "$layout" --runs "$runs" \
+      -o "$out/scion-rec.pairs" > "$out/scion-rec.txt" 2>/dev/null
+    cmp -s "$out/scion.pairs" "$out/scion-rec.pairs" || { echo "bench-collide: $name: the recursive variant's pairs differ" >&2; exit 1; }
+    rms=$(awk '$1 == "time" { printf "%.4f", $2 * 1000 }' "$out/scion-rec.txt")
     "$target/release/collide_inputs" "$f" "$out/a.tris" "$out/b.tris"
     "$out/fcl_collide" "$out/a.tris" "$out/b.tris" "$runs" "$out/fcl" > "$out/fcl.txt"
     obb=$(awk '$1 == "fcl-obbrss" { print $5 }' "$out/fcl.txt")
@@ -60,8 +67,8 @@ table=$out/table.md
       else v=$("$target/release/collide_f64" "$out/a.tris" "$out/b.tris" "$out/scion.pairs" "$out/fcl-$bv.pairs" | sed 's/the peer/FCL/'); fi
       same="${same:+$same; }$bv: $v"
     done
-    awk -v n="$name" -v t="$tris" -v p="$pairs" -v s="$ms" -v o="$obb" -v a="$aabb" -v same="$same" \
-      'BEGIN { f = (o < a ? o : a); printf "| %s | %s | %s | %.3f | %.3f | %.3f | %.2f | %s |\n", n, t, p, s, o, a, f / s, same }'
+    awk -v n="$name" -v t="$tris" -v p="$pairs" -v s="$ms" -v r="$rms" -v o="$obb" -v a="$aabb" -v same="$same" \
+      'BEGIN { f = (o < a ? o : a); printf "| %s | %s | %s | %.3f | %.3f | %.3f | %.3f | %.2f | %.2f | %s |\n", n, t, p, s, r, o, a, f / s, f / r, same }'
   done
 } > "$table"
 cat "$table"

@@ -5,10 +5,12 @@
 //! are read back here to be checked with the others.
 //!
 //! Scion: the library's closest-point entry over each layout of `--layouts` (default
-//! `pbrt,bvh8`: `closest_point.scion`'s `closest_point_query` over the binary pbrt layout,
-//! `closest_point8.scion`'s `closest_point8` over the eight-wide bvh8), LLVM -O3, through its C
-//! entries on the batch driver with one thread, the tree built by the runtime's binned SAH
-//! (leaves of up to 15 triangles; collapsed to eight children for the wide layouts). parry3d: `TriMesh::new` over the same
+//! `pbrt,bvh8,pbrt@fcpw`: `closest_point.scion`'s `closest_point_query` over the binary pbrt
+//! layout, `closest_point8.scion`'s `closest_point8` over the eight-wide bvh8), LLVM -O3,
+//! through its C entries on the batch driver with one thread, the tree built by the runtime's
+//! binned SAH (leaves of up to `--max-leaf`, 15; collapsed to eight children for the wide
+//! layouts), or with `LAYOUT@fcpw` by FCPW's builder (`scion_runtime::bvh::fcpw`, leaves of up
+//! to 4), the paper's set-up (§9.3.2: FCPW's layout and tree, Scion's traversal). parry3d: `TriMesh::new` over the same
 //! triangles (three vertices each), `project_local_point_and_get_location(p, false)` per point.
 //! Points: `scion run --algorithm closest-point`'s, uniform in the scene's box (`--n`, `--seed`).
 //!
@@ -18,7 +20,7 @@
 //! 1e-6 of the scene's size away from float64's (a wrong triangle, not a tie).
 //!
 //! Options: `--scene PATH|NAME` (default bunny), `--n N` (65536), `--seed S` (1), `--runs R`
-//! (9), `--layouts L,L...` (pbrt,bvh8), `--check K` (2048), `--max-leaf M` (Scion's tree's largest leaf,
+//! (9), `--layouts L[@fcpw],...` (pbrt,bvh8,pbrt@fcpw), `--check K` (2048), `--max-leaf M` (Scion's tree's largest leaf,
 //! 15), `--inputs DIR` (write `DIR/tris.bin` and
 //! `DIR/points.bin` and stop), `--peer NAME=FILE` (also check a peer's 20-byte answers, e.g.
 //! FCPW's; repeatable). Prints `key value` lines (`scion_ms LAYOUT MS` per layout).
@@ -31,7 +33,7 @@ use scion_host::jit::Codegen;
 use scion_host::library::{resolve_kind, QueryKind};
 use scion_host::queries::{closest_point_from, Queries};
 use scion_runtime::batch::BatchDriver;
-use scion_runtime::bvh::{build_sah_binned, SahOptions};
+use scion_runtime::bvh::{build_fcpw, build_sah_binned, FcpwOptions, SahOptions};
 use scion_runtime::query::points::uniform_points;
 use scion_runtime::reference::closest_point::closest_point_f64;
 use scion_runtime::scene::load_obj;
@@ -57,7 +59,7 @@ fn parse() -> Result<Args, String> {
         n: 65536,
         seed: 1,
         runs: 9,
-        layouts: vec!["pbrt".into(), "bvh8".into()],
+        layouts: vec!["pbrt".into(), "bvh8".into(), "pbrt@fcpw".into()],
         check: 2048,
         inputs: None,
         peers: Vec::new(),
@@ -162,11 +164,21 @@ fn run() -> Result<(), String> {
     );
     let q = Queries::points(points.clone());
     let init = q.initial_results();
+    let fcpw_tree = build_fcpw(&scene.triangles, &FcpwOptions::default());
     let mut scion = Vec::new();
-    for layout in &a.layouts {
+    for spec in &a.layouts {
+        let (layout, tree) = match spec.split_once('@') {
+            None => (spec.as_str(), &tree),
+            Some((layout, "fcpw")) => (layout, &fcpw_tree),
+            Some(_) => {
+                return Err(format!(
+                    "--layouts: `{spec}`: the tree is LAYOUT or LAYOUT@fcpw"
+                ))
+            }
+        };
         let resolved = resolve_kind(layout, None, QueryKind::ClosestPoint)?;
         let entries = Entries::compile(&resolved.program, Codegen::Llvm(3), None)?;
-        let packed = entries.pack(&tree)?;
+        let packed = entries.pack(tree)?;
         let mut results = init.clone();
         let time = measure_with(&plan, || {
             results.copy_from_slice(&init);
@@ -181,7 +193,7 @@ fn run() -> Result<(), String> {
                 (c.distance, c.prim)
             })
             .collect();
-        scion.push((layout.clone(), time, answers));
+        scion.push((spec.clone(), time, answers));
     }
 
     // parry3d.

@@ -111,9 +111,10 @@ pub struct RunArgs {
     /// Tree builder.
     #[arg(long, value_enum, default_value = "sah")]
     pub builder: BuilderArg,
-    /// Largest leaf of the SAH builder (1..=15).
-    #[arg(long, default_value_t = 15, value_parser = clap::value_parser!(u32).range(1..=15))]
-    pub leaf_size: u32,
+    /// Largest leaf of the SAH and FCPW builders (1..=15; default 15 for sah, FCPW's 4 for
+    /// fcpw; median leaves hold one triangle).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=15))]
+    pub leaf_size: Option<u32>,
     /// Where to run: this CPU (with --backend and --threads), an NVIDIA GPU (the algorithm
     /// compiled to PTX, one thread per query, through CUDA) or the GPU's kernels emulated on
     /// this CPU. Every answer is checked against the reference either way. Collision runs on
@@ -231,6 +232,32 @@ pub enum BuilderArg {
     Sah,
     /// Median split of the longest axis, one triangle per leaf.
     Median,
+    /// FCPW's builder (the paper's closest-point comparison, §9.3.2): binned surface area over
+    /// 8 slices of each node's box, leaves of up to `--leaf-size` triangles (default 4), no
+    /// leaf cost and no reinsertion (docs/runtime.md).
+    Fcpw,
+}
+
+impl BuilderArg {
+    /// The largest leaf this builder makes with `--leaf-size` (median: 1). FCPW's builder
+    /// also makes a larger leaf at its depth limit (62), which no library scene reaches.
+    pub fn leaf_size(self, leaf_size: Option<u32>) -> usize {
+        match self {
+            BuilderArg::Sah => leaf_size.unwrap_or(15) as usize,
+            BuilderArg::Fcpw => leaf_size.unwrap_or(4) as usize,
+            BuilderArg::Median => 1,
+        }
+    }
+
+    /// How the tree was built, for reports.
+    pub fn describe(self, leaf_size: Option<u32>) -> String {
+        let n = self.leaf_size(leaf_size);
+        match self {
+            BuilderArg::Sah => format!("binned SAH + reinsertion, leaves <= {n}"),
+            BuilderArg::Fcpw => format!("FCPW's binned surface area, leaves <= {n}"),
+            BuilderArg::Median => "median, one triangle per leaf".to_string(),
+        }
+    }
 }
 
 /// Arguments of `scion trace`.
@@ -280,9 +307,10 @@ pub struct TraceArgs {
     /// Tree builder.
     #[arg(long, value_enum, default_value = "sah")]
     pub builder: BuilderArg,
-    /// Largest leaf of the SAH builder (1..=15).
-    #[arg(long, default_value_t = 15, value_parser = clap::value_parser!(u32).range(1..=15))]
-    pub leaf_size: u32,
+    /// Largest leaf of the SAH and FCPW builders (1..=15; default 15 for sah, FCPW's 4 for
+    /// fcpw; median leaves hold one triangle).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=15))]
+    pub leaf_size: Option<u32>,
     /// Timed runs: 9 is the paper's method (1 warm-up, 9 runs, mean of the middle 5); 1 is a
     /// single untimed-warm-up run for quick use; other counts drop (runs - 1) / 4 at each end.
     #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(1..=1000))]

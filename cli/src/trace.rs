@@ -20,7 +20,9 @@ use scion_host::mem_interp::{layout_boxes, library_layouts, MemInterpBackend};
 use scion_host::quantized::{Boxes, DecodedTree};
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::wide::collapse;
-use scion_runtime::bvh::{build_median, build_sah_binned, LogicalNode, LogicalTree, SahOptions};
+use scion_runtime::bvh::{
+    build_fcpw, build_median, build_sah_binned, FcpwOptions, LogicalNode, LogicalTree, SahOptions,
+};
 use scion_runtime::geom::{Ray, Triangle};
 use scion_runtime::query::{
     axis_rays, hits_checksum, primary_rays_n, read_rays, secondary_rays, write_hits,
@@ -122,9 +124,12 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     let t = Instant::now();
     let tree = build(&scene, args);
     let build_time = t.elapsed();
+    // FCPW's builder makes a larger leaf at its depth limit only.
     let cap = match args.builder {
-        BuilderArg::Sah => args.leaf_size as usize,
-        BuilderArg::Median => 1,
+        BuilderArg::Fcpw if tree.stats().depth > FcpwOptions::default().max_depth => {
+            u16::MAX as usize
+        }
+        b => b.leaf_size(args.leaf_size),
     };
     tree.validate_with_cap(cap)
         .map_err(|e| CliError::new(format!("the builder made an invalid tree: {e}")))?;
@@ -238,10 +243,7 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         }
     };
     let hit_count = hits.iter().filter(|h| h.is_hit()).count();
-    let builder = match args.builder {
-        BuilderArg::Sah => format!("binned SAH + reinsertion, leaves <= {}", args.leaf_size),
-        BuilderArg::Median => "median, one triangle per leaf".to_string(),
-    };
+    let builder = args.builder.describe(args.leaf_size);
     let source = match &args.rays_file {
         Some(p) => format!("from {}", p.display()),
         None => format!("{:?} (seed {})", args.rays, args.seed).to_lowercase(),
@@ -430,8 +432,14 @@ pub(crate) fn build(scene: &Scene, args: &TraceArgs) -> LogicalTree {
     build_with(scene, args.builder, args.leaf_size)
 }
 
-/// The logical tree of `scene` by `builder` (SAH leaves of at most `leaf_size` triangles).
-pub(crate) fn build_with(scene: &Scene, builder: BuilderArg, leaf_size: u32) -> LogicalTree {
+/// The logical tree of `scene` by `builder` (leaves of at most `builder.leaf_size(leaf_size)`
+/// triangles).
+pub(crate) fn build_with(
+    scene: &Scene,
+    builder: BuilderArg,
+    leaf_size: Option<u32>,
+) -> LogicalTree {
+    let max_leaf = builder.leaf_size(leaf_size);
     progress(&format!(
         "building the logical tree of {} triangles",
         scene.len()
@@ -440,11 +448,18 @@ pub(crate) fn build_with(scene: &Scene, builder: BuilderArg, leaf_size: u32) -> 
         BuilderArg::Sah => build_sah_binned(
             &scene.triangles,
             &SahOptions {
-                max_leaf: leaf_size as usize,
+                max_leaf,
                 ..SahOptions::default()
             },
         ),
         BuilderArg::Median => build_median(&scene.triangles),
+        BuilderArg::Fcpw => build_fcpw(
+            &scene.triangles,
+            &FcpwOptions {
+                leaf_size: max_leaf,
+                ..FcpwOptions::default()
+            },
+        ),
     }
 }
 

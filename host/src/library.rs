@@ -149,6 +149,9 @@ pub struct Declared {
     pub layouts: Vec<DeclaredLayout>,
     /// Entry functions `(query, tree: T, result: mut R)` of a known kind: name, `T`, kind.
     pub entries: Vec<(String, String, QueryKind)>,
+    /// Functions some other function calls: an entry among them is a piece of a traversal
+    /// (`collide_node` of `collide`), runnable by name but never chosen by default.
+    pub called: std::collections::BTreeSet<String>,
 }
 
 impl Declared {
@@ -158,6 +161,15 @@ impl Declared {
             .iter()
             .filter(|e| e.2 == kind)
             .map(|e| (e.0.clone(), e.1.clone()))
+            .collect()
+    }
+
+    /// The entries no other function calls: the traversals themselves, not their pieces.
+    pub fn roots(&self) -> Vec<(String, String, QueryKind)> {
+        self.entries
+            .iter()
+            .filter(|e| !self.called.contains(&e.0))
+            .cloned()
             .collect()
     }
 }
@@ -182,7 +194,24 @@ pub fn declared(files: &[(String, String)]) -> Result<Declared, String> {
             })
             .collect(),
         entries: entries(&module),
+        called: called(&module),
     })
+}
+
+/// The names of the functions that another function of `module` calls.
+fn called(module: &Module) -> std::collections::BTreeSet<String> {
+    let mut out = std::collections::BTreeSet::new();
+    for &f in &module.func_order {
+        let name = &module.funcs[f].name;
+        for op in scion_ir::walk::region_ops(module, module.funcs[f].body) {
+            if let Some(c) = module.ops[op].callee() {
+                if c != name {
+                    out.insert(c.to_string());
+                }
+            }
+        }
+    }
+    out
 }
 
 /// How layout `layout` stores boxes, as far as its bit-for-bit reference goes: quantized
@@ -403,7 +432,11 @@ pub fn resolve_kind(
     // The entry of that kind over that type.
     let of_kind = found.of_kind(kind);
     let what = kind.name();
-    let over: Vec<&(String, String)> = of_kind.iter().filter(|(_, t)| *t == tree_type).collect();
+    // By default, only the traversals themselves (entries no other function calls).
+    let over: Vec<&(String, String)> = of_kind
+        .iter()
+        .filter(|(f, t)| *t == tree_type && !found.called.contains(f))
+        .collect();
     // With an algorithm file of a single entry of the kind, that one (checked against the type).
     let entry_pick = match (&entry_pick, algorithm, &of_kind[..]) {
         (None, Some(_), [(only, _)]) => Some(only.clone()),
@@ -481,10 +514,11 @@ pub fn resolve_kind(
 }
 
 /// The library's algorithm files, as (name, text).
-/// Every entry of a known kind the library's algorithm files declare: name, tree type, kind
-/// (`closest_hit`, `closest_point_query`, `closest_point_best_first`, `collide`, ...).
+/// Every entry of a known kind the library's algorithm files declare that no other function
+/// calls: name, tree type, kind (`closest_hit`, `closest_point_query`,
+/// `closest_point_best_first`, `collide`, `collide_recursive`, ...).
 pub fn library_entries() -> Result<Vec<(String, String, QueryKind)>, String> {
-    Ok(declared(&library_algorithms())?.entries)
+    Ok(declared(&library_algorithms())?.roots())
 }
 
 fn library_algorithms() -> Vec<(String, String)> {

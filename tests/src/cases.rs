@@ -3,7 +3,9 @@
 //! sets (primary, secondary, axis-parallel with signed zeros, and feature rays that graze
 //! vertices and edges or start on surfaces), and [`compare`], the bit-for-bit check.
 
-use scion_runtime::bvh::{build_median, build_sah_binned, LogicalTree, SahOptions};
+use scion_runtime::bvh::{
+    build_fcpw, build_median, build_sah_binned, FcpwOptions, LogicalTree, SahOptions,
+};
 use scion_runtime::geom::{Hit, Ray, Vec3};
 use scion_runtime::query::{axis_rays, primary_rays, secondary_rays};
 use scion_runtime::reference::why_pruned;
@@ -28,6 +30,8 @@ pub enum TreeKind {
     Sah4,
     /// Median split, one triangle per leaf (the deepest balanced tree).
     Median,
+    /// FCPW's builder (binned surface area over 8 slices of the node's box, leaves of up to 4).
+    Fcpw,
 }
 
 impl TreeKind {
@@ -43,6 +47,7 @@ impl TreeKind {
                 },
             ),
             TreeKind::Median => build_median(&scene.triangles),
+            TreeKind::Fcpw => build_fcpw(&scene.triangles, &FcpwOptions::default()),
         }
     }
 }

@@ -131,7 +131,13 @@ fn cases() -> Vec<Case> {
         .into_iter()
         .enumerate()
         .filter_map(|(i, scene)| {
-            let tree = TreeKind::Sah4.build(&scene);
+            // Scion's binned SAH tree and FCPW's, on alternate scenes.
+            let kind = if i % 2 == 0 {
+                TreeKind::Sah4
+            } else {
+                TreeKind::Fcpw
+            };
+            let tree = kind.build(&scene);
             if tree.is_empty() {
                 return None;
             }

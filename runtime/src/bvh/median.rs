@@ -11,7 +11,7 @@ use crate::geom::{Aabb, Triangle};
 struct Median;
 
 impl Decide for Median {
-    fn decide(&self, items: &mut [Item], bounds: Aabb, _: Aabb) -> Decision {
+    fn decide(&self, items: &mut [Item], bounds: Aabb, _: Aabb, _: usize) -> Decision {
         if items.len() == 1 {
             Decision::Leaf
         } else {

@@ -1,7 +1,7 @@
 //! Logical BVHs and their builders: triangles -> [`LogicalTree`] (architecture §5).
 //!
-//! [`logical`] holds the tree form every generated constructor reads; [`sah_binned`] and
-//! [`median`] build it; [`chain`] builds a maximally deep tree for stack-limit tests;
+//! [`logical`] holds the tree form every generated constructor reads; [`sah_binned`],
+//! [`median`] and [`fcpw`] (FCPW's binned surface-area builder) build it; [`chain`] builds a maximally deep tree for stack-limit tests;
 //! [`wide`] collapses it to four- or eight-wide nodes.
 //!
 //! The top-down builders are deterministic: the same input gives the same tree, bit for bit,
@@ -12,6 +12,7 @@
 
 pub mod chain;
 pub mod dop14;
+pub mod fcpw;
 pub mod fill;
 pub mod logical;
 pub mod median;
@@ -22,6 +23,7 @@ pub mod schema;
 pub mod wide;
 
 pub use chain::{build_caterpillar, DeepSide};
+pub use fcpw::{build_fcpw, FcpwOptions};
 pub use logical::{
     LogicalNode, LogicalTree, TreeStats, DEFAULT_MAX_LEAF, KIND_INTERIOR, KIND_LEAF, NO_NODE,
 };
@@ -75,10 +77,10 @@ pub(crate) fn median_split(items: &mut [Item], axis: usize) -> usize {
     mid
 }
 
-/// A builder's rule: given a range of items (to partition in place), its box and its
-/// centroid box, make a leaf or split after `k` items (`0 < k < len`).
+/// A builder's rule: given a range of items (to partition in place), its box, its centroid box
+/// and its depth (the root's is 0), make a leaf or split after `k` items (`0 < k < len`).
 pub(crate) trait Decide: Sync {
-    fn decide(&self, items: &mut [Item], bounds: Aabb, cbounds: Aabb) -> Decision;
+    fn decide(&self, items: &mut [Item], bounds: Aabb, cbounds: Aabb, depth: usize) -> Decision;
 }
 
 /// Builds the tree over `tris` with the rule `rule` (see the module documentation).
@@ -99,7 +101,7 @@ pub(crate) fn build_top_down(tris: &[Triangle], rule: &impl Decide) -> LogicalTr
             }
         })
         .collect();
-    let nodes = build_range(&mut items, 0, rule);
+    let nodes = build_range(&mut items, 0, 0, rule);
     let primitives = items.iter().map(|it| tris[it.index as usize]).collect();
     LogicalTree {
         nodes,
@@ -116,22 +118,27 @@ fn checked_split(left: usize, n: usize) -> usize {
     left
 }
 
-/// The pre-order nodes of the subtree over `items`, whose first item is primitive `base` of
-/// the final order; child indices are relative to the returned vector.
-fn build_range(items: &mut [Item], base: usize, rule: &impl Decide) -> Vec<LogicalNode> {
+/// The pre-order nodes of the subtree over `items` at depth `depth`, whose first item is
+/// primitive `base` of the final order; child indices are relative to the returned vector.
+fn build_range(
+    items: &mut [Item],
+    base: usize,
+    depth: usize,
+    rule: &impl Decide,
+) -> Vec<LogicalNode> {
     let n = items.len();
     if n < PARALLEL_MIN {
-        return build_sequential(items, base, rule);
+        return build_sequential(items, base, depth, rule);
     }
     let (bounds, cbounds) = range_bounds(items);
-    match rule.decide(items, bounds, cbounds) {
+    match rule.decide(items, bounds, cbounds, depth) {
         Decision::Leaf => vec![LogicalNode::leaf(bounds, base as u32, n as u32)],
         Decision::Split(left) => {
             let left = checked_split(left, n);
             let (l_items, r_items) = items.split_at_mut(left);
             let (l, r) = rayon::join(
-                || build_range(l_items, base, rule),
-                || build_range(r_items, base + left, rule),
+                || build_range(l_items, base, depth + 1, rule),
+                || build_range(r_items, base + left, depth + 1, rule),
             );
             let mut nodes = Vec::with_capacity(1 + l.len() + r.len());
             nodes.push(LogicalNode::interior(bounds, 1, (1 + l.len()) as u32));
@@ -150,18 +157,24 @@ fn build_range(items: &mut [Item], base: usize, rule: &impl Decide) -> Vec<Logic
 }
 
 /// [`build_range`] on one thread with an explicit stack (same pre-order).
-fn build_sequential(items: &mut [Item], base: usize, rule: &impl Decide) -> Vec<LogicalNode> {
-    // (begin, end, parent, side), relative to `items`.
-    let mut stack: Vec<(usize, usize, u32, usize)> = vec![(0, items.len(), NO_NODE, 0)];
+fn build_sequential(
+    items: &mut [Item],
+    base: usize,
+    depth: usize,
+    rule: &impl Decide,
+) -> Vec<LogicalNode> {
+    // (begin, end, parent, side, depth), relative to `items`.
+    let mut stack: Vec<(usize, usize, u32, usize, usize)> =
+        vec![(0, items.len(), NO_NODE, 0, depth)];
     let mut nodes: Vec<LogicalNode> = Vec::new();
-    while let Some((begin, end, parent, side)) = stack.pop() {
+    while let Some((begin, end, parent, side, depth)) = stack.pop() {
         let me = nodes.len() as u32;
         if parent != NO_NODE {
             nodes[parent as usize].child[side] = me;
         }
         let range = &mut items[begin..end];
         let (bounds, cbounds) = range_bounds(range);
-        match rule.decide(range, bounds, cbounds) {
+        match rule.decide(range, bounds, cbounds, depth) {
             Decision::Leaf => nodes.push(LogicalNode::leaf(
                 bounds,
                 (base + begin) as u32,
@@ -170,8 +183,8 @@ fn build_sequential(items: &mut [Item], base: usize, rule: &impl Decide) -> Vec<
             Decision::Split(left) => {
                 let left = checked_split(left, end - begin);
                 nodes.push(LogicalNode::interior(bounds, NO_NODE, NO_NODE));
-                stack.push((begin + left, end, me, 1));
-                stack.push((begin, begin + left, me, 0));
+                stack.push((begin + left, end, me, 1, depth + 1));
+                stack.push((begin, begin + left, me, 0, depth + 1));
             }
         }
     }

@@ -86,7 +86,7 @@ pub fn build_sah_binned(tris: &[Triangle], options: &SahOptions) -> LogicalTree 
 }
 
 impl Decide for Sah {
-    fn decide(&self, items: &mut [Item], bounds: Aabb, cbounds: Aabb) -> Decision {
+    fn decide(&self, items: &mut [Item], bounds: Aabb, cbounds: Aabb, _: usize) -> Decision {
         let (bins, ct, ci) = (self.bins, self.ct, self.ci);
         let n = items.len();
         if n <= self.min_leaf {

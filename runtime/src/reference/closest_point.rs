@@ -9,6 +9,7 @@
 //! [`closest_point_f64`] is the same search in `f64`, the accuracy check of the `f32` answer.
 
 use super::prelude::{max_num, min_num};
+use super::v64::{add, axpy, dot, narrow, scale, sub, widen, V64};
 use crate::geom::{Aabb, Triangle, Vec3};
 
 /// The answer to one query: `best` of the algorithm file.
@@ -59,40 +60,20 @@ pub fn box_distance_squared(p: Vec3, b: &Aabb) -> f32 {
     length_squared(clamp_to_box(p, b) - p)
 }
 
-type P64 = [f64; 3];
-
-fn sub3(a: P64, b: P64) -> P64 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn add3(a: P64, b: P64) -> P64 {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-
-/// The prelude's `dot` in `f64`: left to right, no fusing.
-fn dot3(a: P64, b: P64) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-/// The prelude's `scale64(v, s)`.
-fn scale3(v: P64, s: f64) -> P64 {
-    [v[0] * s, v[1] * s, v[2] * s]
-}
-
-fn closest_point_on_segment(p: P64, a: P64, b: P64) -> P64 {
-    let ab = sub3(b, a);
-    let len2 = dot3(ab, ab);
+fn closest_point_on_segment(p: V64, a: V64, b: V64) -> V64 {
+    let ab = sub(b, a);
+    let len2 = dot(ab, ab);
     if len2 == 0.0 {
         return a;
     }
     // minNum/maxNum, as the prelude's `min`/`max` (not `clamp`, which keeps a NaN).
     #[allow(clippy::manual_clamp)]
-    let t = (dot3(sub3(p, a), ab) / len2).max(0.0).min(1.0);
-    add3(a, scale3(ab, t))
+    let t = (dot(sub(p, a), ab) / len2).max(0.0).min(1.0);
+    add(a, scale(ab, t))
 }
 
-fn nearer(p: P64, x: P64, y: P64) -> P64 {
-    if dot3(sub3(y, p), sub3(y, p)) < dot3(sub3(x, p), sub3(x, p)) {
+fn nearer(p: V64, x: V64, y: V64) -> V64 {
+    if dot(sub(y, p), sub(y, p)) < dot(sub(x, p), sub(x, p)) {
         y
     } else {
         x
@@ -102,29 +83,32 @@ fn nearer(p: P64, x: P64, y: P64) -> P64 {
 /// The prelude's `closest_point(p, tri)`: Ericson §5.1.5 (edges for a zero-area triangle) in
 /// `f64` on the widened corners, rounded to `f32` at the end.
 pub fn closest_point_on_triangle(p: Vec3, tri: &Triangle) -> Vec3 {
-    let w = |v: Vec3| [f64::from(v.x), f64::from(v.y), f64::from(v.z)];
-    let c = closest_point_f64_ericson(w(p), w(tri.p0), w(tri.p1), w(tri.p2));
-    Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32)
+    narrow(closest_point_f64_ericson(
+        widen(p),
+        widen(tri.p0),
+        widen(tri.p1),
+        widen(tri.p2),
+    ))
 }
 
-fn closest_point_f64_ericson(p: P64, a: P64, b: P64, c: P64) -> P64 {
-    let ab = sub3(b, a);
-    let ac = sub3(c, a);
-    let ap = sub3(p, a);
-    let d1 = dot3(ab, ap);
-    let d2 = dot3(ac, ap);
+fn closest_point_f64_ericson(p: V64, a: V64, b: V64, c: V64) -> V64 {
+    let ab = sub(b, a);
+    let ac = sub(c, a);
+    let ap = sub(p, a);
+    let d1 = dot(ab, ap);
+    let d2 = dot(ac, ap);
     if d1 <= 0.0 && d2 <= 0.0 {
         return a;
     }
-    let bp = sub3(p, b);
-    let d3 = dot3(ab, bp);
-    let d4 = dot3(ac, bp);
+    let bp = sub(p, b);
+    let d3 = dot(ab, bp);
+    let d4 = dot(ac, bp);
     if d3 >= 0.0 && d4 <= d3 {
         return b;
     }
-    let cp = sub3(p, c);
-    let d5 = dot3(ab, cp);
-    let d6 = dot3(ac, cp);
+    let cp = sub(p, c);
+    let d5 = dot(ab, cp);
+    let d6 = dot(ac, cp);
     if d6 >= 0.0 && d5 <= d6 {
         return c;
     }
@@ -139,16 +123,16 @@ fn closest_point_f64_ericson(p: P64, a: P64, b: P64, c: P64) -> P64 {
         return nearer(p, nearer(p, e0, e1), e2);
     }
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return add3(a, scale3(ab, d1 / (d1 - d3)));
+        return add(a, scale(ab, d1 / (d1 - d3)));
     }
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return add3(a, scale3(ac, d2 / (d2 - d6)));
+        return add(a, scale(ac, d2 / (d2 - d6)));
     }
     if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
-        return add3(b, scale3(sub3(c, b), (d4 - d3) / ((d4 - d3) + (d5 - d6))));
+        return add(b, scale(sub(c, b), (d4 - d3) / ((d4 - d3) + (d5 - d6))));
     }
     let inv = 1.0 / sum;
-    add3(add3(a, scale3(ab, vb * inv)), scale3(ac, vc * inv))
+    add(add(a, scale(ab, vb * inv)), scale(ac, vc * inv))
 }
 
 /// The prelude's `bounds(tri)`.
@@ -182,24 +166,6 @@ pub fn closest_point_brute(tris: &[Triangle], p: Vec3, radius: f32) -> ClosestPo
     }
 }
 
-type V64 = [f64; 3];
-
-fn sub(a: V64, b: V64) -> V64 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot(a: V64, b: V64) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn axpy(a: V64, d: V64, t: f64) -> V64 {
-    [a[0] + d[0] * t, a[1] + d[1] * t, a[2] + d[2] * t]
-}
-
-fn wide(v: Vec3) -> V64 {
-    [f64::from(v.x), f64::from(v.y), f64::from(v.z)]
-}
-
 fn segment64(p: V64, a: V64, b: V64) -> V64 {
     let ab = sub(b, a);
     let len2 = dot(ab, ab);
@@ -213,7 +179,7 @@ fn segment64(p: V64, a: V64, b: V64) -> V64 {
 /// edges and, when the projection of `p` falls inside, to the plane (no Voronoi-region
 /// decisions, so no cancellation decides a region).
 pub fn triangle_distance_f64(p: Vec3, tri: &Triangle) -> f64 {
-    let (p, a, b, c) = (wide(p), wide(tri.p0), wide(tri.p1), wide(tri.p2));
+    let (p, a, b, c) = (widen(p), widen(tri.p0), widen(tri.p1), widen(tri.p2));
     let mut best = f64::INFINITY;
     for (u, v) in [(a, b), (b, c), (c, a)] {
         let q = segment64(p, u, v);

@@ -10,6 +10,7 @@
 //! `x`); [`collide_brute`] tests all pairs (small inputs); [`rotated`] makes the paper's
 //! rotated copy of a scene.
 
+use super::v64::{cross, dot, sub, widen, V64};
 use crate::geom::{Aabb, Triangle, Vec3};
 
 /// The prelude's `intersects(Triangle, Triangle)`: no candidate axis separates them (face
@@ -18,20 +19,9 @@ use crate::geom::{Aabb, Triangle, Vec3};
 /// inputs cannot overflow it, so nothing is NaN and the order of the `min`/`max` folds does not
 /// matter). Generated code computes exactly this.
 pub fn triangles_intersect(a: &Triangle, b: &Triangle) -> bool {
-    type V = [f64; 3];
-    let v = |p: Vec3| [f64::from(p.x), f64::from(p.y), f64::from(p.z)];
-    let sub = |x: V, y: V| [x[0] - y[0], x[1] - y[1], x[2] - y[2]];
-    let cross = |x: V, y: V| {
-        [
-            x[1] * y[2] - x[2] * y[1],
-            x[2] * y[0] - x[0] * y[2],
-            x[0] * y[1] - x[1] * y[0],
-        ]
-    };
-    let dot = |x: V, y: V| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
-    let pa = [v(a.p0), v(a.p1), v(a.p2)];
-    let pb = [v(b.p0), v(b.p1), v(b.p2)];
-    let separated = |axis: V| {
+    let pa = [widen(a.p0), widen(a.p1), widen(a.p2)];
+    let pb = [widen(b.p0), widen(b.p1), widen(b.p2)];
+    let separated = |axis: V64| {
         let (amin, amax) = pa
             .iter()
             .map(|&p| dot(axis, p))
