@@ -1,6 +1,6 @@
 //! The library's programs type-check with zero diagnostics: the prelude, then every other
-//! `library/*.scion` and `library/*/*.scion` file (each after the prelude, a layout also after
-//! the algorithm files, which declare the tree types beyond the prelude's that layouts realize;
+//! `library/*.scion` and `library/*/*.scion` file (each after the prelude, an algorithm with the
+//! algorithm files declaring the tree types it names, a layout also after the algorithm files, which declare the tree types beyond the prelude's that layouts realize;
 //! and the prelude with all the algorithm files together, as the registry compiles them with
 //! each layout), and the `lit-tests` inputs that are meant to compile. Layout files are
 //! alternatives to one another and are never compiled together: each may name its helpers as
@@ -22,6 +22,31 @@ fn scion_files(dir: &Path, depth: usize, out: &mut Vec<PathBuf>) {
             out.push(p);
         }
     }
+}
+
+/// The types `text` declares (`type NAME`).
+fn declared_types(text: &str) -> Vec<String> {
+    text.lines()
+        .filter_map(|l| l.trim_start().strip_prefix("type "))
+        .filter_map(|rest| {
+            let name: String = rest
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect();
+            (!name.is_empty()).then_some(name)
+        })
+        .collect()
+}
+
+/// Whether `text` names type `ty` without declaring it.
+fn names_type(text: &str, ty: &str) -> bool {
+    let word = |c: char| c.is_alphanumeric() || c == '_';
+    !declared_types(text).iter().any(|t| t == ty)
+        && text.match_indices(ty).any(|(i, _)| {
+            let before = text[..i].chars().next_back().is_none_or(|c| !word(c));
+            let after = text[i + ty.len()..].chars().next().is_none_or(|c| !word(c));
+            before && after
+        })
 }
 
 fn root() -> PathBuf {
@@ -52,6 +77,12 @@ fn library_files_type_check() {
         let mut inputs = vec![("prelude.scion", PRELUDE)];
         if name.contains("/layouts/") {
             inputs.extend(algorithms.iter().copied());
+        } else {
+            // An algorithm over another file's tree type comes with that file, as the registry
+            // compiles it (`closest_point8.scion` with `closest_hit8.scion`'s `BVH8`).
+            inputs.extend(algorithms.iter().copied().filter(|(other, t)| {
+                other != name && declared_types(t).iter().any(|ty| names_type(text, ty))
+            }));
         }
         inputs.push((name, text));
         let (_, typed, diags, sm) = check_files(&inputs);
