@@ -16,6 +16,7 @@ mod gpu;
 mod io;
 mod list;
 mod quant_error;
+mod render;
 mod run;
 mod run_gpu;
 mod trace;
@@ -59,6 +60,78 @@ enum Command {
     /// List the library's layouts (library/layouts/*.scion): the name --layout takes, the
     /// layout, the sum type it realizes, the closest hit compiled for it, how it stores boxes.
     Layouts(LayoutsArgs),
+    /// Render a PNG of a scene through any layout and backend: one primary ray per pixel from
+    /// the camera `scion trace` uses, each hit checked against the reference, shaded by the hit
+    /// triangle's normal. Every layout that returns the reference's hits draws the same bytes.
+    Render(RenderArgs),
+}
+
+/// How `scion render` colours a hit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ShadingArg {
+    /// The hit triangle's normal as a colour (x, y, z from [-1, 1] to red, green, blue).
+    Normals,
+    /// Grey, lit from the camera (the cosine between the ray and the normal).
+    Diffuse,
+}
+
+impl ShadingArg {
+    /// The name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            ShadingArg::Normals => "normals",
+            ShadingArg::Diffuse => "diffuse",
+        }
+    }
+}
+
+/// Arguments of `scion render`.
+#[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Examples:\n  scion render --scene bunny -o bunny.png\n  scion render \
+                        --scene fzk_haus --layout bvh8-q8-ci --shading diffuse --width 1024 \
+                        --height 768 -o haus.png"
+)]
+pub struct RenderArgs {
+    /// The scene: an OBJ file (plain or `.obj.gz`) or a library scene's name (teapot, pine,
+    /// suzanne, balloon, fzk_haus, sponza_dabrovic, bunny, engine, cruiser_cg57, dragon).
+    #[arg(long, value_name = "PATH.obj|NAME")]
+    pub scene: PathBuf,
+    /// The layout: a library layout's name (`scion layouts`) or `PATH.scion[:NAME]`.
+    #[arg(long)]
+    pub layout: Option<String>,
+    /// The closest hit to run (default: the library's over the layout's type), a function
+    /// name or `PATH.scion[:FUNCTION]`.
+    #[arg(long)]
+    pub algorithm: Option<String>,
+    /// The code generator.
+    #[arg(long, value_enum, default_value = "llvm")]
+    pub backend: RunBackend,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 640, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub width: u32,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 480, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub height: u32,
+    /// How hits are coloured.
+    #[arg(long, value_enum, default_value = "normals")]
+    pub shading: ShadingArg,
+    /// Tree builder.
+    #[arg(long, value_enum, default_value = "sah")]
+    pub builder: BuilderArg,
+    /// Largest leaf of the SAH and FCPW builders (1..=15; default 15 for sah, 4 for fcpw).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=15))]
+    pub leaf_size: Option<u32>,
+    /// Threads (0: one per core).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Entries of the traversal's explicit stack (default 64, or 512 where visits push all
+    /// their calls).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
+    pub stack_size: Option<u32>,
+    /// The PNG to write.
+    #[arg(short = 'o', long = "output", value_name = "IMAGE.png")]
+    pub output: PathBuf,
 }
 
 /// The code generators of `scion run`.
@@ -360,6 +433,7 @@ fn main() -> ExitCode {
     let result = match &mut cli.command {
         Command::Trace(args) => preflight(args).and_then(|()| trace::run(args)),
         Command::Layouts(args) => list::run(args),
+        Command::Render(args) => preflight_render(args).and_then(|()| render::run(args)),
         Command::Run(args) => preflight_run(args).and_then(|()| run::run(args)),
         Command::Ptx(args) => check_gpu_cpu(args.cpu.as_deref())
             .and_then(|()| io::check_output("-o", &args.output, &[]))
@@ -420,6 +494,17 @@ fn preflight_run(args: &mut RunArgs) -> Result<(), CliError> {
         None => args.n,
     };
     io::check_memory(&format!("{n} queries and their answers"), n * (32 + 2 * 20))
+}
+
+/// What `scion render` checks before the long work: the scene (a path or a library scene's
+/// name), the threads, the image (not the scene, writable), the memory of its rays and hits.
+fn preflight_render(args: &mut RenderArgs) -> Result<(), CliError> {
+    args.scene = scion_runtime::scene::manifest::resolve(&args.scene)
+        .map_err(|e| CliError::new(format!("--scene {}: {e}", args.scene.display())))?;
+    io::check_threads(args.threads)?;
+    io::check_output("-o", &args.output, &[("--scene", &args.scene)])?;
+    let n = u64::from(args.width) * u64::from(args.height);
+    io::check_memory(&format!("{n} pixels' rays and hits"), n * (32 + 8 + 3))
 }
 
 /// What `scion trace` checks before the long work: the scene (a path or a library scene's
