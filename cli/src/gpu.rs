@@ -100,7 +100,7 @@ pub fn run_ptx(args: &PtxArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-fn write_kit(kit: &PtxKit, path: &Path) -> Result<(), CliError> {
+pub(crate) fn write_kit(kit: &PtxKit, path: &Path) -> Result<(), CliError> {
     crate::io::write_whole(path, kit.ptx.as_bytes())
         .map_err(|e| CliError::new(format!("cannot write {}: {e}", path.display())))?;
     outln!(

@@ -12,14 +12,17 @@
 
 mod bar;
 mod collide;
+mod explore;
 mod gpu;
 mod io;
 mod list;
+mod plot;
 mod quant_error;
 mod render;
 mod run;
 mod run_gpu;
 mod trace;
+mod tune;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
@@ -64,6 +67,172 @@ enum Command {
     /// the camera `scion trace` uses, each hit checked against the reference, shaded by the hit
     /// triangle's normal. Every layout that returns the reference's hits draws the same bytes.
     Render(RenderArgs),
+    /// Sweep the design space: scenes × query kinds × query sets × sizes × backends × every
+    /// library layout with an entry of the kind, timed by the paper's method and checked, one
+    /// CSV row per measurement (resumable: a rerun skips what the file has), then optionally
+    /// Pareto plots of time against memory and of speed against error (`--plots DIR`).
+    Explore(ExploreArgs),
+    /// Choose the layout for one scene and query kind ("model only what a scene needs"): every
+    /// candidate measured as `scion explore` does, the Pareto frontier of time against memory,
+    /// the fastest (or the fastest within a memory budget, or the smallest within a slowdown),
+    /// why, and optionally its compiled code (`--emit obj|ptx|header`).
+    Tune(TuneArgs),
+}
+
+/// What `scion tune` writes for its choice.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum TuneEmit {
+    /// A host object file with the entries (x86-64 or AArch64, LLVM -O3).
+    Obj,
+    /// A PTX kit for `scion trace --device gpu --ptx` and `scion-gpu`.
+    Ptx,
+    /// The C header of the entries.
+    Header,
+}
+
+/// Arguments of `scion tune`.
+#[derive(clap::Args, Debug)]
+#[command(after_help = "Examples:\n  scion tune --scene bunny --algorithm closest-hit\n  scion tune \
+                        --scene fzk_haus --algorithm closest-point --max-bytes-per-triangle 40 \
+                        --emit obj -o chosen.o")]
+pub struct TuneArgs {
+    /// The scene (a path or a library scene's name).
+    #[arg(long, value_name = "PATH.obj|NAME")]
+    pub scene: PathBuf,
+    /// The query kind: closest-hit, any-hit or closest-point.
+    #[arg(long, default_value = "closest-hit")]
+    pub algorithm: String,
+    /// The rays of a hit kind.
+    #[arg(long, value_enum, default_value = "primary")]
+    pub rays: TuneRays,
+    /// Queries per measurement (`N` or `2^K`).
+    #[arg(long, default_value = "65536", value_parser = parse_size)]
+    pub n: usize,
+    /// The code generator.
+    #[arg(long, value_enum, default_value = "llvm")]
+    pub backend: RunBackend,
+    /// Threads (0: one per core).
+    #[arg(long, default_value_t = 1)]
+    pub threads: usize,
+    /// Timed runs per layout (9: the paper's method).
+    #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub runs: u32,
+    /// Candidates, comma-separated (default: every library layout with an entry of the kind).
+    #[arg(long, value_delimiter = ',')]
+    pub layouts: Option<Vec<String>>,
+    /// Choose the fastest layout within this many bytes per triangle.
+    #[arg(long, value_name = "B")]
+    pub max_bytes_per_triangle: Option<f64>,
+    /// Choose the smallest layout within this factor of the fastest's time (e.g. 1.1).
+    #[arg(long, value_name = "X", value_parser = parse_slowdown)]
+    pub max_slowdown: Option<f64>,
+    /// Where the measurements are kept (an explore CSV; default a file in the temporary
+    /// folder): a second call reuses them.
+    #[arg(long, value_name = "RESULTS.csv")]
+    pub results: Option<PathBuf>,
+    /// Also compile the chosen layout's entries.
+    #[arg(long, value_enum)]
+    pub emit: Option<TuneEmit>,
+    /// Where `--emit` writes.
+    #[arg(short = 'o', long = "output", value_name = "FILE")]
+    pub output: Option<PathBuf>,
+}
+
+/// The rays `scion tune` measures with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum TuneRays {
+    /// Camera rays.
+    Primary,
+    /// Rays of uniform origins and directions in the scene's box.
+    Secondary,
+}
+
+impl TuneRays {
+    /// The name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            TuneRays::Primary => "primary",
+            TuneRays::Secondary => "secondary",
+        }
+    }
+}
+
+fn parse_slowdown(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x >= 1.0 && x.is_finite() => Ok(x),
+        _ => Err(format!("`{s}`: a slowdown is a factor of at least 1 (1.1: 10 % slower)")),
+    }
+}
+
+/// Parses a size: `N` or `2^K`.
+fn parse_size(s: &str) -> Result<usize, String> {
+    let n = match s.strip_prefix("2^") {
+        Some(k) => {
+            let k: u32 = k.parse().map_err(|_| format!("`{s}`: 2^K needs a whole K"))?;
+            if k > 30 {
+                return Err(format!("`{s}`: at most 2^30 queries"));
+            }
+            1usize << k
+        }
+        None => s
+            .parse()
+            .map_err(|_| format!("`{s}`: a size is N or 2^K"))?,
+    };
+    if n == 0 {
+        return Err("a size of 0 queries measures nothing".into());
+    }
+    Ok(n)
+}
+
+/// Arguments of `scion explore`.
+#[derive(clap::Args, Debug)]
+#[command(after_help = "Examples:\n  scion explore --scenes teapot,bunny --layouts pbrt,pbrt-q16,bvh8 \
+                        -o explore.csv --plots docs/explore\n  scion explore --kinds \
+                        closest-hit,closest-point --sizes 2^18,2^20 -o all.csv\n\nColumns: \
+                        docs/benchmarks.md, \"Design-space exploration\".")]
+pub struct ExploreArgs {
+    /// Scenes, comma-separated (paths or library scene names; default: the ten library scenes).
+    #[arg(long, value_delimiter = ',')]
+    pub scenes: Option<Vec<String>>,
+    /// Layouts, comma-separated library names (default: every library layout; each kind runs
+    /// on those with an entry of the kind over their type).
+    #[arg(long, value_delimiter = ',')]
+    pub layouts: Option<Vec<String>>,
+    /// Query kinds, comma-separated: closest-hit, any-hit, closest-point.
+    #[arg(long, value_delimiter = ',', default_value = "closest-hit")]
+    pub kinds: Vec<String>,
+    /// Ray sets of the hit kinds, comma-separated: primary, secondary (closest points use
+    /// points uniform in the scene's box).
+    #[arg(long, value_delimiter = ',', default_value = "primary,secondary")]
+    pub rays: Vec<String>,
+    /// Queries per measurement, comma-separated, `N` or `2^K` (the paper sweeps 2^18 to 2^23).
+    #[arg(long, value_delimiter = ',', default_value = "65536", value_parser = parse_size)]
+    pub sizes: Vec<usize>,
+    /// Code generators, comma-separated: llvm, jit.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "llvm")]
+    pub backends: Vec<RunBackend>,
+    /// Threads (0: one per core).
+    #[arg(long, default_value_t = 1)]
+    pub threads: usize,
+    /// Timed runs per measurement (9: the paper's method).
+    #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub runs: u32,
+    /// Tree builder.
+    #[arg(long, value_enum, default_value = "sah")]
+    pub builder: BuilderArg,
+    /// Largest leaf of the SAH and FCPW builders (1..=15; default 15 for sah, 4 for fcpw).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=15))]
+    pub leaf_size: Option<u32>,
+    /// Entries of the traversals' explicit stacks (default 64, or 512 where visits push all
+    /// their calls).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
+    pub stack_size: Option<u32>,
+    /// The results CSV: rows are appended; a rerun skips the measurements it has.
+    #[arg(short = 'o', long = "output", value_name = "RESULTS.csv", default_value = "explore.csv")]
+    pub output: PathBuf,
+    /// Also draw the plots of every context in the file (SVG) and their index.md into DIR.
+    #[arg(long, value_name = "DIR")]
+    pub plots: Option<PathBuf>,
 }
 
 /// How `scion render` colours a hit.
@@ -434,6 +603,8 @@ fn main() -> ExitCode {
         Command::Trace(args) => preflight(args).and_then(|()| trace::run(args)),
         Command::Layouts(args) => list::run(args),
         Command::Render(args) => preflight_render(args).and_then(|()| render::run(args)),
+        Command::Explore(args) => io::check_threads(args.threads).and_then(|()| explore::run(args)),
+        Command::Tune(args) => preflight_tune(args).and_then(|()| tune::run(args)),
         Command::Run(args) => preflight_run(args).and_then(|()| run::run(args)),
         Command::Ptx(args) => check_gpu_cpu(args.cpu.as_deref())
             .and_then(|()| io::check_output("-o", &args.output, &[]))
@@ -494,6 +665,17 @@ fn preflight_run(args: &mut RunArgs) -> Result<(), CliError> {
         None => args.n,
     };
     io::check_memory(&format!("{n} queries and their answers"), n * (32 + 2 * 20))
+}
+
+/// What `scion tune` checks first: the scene (resolved to a path), the threads, the output.
+fn preflight_tune(args: &mut TuneArgs) -> Result<(), CliError> {
+    args.scene = scion_runtime::scene::manifest::resolve(&args.scene)
+        .map_err(|e| CliError::new(format!("--scene {}: {e}", args.scene.display())))?;
+    io::check_threads(args.threads)?;
+    if let Some(out) = &args.output {
+        io::check_output("-o", out, &[("--scene", &args.scene)])?;
+    }
+    Ok(())
 }
 
 /// What `scion render` checks before the long work: the scene (a path or a library scene's

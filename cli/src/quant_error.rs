@@ -95,6 +95,60 @@ fn extra(more: u64, base: u64) -> String {
     format!("{:+.1} %", (more as f64 / base as f64 - 1.0) * 100.0)
 }
 
+/// What a quantized layout's boxes cost on some rays: the inflation of its decoded boxes and
+/// the reference traversal's work over them and over the exact ones.
+pub struct QuantError {
+    /// Decoded against exact boxes.
+    pub inflation: Inflation,
+    /// The work over the decoded boxes.
+    pub decoded: TraversalStats,
+    /// The work over the exact boxes.
+    pub exact: TraversalStats,
+}
+
+impl QuantError {
+    /// `decoded / exact - 1` of the box tests, node visits and triangle tests.
+    pub fn extra(&self) -> [f64; 3] {
+        let r = |d: u64, e: u64| if e > 0 { d as f64 / e as f64 - 1.0 } else { 0.0 };
+        [
+            r(self.decoded.boxes_tested, self.exact.boxes_tested),
+            r(self.decoded.nodes_visited, self.exact.nodes_visited),
+            r(self.decoded.triangles_tested, self.exact.triangles_tested),
+        ]
+    }
+}
+
+/// What `boxes` cost against the exact boxes of `tree` on `rays`: over the binary tree for a
+/// layout quantized against one frame, over the tree collapsed to eight children for one that
+/// quantizes each node's children (`Boxes::node_codes`); `None` for exact boxes.
+pub fn measure(
+    boxes: scion_host::quantized::Boxes,
+    tree: &LogicalTree,
+    rays: &[scion_runtime::geom::Ray],
+    driver: &scion_runtime::batch::BatchDriver,
+) -> Option<QuantError> {
+    use scion_host::quantized::{Boxes, DecodedTree};
+    use scion_runtime::reference::{closest_hits_tree_stats, closest_hits_wide_stats};
+    if matches!(boxes, Boxes::Exact) {
+        return None;
+    }
+    if boxes.node_codes().is_some() {
+        let w8 = scion_runtime::bvh::wide::collapse::<8>(tree);
+        let decoded = scion_host::quantized::decoded_wide(boxes, &w8);
+        return Some(QuantError {
+            inflation: inflation_wide(&w8, &decoded),
+            decoded: closest_hits_wide_stats(&decoded, &tree.primitives, rays, driver),
+            exact: closest_hits_wide_stats(&w8, &tree.primitives, rays, driver),
+        });
+    }
+    let traversed = boxes.decoded_tree(tree);
+    Some(QuantError {
+        inflation: inflation(tree, &traversed),
+        decoded: closest_hits_tree_stats(&traversed, rays, driver),
+        exact: closest_hits_tree_stats(tree, rays, driver),
+    })
+}
+
 /// The report's lines: the boxes, then the extra work against the exact tree.
 pub fn report(i: &Inflation, decoded: &TraversalStats, exact: &TraversalStats) -> [String; 2] {
     [

@@ -36,6 +36,12 @@ pub mod target;
 pub mod translate;
 
 pub use jit::{JitModule, Llvm};
+
+/// The version of the LLVM library linked in (`major.minor.patch`).
+pub fn llvm_version() -> String {
+    let (a, b, c) = inkwell::support::get_llvm_version();
+    format!("{a}.{b}.{c}")
+}
 pub use target::Target;
 
 use inkwell::context::Context;

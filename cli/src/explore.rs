@@ -1,0 +1,507 @@
+//! `scion explore`: the design space swept (paper §9.2): every scene × query kind × query set
+//! (primary or secondary rays, points) × size × backend × layout that has an entry of the kind,
+//! each timed by the paper's method on the same queries and checked against the reference,
+//! one CSV row per measurement (`ROW_FIELDS`), appended and flushed as it comes. A rerun with
+//! the same output skips the rows already there (the key: scene, kind, queries, size, backend,
+//! threads, builder, layout), so a sweep stopped halfway resumes; rows of another commit are
+//! kept and measured again. Every row carries the machine, the commit and the toolchain.
+//!
+//! Per row: the packed bytes and bytes per triangle, the mean time of the middle runs, the
+//! time per query and the throughput, whether the answers equal the reference, and for a
+//! quantized layout its speed against error: the decoded boxes' surface area over the exact
+//! ones', and the extra box tests and node visits of the reference traversal over them
+//! (`crate::quant_error`). Trees are built once per scene, entries compiled once per layout,
+//! kind and backend. `--plots DIR` then draws the results (`crate::plot`).
+
+use crate::io::outln;
+use crate::trace::{build_with, timed};
+use crate::{CliError, ExploreArgs, RunBackend};
+use scion_host::entries::Entries;
+use scion_host::jit::Codegen;
+use scion_host::library::{self, resolve_kind, QueryKind, Resolved};
+use scion_host::quantized::DecodedTree;
+use scion_host::queries::{uniform_points, Queries};
+use scion_runtime::batch::BatchDriver;
+use scion_runtime::bvh::LogicalTree;
+use scion_runtime::query::{primary_rays_n, secondary_rays};
+use scion_runtime::scene::{load_obj, Scene};
+use std::collections::{BTreeMap, BTreeSet};
+use std::io::Write;
+use std::path::Path;
+
+/// The CSV's columns, in order.
+pub const ROW_FIELDS: [&str; 24] = [
+    "commit",
+    "machine",
+    "cpus",
+    "toolchain",
+    "date",
+    "scene",
+    "triangles",
+    "kind",
+    "queries",
+    "n",
+    "backend",
+    "threads",
+    "builder",
+    "layout",
+    "bytes",
+    "bytes_per_triangle",
+    "seconds",
+    "ns_per_query",
+    "mqueries_per_s",
+    "check",
+    "area_inflation",
+    "extra_box_tests",
+    "extra_node_visits",
+    "runs",
+];
+
+/// The columns that identify a measurement (a rerun skips a key already present).
+const KEY_FIELDS: [&str; 8] = [
+    "scene", "kind", "queries", "n", "backend", "threads", "builder", "layout",
+];
+
+/// One measurement's fields, by column name.
+pub type Row = BTreeMap<String, String>;
+
+/// Reads the rows of a results CSV (`None` when there is no such file).
+pub fn read_rows(path: &Path) -> Result<Option<Vec<Row>>, CliError> {
+    let text = match std::fs::read_to_string(path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(CliError::new(format!("cannot read {}: {e}", path.display()))),
+    };
+    let mut lines = text.lines();
+    let Some(header) = lines.next() else {
+        return Ok(Some(Vec::new()));
+    };
+    let names: Vec<&str> = header.split(',').collect();
+    if names != ROW_FIELDS {
+        return Err(CliError::new(format!(
+            "{}: not a results file of this version of `scion explore` (its header is `{header}`); \
+             give another -o",
+            path.display()
+        )));
+    }
+    let mut rows = Vec::new();
+    for (k, line) in lines.enumerate() {
+        let cells = split_csv(line);
+        if cells.len() != names.len() {
+            return Err(CliError::new(format!(
+                "{}:{}: {} fields where the header has {}",
+                path.display(),
+                k + 2,
+                cells.len(),
+                names.len()
+            )));
+        }
+        rows.push(names.iter().map(|n| n.to_string()).zip(cells).collect());
+    }
+    Ok(Some(rows))
+}
+
+/// A CSV line's fields (double quotes around a field with a comma or a quote, `""` inside).
+fn split_csv(line: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut cur = String::new();
+    let mut quoted = false;
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match (c, quoted) {
+            ('"', true) if chars.peek() == Some(&'"') => {
+                cur.push('"');
+                chars.next();
+            }
+            ('"', _) => quoted = !quoted,
+            (',', false) => out.push(std::mem::take(&mut cur)),
+            _ => cur.push(c),
+        }
+    }
+    out.push(cur);
+    out
+}
+
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\"").replace('\n', " "))
+    } else {
+        s.to_string()
+    }
+}
+
+fn key(row: &Row) -> Vec<String> {
+    KEY_FIELDS
+        .iter()
+        .map(|f| row.get(*f).cloned().unwrap_or_default())
+        .collect()
+}
+
+/// The machine, the commit and the toolchain, for every row.
+struct Provenance {
+    commit: String,
+    machine: String,
+    cpus: String,
+    toolchain: String,
+}
+
+fn provenance() -> Provenance {
+    let commit = std::process::Command::new("git")
+        .args(["rev-parse", "--short", "HEAD"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_else(|| "unknown".into());
+    let machine = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string());
+    let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
+    Provenance {
+        commit,
+        machine,
+        cpus: cpus.to_string(),
+        toolchain: format!(
+            "scion {} LLVM {}",
+            env!("CARGO_PKG_VERSION"),
+            scion_llvm::llvm_version()
+        ),
+    }
+}
+
+/// A sweep's plan: what to measure, in order.
+struct Job {
+    scene: String,
+    kind: QueryKind,
+    queries: &'static str,
+    n: usize,
+    backend: RunBackend,
+    layout: String,
+}
+
+fn backend_name(b: RunBackend) -> &'static str {
+    match b {
+        RunBackend::Jit => "cranelift",
+        RunBackend::Llvm => "llvm-O3",
+    }
+}
+
+/// The query sets of a kind: rays for hits, points for closest points.
+fn query_sets(kind: QueryKind, rays: &[String]) -> Vec<&'static str> {
+    match kind {
+        QueryKind::ClosestPoint => vec!["points"],
+        _ => rays
+            .iter()
+            .filter_map(|r| match r.as_str() {
+                "primary" => Some("primary"),
+                "secondary" => Some("secondary"),
+                _ => None,
+            })
+            .collect(),
+    }
+}
+
+fn make_queries(kind: QueryKind, set: &str, scene: &Scene, n: usize) -> Result<Queries, String> {
+    let b = scene.bounds();
+    Ok(match set {
+        "points" => Queries::points(uniform_points(b.low, b.high, n, 1)),
+        "primary" => Queries::rays(
+            kind,
+            primary_rays_n(b, n as u64, 1).ok_or("no rays for that many queries")?,
+        ),
+        _ => Queries::rays(kind, secondary_rays(b, n, 1)),
+    })
+}
+
+/// The library layouts with an entry of `kind` over their type, by command-line name.
+fn layouts_of(kind: QueryKind, names: &[String]) -> Vec<String> {
+    names
+        .iter()
+        .filter(|n| resolve_kind(n, None, kind).is_ok())
+        .cloned()
+        .collect()
+}
+
+/// Runs `scion explore`.
+pub fn run(args: &ExploreArgs) -> Result<(), CliError> {
+    let kinds: Vec<QueryKind> = args
+        .kinds
+        .iter()
+        .map(|k| {
+            QueryKind::BATCHED
+                .into_iter()
+                .find(|q| q.name() == k)
+                .ok_or_else(|| {
+                    CliError::usage(format!(
+                        "--kinds: `{k}` is not a batched query kind (closest-hit, any-hit, closest-point)"
+                    ))
+                })
+        })
+        .collect::<Result<_, _>>()?;
+    let all_layouts = library::layout_names();
+    let layout_names: Vec<String> = match &args.layouts {
+        Some(l) => {
+            for name in l {
+                if !all_layouts.contains(name) && !name.ends_with(".scion") {
+                    return Err(CliError::usage(format!(
+                        "--layouts: unknown layout `{name}`: the library's are {}",
+                        all_layouts.join(", ")
+                    )));
+                }
+            }
+            l.clone()
+        }
+        None => all_layouts,
+    };
+    let scenes: Vec<String> = match &args.scenes {
+        Some(s) => s.clone(),
+        None => scion_runtime::scene::manifest::REAL_SCENES
+            .iter()
+            .map(|s| s.name.to_string())
+            .collect(),
+    };
+    let existing = read_rows(&args.output)?;
+    let done: BTreeSet<Vec<String>> = existing.iter().flatten().map(key).collect();
+    let threads = args.threads.to_string();
+    let builder = args.builder.describe(args.leaf_size);
+
+    // The plan, in the order it runs (scene by scene, so each tree is built once).
+    let mut jobs = Vec::new();
+    let mut layouts_by_kind = BTreeMap::new();
+    for kind in &kinds {
+        layouts_by_kind.insert(kind.name(), layouts_of(*kind, &layout_names));
+    }
+    for scene in &scenes {
+        for kind in &kinds {
+            for set in query_sets(*kind, &args.rays) {
+                for &n in &args.sizes {
+                    for &backend in &args.backends {
+                        for layout in &layouts_by_kind[kind.name()] {
+                            let job = Job {
+                                scene: scene.clone(),
+                                kind: *kind,
+                                queries: set,
+                                n,
+                                backend,
+                                layout: layout.clone(),
+                            };
+                            let k = vec![
+                                job.scene.clone(),
+                                kind.name().to_string(),
+                                set.to_string(),
+                                n.to_string(),
+                                backend_name(backend).to_string(),
+                                threads.clone(),
+                                builder.clone(),
+                                layout.clone(),
+                            ];
+                            if !done.contains(&k) {
+                                jobs.push(job);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let total = jobs.len();
+    outln!(
+        "explore      {total} measurements to make ({} already in {})",
+        done.len(),
+        args.output.display()
+    );
+    if total > 0 {
+        sweep(args, jobs, existing.is_none(), &threads, &builder)?;
+    }
+    if let Some(dir) = &args.plots {
+        let rows = read_rows(&args.output)?.unwrap_or_default();
+        let written = crate::plot::write_all(&rows, dir)?;
+        outln!("plots        {} files in {}", written, dir.display());
+    }
+    Ok(())
+}
+
+fn sweep(
+    args: &ExploreArgs,
+    jobs: Vec<Job>,
+    new_file: bool,
+    threads: &str,
+    builder: &str,
+) -> Result<(), CliError> {
+    let prov = provenance();
+    let open = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&args.output);
+    let mut out = open
+        .map_err(|e| CliError::new(format!("cannot write {}: {e}", args.output.display())))?;
+    let write_err = |e: std::io::Error| {
+        CliError::new(format!("cannot write {}: {e}", args.output.display()))
+    };
+    if new_file {
+        writeln!(out, "{}", ROW_FIELDS.join(",")).map_err(write_err)?;
+    }
+    let bar = indicatif::ProgressBar::new(jobs.len() as u64);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "scion: {bar:40} {pos}/{len} measurements ({elapsed} elapsed, about {eta} left) {msg}",
+    ) {
+        bar.set_style(style);
+    }
+    let driver = BatchDriver::new(args.threads).map_err(CliError::new)?;
+    let mut compiled: BTreeMap<(String, &'static str, &'static str), (Entries, Resolved)> =
+        BTreeMap::new();
+    let mut scene_cache: Option<(String, Scene, LogicalTree)> = None;
+    let mut queries_cache: Option<((String, &'static str, &'static str, usize), Queries)> = None;
+    let mut measured = 0usize;
+    for job in jobs {
+        bar.set_message(format!("{} {} {}", job.scene, job.kind.name(), job.layout));
+        if scene_cache.as_ref().is_none_or(|c| c.0 != job.scene) {
+            let path = scion_runtime::scene::manifest::resolve(Path::new(&job.scene))
+                .map_err(|e| CliError::new(format!("--scenes {}: {e}", job.scene)))?;
+            let scene = load_obj(&path)
+                .map_err(|e| CliError::new(format!("cannot load {}: {e}", job.scene)))?;
+            let tree = build_with(&scene, args.builder, args.leaf_size);
+            scene_cache = Some((job.scene.clone(), scene, tree));
+        }
+        let (_, scene, tree) = scene_cache.as_ref().expect("loaded above");
+        let qkey = (job.scene.clone(), job.kind.name(), job.queries, job.n);
+        if queries_cache.as_ref().is_none_or(|c| c.0 != qkey) {
+            let q = make_queries(job.kind, job.queries, scene, job.n).map_err(CliError::new)?;
+            queries_cache = Some((qkey, q));
+        }
+        let (_, queries) = queries_cache.as_ref().expect("made above");
+        let ckey = (job.layout.clone(), job.kind.name(), backend_name(job.backend));
+        if !compiled.contains_key(&ckey) {
+            let resolved = resolve_kind(&job.layout, None, job.kind).map_err(CliError::new)?;
+            let codegen = match job.backend {
+                RunBackend::Jit => Codegen::Cranelift,
+                RunBackend::Llvm => Codegen::Llvm(3),
+            };
+            let entries = Entries::compile(&resolved.program, codegen, args.stack_size)
+                .map_err(|e| CliError::new(format!("cannot compile for {}: {e}", job.layout)))?;
+            compiled.insert(ckey.clone(), (entries, resolved));
+        }
+        let (entries, resolved) = &compiled[&ckey];
+        let packed = entries.pack(tree).map_err(CliError::new)?;
+        let init = queries.initial_results();
+        let (results, timing) = timed(args.runs, || {
+            let mut r = init.clone();
+            entries
+                .run(&packed, &queries.bytes, &mut r, &driver)
+                .map_err(|e| CliError::new(format!("{} on {}: {e}", job.layout, job.scene)))?;
+            Ok(r)
+        })?;
+        let check = match queries.check(
+            &scene.triangles,
+            &resolved.boxes.decoded_tree(tree),
+            &results,
+            1024,
+            &driver,
+        ) {
+            Ok(_) => "identical".to_string(),
+            Err(e) => {
+                bar.println(format!(
+                    "scion: warning: {} {} {} {}: {e}",
+                    job.scene,
+                    job.kind.name(),
+                    job.queries,
+                    job.layout
+                ));
+                "differs".to_string()
+            }
+        };
+        let err = match job.kind {
+            QueryKind::ClosestPoint => None,
+            _ => crate::quant_error::measure(resolved.boxes, tree, &queries.rays, &driver),
+        };
+        let n = queries.len();
+        let bytes = packed.bytes();
+        let f = |x: f64| format!("{x:.6}");
+        let row: Vec<String> = vec![
+            prov.commit.clone(),
+            prov.machine.clone(),
+            prov.cpus.clone(),
+            prov.toolchain.clone(),
+            now_utc(),
+            job.scene.clone(),
+            scene.len().to_string(),
+            job.kind.name().to_string(),
+            job.queries.to_string(),
+            job.n.to_string(),
+            backend_name(job.backend).to_string(),
+            threads.to_string(),
+            builder.to_string(),
+            job.layout.clone(),
+            bytes.to_string(),
+            f(bytes as f64 / scene.len().max(1) as f64),
+            format!("{:.9}", timing.mean.as_secs_f64()),
+            f(timing.ns_per_query(n)),
+            f(timing.queries_per_second(n) / 1e6),
+            check,
+            err.as_ref().map_or(String::new(), |e| f(e.inflation.area)),
+            err.as_ref().map_or(String::new(), |e| f(e.extra()[0])),
+            err.as_ref().map_or(String::new(), |e| f(e.extra()[1])),
+            args.runs.to_string(),
+        ];
+        let line: Vec<String> = row.iter().map(|c| csv_field(c)).collect();
+        writeln!(out, "{}", line.join(",")).map_err(write_err)?;
+        out.flush().map_err(write_err)?;
+        measured += 1;
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    outln!(
+        "results      {measured} rows appended to {}",
+        args.output.display()
+    );
+    Ok(())
+}
+
+/// The time now, `YYYY-MM-DDTHH:MM:SSZ`.
+fn now_utc() -> String {
+    let s = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let (days, rem) = (s / 86_400, s % 86_400);
+    // Civil from days (Howard Hinnant's algorithm).
+    let z = days as i64 + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!(
+        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_fields_round_trip() {
+        let cells = ["a", "b,c", "say \"hi\"", ""];
+        let line: Vec<String> = cells.iter().map(|c| csv_field(c)).collect();
+        assert_eq!(split_csv(&line.join(",")), cells);
+    }
+
+    #[test]
+    fn dates_are_civil() {
+        let d = now_utc();
+        assert_eq!(d.len(), 20, "{d}");
+        assert!(d.starts_with("20"), "{d}");
+    }
+}
