@@ -70,7 +70,12 @@ pub fn read_rows(path: &Path) -> Result<Option<Vec<Row>>, CliError> {
     let text = match std::fs::read_to_string(path) {
         Ok(t) => t,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e) => return Err(CliError::new(format!("cannot read {}: {e}", path.display()))),
+        Err(e) => {
+            return Err(CliError::new(format!(
+                "cannot read {}: {e}",
+                path.display()
+            )))
+        }
     };
     let mut lines = text.lines();
     let Some(header) = lines.next() else {
@@ -146,12 +151,24 @@ struct Provenance {
 }
 
 fn provenance() -> Provenance {
-    let commit = std::process::Command::new("git")
-        .args(["rev-parse", "--short", "HEAD"])
-        .output()
+    // The commit of the checkout the binary was built in (it lives in its target folder),
+    // else of the current folder.
+    let exe_dir = std::env::current_exe()
         .ok()
-        .filter(|o| o.status.success())
-        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .and_then(|p| p.parent().map(Path::to_path_buf));
+    let commit = exe_dir
+        .into_iter()
+        .chain(std::iter::once(std::path::PathBuf::from(".")))
+        .find_map(|dir| {
+            std::process::Command::new("git")
+                .arg("-C")
+                .arg(&dir)
+                .args(["rev-parse", "--short", "HEAD"])
+                .output()
+                .ok()
+                .filter(|o| o.status.success())
+                .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        })
         .unwrap_or_else(|| "unknown".into());
     let machine = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
@@ -174,6 +191,9 @@ fn provenance() -> Provenance {
         ),
     }
 }
+
+/// What a set of queries is made from: scene, kind, query set, size.
+type QueryKey = (String, &'static str, &'static str, usize);
 
 /// A sweep's plan: what to measure, in order.
 struct Job {
@@ -339,11 +359,10 @@ fn sweep(
         .create(true)
         .append(true)
         .open(&args.output);
-    let mut out = open
-        .map_err(|e| CliError::new(format!("cannot write {}: {e}", args.output.display())))?;
-    let write_err = |e: std::io::Error| {
-        CliError::new(format!("cannot write {}: {e}", args.output.display()))
-    };
+    let mut out =
+        open.map_err(|e| CliError::new(format!("cannot write {}: {e}", args.output.display())))?;
+    let write_err =
+        |e: std::io::Error| CliError::new(format!("cannot write {}: {e}", args.output.display()));
     if new_file {
         writeln!(out, "{}", ROW_FIELDS.join(",")).map_err(write_err)?;
     }
@@ -357,7 +376,7 @@ fn sweep(
     let mut compiled: BTreeMap<(String, &'static str, &'static str), (Entries, Resolved)> =
         BTreeMap::new();
     let mut scene_cache: Option<(String, Scene, LogicalTree)> = None;
-    let mut queries_cache: Option<((String, &'static str, &'static str, usize), Queries)> = None;
+    let mut queries_cache: Option<(QueryKey, Queries)> = None;
     let mut measured = 0usize;
     for job in jobs {
         bar.set_message(format!("{} {} {}", job.scene, job.kind.name(), job.layout));
@@ -376,7 +395,11 @@ fn sweep(
             queries_cache = Some((qkey, q));
         }
         let (_, queries) = queries_cache.as_ref().expect("made above");
-        let ckey = (job.layout.clone(), job.kind.name(), backend_name(job.backend));
+        let ckey = (
+            job.layout.clone(),
+            job.kind.name(),
+            backend_name(job.backend),
+        );
         if !compiled.contains_key(&ckey) {
             let resolved = resolve_kind(&job.layout, None, job.kind).map_err(CliError::new)?;
             let codegen = match job.backend {

@@ -83,7 +83,13 @@ fn stem(ctx: &[String]) -> String {
         .take(6)
         .map(|f| {
             f.chars()
-                .map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' })
+                .map(|c| {
+                    if c.is_ascii_alphanumeric() || c == '-' {
+                        c
+                    } else {
+                        '_'
+                    }
+                })
                 .collect::<String>()
         })
         .collect::<Vec<_>>()
@@ -215,7 +221,9 @@ pub fn write_all(rows: &[Row], dir: &Path) -> Result<usize, CliError> {
         pareto_svg(&pareto, &ctx, &points)?;
         files += 1;
         index.push_str(&format!("## {}\n\n![{s}]({s}.svg)\n\n", title(&ctx)));
-        index.push_str("| layout | bytes/triangle | ns/query | Pareto-optimal |\n|---|---:|---:|---|\n");
+        index.push_str(
+            "| layout | bytes/triangle | ns/query | Pareto-optimal |\n|---|---:|---:|---|\n",
+        );
         let front = frontier(&points);
         let mut sorted = points.clone();
         sorted.sort_by(|a, b| a.ns_per_query.total_cmp(&b.ns_per_query));
@@ -225,7 +233,11 @@ pub fn write_all(rows: &[Row], dir: &Path) -> Result<usize, CliError> {
                 p.layout,
                 p.bytes_per_triangle,
                 p.ns_per_query,
-                if front.iter().any(|q| q.layout == p.layout) { "yes" } else { "" }
+                if front.iter().any(|q| q.layout == p.layout) {
+                    "yes"
+                } else {
+                    ""
+                }
             ));
         }
         index.push('\n');

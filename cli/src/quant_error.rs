@@ -109,7 +109,13 @@ pub struct QuantError {
 impl QuantError {
     /// `decoded / exact - 1` of the box tests, node visits and triangle tests.
     pub fn extra(&self) -> [f64; 3] {
-        let r = |d: u64, e: u64| if e > 0 { d as f64 / e as f64 - 1.0 } else { 0.0 };
+        let r = |d: u64, e: u64| {
+            if e > 0 {
+                d as f64 / e as f64 - 1.0
+            } else {
+                0.0
+            }
+        };
         [
             r(self.decoded.boxes_tested, self.exact.boxes_tested),
             r(self.decoded.nodes_visited, self.exact.nodes_visited),

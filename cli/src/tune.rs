@@ -81,11 +81,7 @@ pub fn run(args: &TuneArgs) -> Result<(), CliError> {
         .into_iter()
         .filter(|(ctx, _)| ctx.iter().zip(want).all(|(a, b)| a == b))
         .flat_map(|(_, p)| p)
-        .filter(|p| {
-            args.layouts
-                .as_ref()
-                .is_none_or(|l| l.contains(&p.layout))
-        })
+        .filter(|p| args.layouts.as_ref().is_none_or(|l| l.contains(&p.layout)))
         .collect();
     let good: Vec<Point> = points.iter().filter(|p| p.identical).cloned().collect();
     if good.is_empty() {
@@ -108,9 +104,9 @@ pub fn run(args: &TuneArgs) -> Result<(), CliError> {
             ),
             None => {
                 return Err(CliError::new(format!(
-                    "no layout fits in {b} bytes per triangle: the smallest measured, {}, takes {:.1}",
-                    front[0].layout, front[0].bytes_per_triangle
-                )))
+                "no layout fits in {b} bytes per triangle: the smallest measured, {}, takes {:.1}",
+                front[0].layout, front[0].bytes_per_triangle
+            )))
             }
         }
     } else if let Some(x) = args.max_slowdown {
@@ -152,7 +148,11 @@ pub fn run(args: &TuneArgs) -> Result<(), CliError> {
             p.bytes_per_triangle,
             p.ns_per_query,
             if on { "yes" } else { "" },
-            if p.identical { "" } else { " (answers differ from the reference: not chosen)" }
+            if p.identical {
+                ""
+            } else {
+                " (answers differ from the reference: not chosen)"
+            }
         );
     }
     outln!(

@@ -1,0 +1,170 @@
+//! `scion explore` and `scion tune` end to end on a small sweep: one CSV row per measurement
+//! with the machine, commit and toolchain, answers checked, speed against error for the
+//! quantized layout; a rerun skips what the file has; plots and their index are written; tune
+//! picks the fastest, the fastest within a memory budget and the smallest within a slowdown
+//! from the same measurements, and emits the chosen layout's header and object file.
+
+mod common;
+
+use common::{fails_with, scion, succeeds_with, text};
+use std::path::PathBuf;
+
+fn scratch(test: &str) -> PathBuf {
+    common::scratch("explore", test)
+}
+
+fn rows(csv: &std::path::Path) -> Vec<Vec<String>> {
+    std::fs::read_to_string(csv)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            // The builder's description is the only quoted field.
+            let mut out = Vec::new();
+            let mut cur = String::new();
+            let mut quoted = false;
+            for c in l.chars() {
+                match c {
+                    '"' => quoted = !quoted,
+                    ',' if !quoted => out.push(std::mem::take(&mut cur)),
+                    _ => cur.push(c),
+                }
+            }
+            out.push(cur);
+            out
+        })
+        .collect()
+}
+
+#[test]
+fn a_sweep_writes_checked_rows_resumes_and_plots() {
+    let dir = scratch("sweep");
+    let csv = dir.join("r.csv");
+    let plots = dir.join("plots");
+    let args = [
+        "explore",
+        "--scenes",
+        "teapot",
+        "--layouts",
+        "pbrt,pbrt-q16,bvh8",
+        "--kinds",
+        "closest-hit,closest-point",
+        "--sizes",
+        "2^12",
+        "--runs",
+        "1",
+        "-o",
+        csv.to_str().unwrap(),
+        "--plots",
+        plots.to_str().unwrap(),
+    ];
+    let o = scion(&args);
+    // closest hit: 3 layouts × primary, secondary; closest point: 3 layouts × points.
+    succeeds_with(&o, "9 measurements to make (0 already");
+    let r = rows(&csv);
+    assert_eq!(r.len(), 10, "a header and nine rows");
+    let h = &r[0];
+    let col = |name: &str| h.iter().position(|c| c == name).unwrap();
+    for row in &r[1..] {
+        assert_eq!(row.len(), h.len());
+        assert_eq!(row[col("check")], "identical", "{row:?}");
+        assert_eq!(row[col("scene")], "teapot");
+        assert_eq!(row[col("n")], "4096");
+        assert!(row[col("toolchain")].contains("LLVM 22"), "{row:?}");
+        assert!(row[col("ns_per_query")].parse::<f64>().unwrap() > 0.0);
+        let quantized = row[col("layout")] == "pbrt-q16" && row[col("kind")] == "closest-hit";
+        let inflation = &row[col("area_inflation")];
+        assert_eq!(!inflation.is_empty(), quantized, "{row:?}");
+        if quantized {
+            assert!(inflation.parse::<f64>().unwrap() >= 1.0);
+        }
+    }
+    // A rerun measures nothing and keeps the rows.
+    let o = scion(&args);
+    succeeds_with(&o, "0 measurements to make (9 already");
+    assert_eq!(rows(&csv).len(), 10);
+    let index = std::fs::read_to_string(plots.join("index.md")).unwrap();
+    assert!(
+        index.contains("## teapot: closest-point (4096 points)"),
+        "{index}"
+    );
+    assert!(index.contains("| pbrt |"), "{index}");
+    let svg = std::fs::read_to_string(plots.join("teapot-closest-hit-primary-4096-llvm-O3-1.svg"))
+        .unwrap();
+    assert!(
+        svg.starts_with("<svg") && svg.contains("pbrt-q16"),
+        "an SVG naming the layouts"
+    );
+    assert!(plots
+        .join("teapot-closest-hit-primary-4096-llvm-O3-1-error.svg")
+        .exists());
+}
+
+#[test]
+fn tune_chooses_from_the_frontier_and_emits_it() {
+    let dir = scratch("tune");
+    let csv = dir.join("r.csv");
+    let base = [
+        "tune",
+        "--scene",
+        "teapot",
+        "--layouts",
+        "pbrt,pbrt-q16,ptr",
+        "--n",
+        "2^12",
+        "--runs",
+        "1",
+        "--results",
+        csv.to_str().unwrap(),
+    ];
+    let o = scion(&base);
+    succeeds_with(&o, "choice       ");
+    let out = text(&o.stdout);
+    assert!(out.contains("(the fastest:"), "{out}");
+    // The same measurements, a memory budget that only pbrt-q16 (55 bytes per triangle) meets.
+    let mut args = base.to_vec();
+    args.extend(["--max-bytes-per-triangle", "60"]);
+    let o = scion(&args);
+    succeeds_with(&o, "0 measurements to make");
+    succeeds_with(
+        &o,
+        "choice       pbrt-q16 (the fastest within 60 bytes per triangle",
+    );
+    // A slowdown of 100 times takes the smallest.
+    let mut args = base.to_vec();
+    args.extend(["--max-slowdown", "100"]);
+    succeeds_with(
+        &scion(&args),
+        "choice       pbrt-q16 (the smallest within 100 times",
+    );
+    // Nothing fits in 1 byte per triangle.
+    let mut args = base.to_vec();
+    args.extend(["--max-bytes-per-triangle", "1"]);
+    fails_with(&scion(&args), 1, "no layout fits in 1 bytes per triangle");
+    // The choice's header and object file.
+    for (emit, file) in [("header", "chosen.h"), ("obj", "chosen.o")] {
+        let path = dir.join(file);
+        let mut args = base.to_vec();
+        args.extend([
+            "--max-bytes-per-triangle",
+            "60",
+            "--emit",
+            emit,
+            "-o",
+            path.to_str().unwrap(),
+        ]);
+        succeeds_with(&scion(&args), "output       ");
+        let bytes = std::fs::read(&path).unwrap();
+        match emit {
+            "header" => assert!(
+                String::from_utf8_lossy(&bytes).contains("PbrtQ16"),
+                "the chosen layout's header"
+            ),
+            _ => assert_eq!(&bytes[..4], b"\x7fELF"),
+        }
+    }
+    fails_with(
+        &scion(&["tune", "--scene", "teapot", "--algorithm", "collide"]),
+        2,
+        "closest-hit, any-hit or closest-point",
+    );
+}
