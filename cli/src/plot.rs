@@ -110,9 +110,15 @@ fn plot_err(path: &Path, e: impl std::fmt::Display) -> CliError {
 /// Draws the Pareto plot of one context into `path` (SVG).
 fn pareto_svg(path: &Path, ctx: &[String], points: &[Point]) -> Result<(), CliError> {
     let front = frontier(points);
-    let (xmax, ymax) = points.iter().fold((0f64, 0f64), |(x, y), p| {
-        (x.max(p.bytes_per_triangle), y.max(p.ns_per_query))
+    let (xmin, xmax, ymax) = points.iter().fold((f64::MAX, 0f64, 0f64), |(a, x, y), p| {
+        (
+            a.min(p.bytes_per_triangle),
+            x.max(p.bytes_per_triangle),
+            y.max(p.ns_per_query),
+        )
     });
+    // The bytes axis spans the layouts (they differ by tens of percent); time starts at 0.
+    let pad = ((xmax - xmin) * 0.1).max(1.0);
     let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
     let mut chart = ChartBuilder::on(&root)
@@ -120,7 +126,10 @@ fn pareto_svg(path: &Path, ctx: &[String], points: &[Point]) -> Result<(), CliEr
         .margin(20)
         .x_label_area_size(45)
         .y_label_area_size(70)
-        .build_cartesian_2d(0f64..xmax * 1.15 + 1e-9, 0f64..ymax * 1.15 + 1e-9)
+        .build_cartesian_2d(
+            (xmin - pad).max(0.0)..xmax + 2.0 * pad,
+            0f64..ymax * 1.15 + 1e-9,
+        )
         .map_err(|e| plot_err(path, e))?;
     chart
         .configure_mesh()

@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# The design-space exploration of the docs (issue 17), in one command: `scion explore` over the
+# library's ten scenes × every library layout × closest hit with primary and secondary rays
+# (65,536 each, one thread, LLVM -O3, the paper's method), its results in
+# docs/explore/results.csv (resumable: a rerun measures only what is missing; delete the file to
+# measure again), the Pareto and speed-against-error plots of every context and their index in
+# docs/explore/, and the summary table of docs/benchmarks.md ("Design-space exploration",
+# between `<!-- explore:begin -->` and `<!-- explore:end -->`; BENCH_NO_DOC=1: print only).
+#
+# Usage: scripts/explore-docs.sh [SCENE_NAME...]   (default: the ten library scenes)
+#   Environment: EXPLORE_KINDS (closest-hit), EXPLORE_SIZES (65536), EXPLORE_RUNS (9),
+#   EXPLORE_LAYOUTS (every library layout but hair-bvh, whose 3-bit leaf counts need leaves of
+#   at most 7 triangles: `scion trace --layout hair-bvh --leaf-size 7` measures it).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+. scripts/bench-lib.sh
+./scripts/setup.sh >/dev/null
+cargo build --release -q -p scion-cli
+if [ $# -gt 0 ]; then names=("$@"); else names=("${LIBRARY_SCENES[@]}"); fi
+scenes_arg=$(IFS=,; echo "${names[*]}")
+out=docs/explore
+mkdir -p "$out"
+all=$(target/release/scion layouts --names | grep -v '^hair-bvh$' | paste -sd, -)
+layouts=(--layouts "${EXPLORE_LAYOUTS:-$all}")
+target/release/scion explore --scenes "$scenes_arg" "${layouts[@]}" \
+  --kinds "${EXPLORE_KINDS:-closest-hit}" --sizes "${EXPLORE_SIZES:-65536}" \
+  --runs "${EXPLORE_RUNS:-9}" --threads 1 -o "$out/results.csv" --plots "$out"
+table=target/explore-summary.md
+python3 scripts/explore_summary.py "$out/results.csv" > "$table"
+cat "$table"
+doc_table "$table" explore
