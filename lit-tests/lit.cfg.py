@@ -34,6 +34,17 @@ config.substitutions.append(("FileCheck", filecheck + " --enable-var-scope"))
 scion_opt = lit_config.params.get("scion_opt", os.path.join(repo, "target", "release", "scion-opt"))
 config.substitutions.append(("%scion-opt", scion_opt))
 
+# MLIR's tools (Debian's mlir-22-tools, which scripts/setup.sh installs): the tests of
+# --emit=mlir say `REQUIRES: mlir-opt`.
+mlir_opt = os.path.join(llvm_bin, "mlir-opt")
+if os.access(mlir_opt, os.X_OK):
+    config.available_features.add("mlir-opt")
+    config.substitutions.append(("%mlir-opt", mlir_opt))
+    config.substitutions.append(("%mlir-translate", os.path.join(llvm_bin, "mlir-translate")))
+    config.substitutions.append(("%lli", os.path.join(llvm_bin, "lli")))
+else:
+    lit_config.note("mlir-opt not found: the --emit=mlir tests are UNSUPPORTED (scripts/setup.sh installs mlir-22-tools)")
+
 # `not` and `count` come from LLVM's tools.
 config.environment["PATH"] = os.pathsep.join([llvm_bin, config.environment.get("PATH", os.environ.get("PATH", ""))])
 config.environment["NO_COLOR"] = "1"

@@ -6,6 +6,8 @@
 #   - LLVM 22 development files (llvm-config, libLLVM, and the Polly, zlib and zstd libraries
 #     llvm-config names): the LLVM backend (compiler/backend-llvm, through inkwell/llvm-sys)
 #     links against them; .cargo/config.toml points llvm-sys at /usr/lib/llvm-22.
+#   - MLIR 22's tools (mlir-opt, mlir-translate; Debian's mlir-22-tools): the tests of
+#     `scionc --emit=mlir` give its output to MLIR's verifier and lower it to LLVM IR.
 #   - g++ and make: the test suite builds and runs the C++ example (examples/cpp).
 #   - On x86-64: the AArch64 cross C compiler (gcc-aarch64-linux-gnu, libc6-dev-arm64-cross)
 #     and qemu-user: the test suite runs the AArch64 code scionc emits under qemu.
@@ -20,6 +22,7 @@ need_apt=()
 [ -x /usr/lib/llvm-22/bin/lit ] || need_apt+=(llvm-22-tools)
 [ -x /usr/bin/FileCheck-22 ] || need_apt+=(llvm-22-tools)
 [ -x /usr/lib/llvm-22/bin/llvm-config ] || need_apt+=(llvm-22-dev)
+[ -x /usr/lib/llvm-22/bin/mlir-opt ] || need_apt+=(mlir-22-tools)
 [ -e /usr/lib/llvm-22/lib/libPolly.a ] || need_apt+=(libpolly-22-dev)
 dpkg -s zlib1g-dev >/dev/null 2>&1 || need_apt+=(zlib1g-dev)
 dpkg -s libzstd-dev >/dev/null 2>&1 || need_apt+=(libzstd-dev)

@@ -10,6 +10,7 @@ pub mod frontend;
 pub mod fuzz;
 pub mod irgen;
 pub mod layout;
+pub mod mlir;
 pub mod passes;
 pub mod sema;
 pub mod syntax;

@@ -154,7 +154,7 @@ pub const JIT_OPT_LEVEL: u8 = 3;
 /// How [`library_lo`] compiles.
 #[derive(Clone, Copy, Debug)]
 pub struct LoOptions {
-    /// Traversal stack entries (`None`: the default, 64).
+    /// Traversal stack entries (`None`: the default, 64, or 512 where visits push all calls).
     pub stack_size: Option<u32>,
     /// The tree/mem `-O` level.
     pub opt_level: u8,

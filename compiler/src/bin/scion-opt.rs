@@ -39,9 +39,9 @@ struct Args {
     #[arg(long)]
     help_passes: bool,
     /// What to print: the IR (`ir`, default) or, for a `lo` module, its Cranelift IR (`clif`),
-    /// its LLVM IR as translated, before LLVM optimizes (`llvm`), or its assembly (`asm`, PTX
-    /// for nvptx64; LLVM -O2).
-    #[arg(long, value_name = "ir|clif|llvm|asm", default_value = "ir")]
+    /// its LLVM IR as translated, before LLVM optimizes (`llvm`), its assembly (`asm`, PTX
+    /// for nvptx64; LLVM -O2) or upstream MLIR (`mlir`).
+    #[arg(long, value_name = "ir|clif|llvm|asm|mlir", default_value = "ir")]
     emit: String,
     /// The LLVM target of `--emit=llvm|asm`: x86_64, aarch64 or nvptx64 (default: this machine).
     #[arg(long, value_name = "TARGET")]
@@ -63,9 +63,9 @@ fn main() {
 
 fn run(args: &Args) -> i32 {
     let registry = passes::registry();
-    if !["ir", "clif", "llvm", "asm"].contains(&args.emit.as_str()) {
+    if !["ir", "clif", "llvm", "asm", "mlir"].contains(&args.emit.as_str()) {
         eprintln!(
-            "error[E0907]: --emit={}: expected `ir`, `clif`, `llvm` or `asm`",
+            "error[E0907]: --emit={}: expected `ir`, `clif`, `llvm`, `asm` or `mlir`",
             args.emit
         );
         return 2;
@@ -147,6 +147,17 @@ fn run(args: &Args) -> i32 {
                 }
                 Err(e) => {
                     eprintln!("error[E0907]: {e}");
+                    status = 1;
+                }
+            },
+            Ok(_) if args.emit == "mlir" => match scion_compiler::mlir::print_mlir(&module) {
+                Ok(text) => {
+                    if let Err(e) = write!(out, "{text}") {
+                        failed.get_or_insert(e);
+                    }
+                }
+                Err(d) => {
+                    eprint!("{}", d.render(&sources));
                     status = 1;
                 }
             },

@@ -28,6 +28,9 @@ pub enum Emit {
     Ptx,
     /// A C header for the generated entry points.
     Header,
+    /// Upstream MLIR (func, arith, math, cf and llvm's pointers) from the `lo` module, for
+    /// MLIR's tools (`mlir-opt` verifies it; docs/backends.md).
+    Mlir,
     /// Nothing: check the input and report diagnostics only.
     Check,
 }
@@ -37,7 +40,7 @@ impl Emit {
     pub fn lowers_to_lo(self) -> bool {
         matches!(
             self,
-            Emit::Lo | Emit::Clif | Emit::Llvm | Emit::Asm | Emit::Obj | Emit::Ptx
+            Emit::Lo | Emit::Clif | Emit::Mlir | Emit::Llvm | Emit::Asm | Emit::Obj | Emit::Ptx
         )
     }
 
@@ -59,6 +62,7 @@ impl Emit {
             Emit::Obj => "obj",
             Emit::Ptx => "ptx",
             Emit::Header => "header",
+            Emit::Mlir => "mlir",
             Emit::Check => "check",
         }
     }
@@ -254,6 +258,7 @@ impl Options {
             | Emit::Asm
             | Emit::Obj
             | Emit::Ptx
+            | Emit::Mlir
             | Emit::Header => None,
         };
         if let Some(planned) = emit_plan {

@@ -82,6 +82,7 @@ pub fn render_low(m: &Module, emit: Emit, entry: Option<&EntrySig>) -> Result<St
                 })?;
             abi::header::render(sig, &root)
         }
+        Emit::Mlir => crate::mlir::print_mlir(m).map_err(|d| PassError::Diagnostics(d.into()))?,
         #[cfg(feature = "backends")]
         Emit::Clif => scion_clif::print_clif(m)
             .map_err(|e| PassError::Internal(InternalError::new(e.to_string())))?,
