@@ -17,6 +17,7 @@ mod explore;
 mod gpu;
 mod io;
 mod list;
+mod memory;
 mod plot;
 mod quant_error;
 mod render;

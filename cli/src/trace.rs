@@ -72,6 +72,7 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     if args.algorithm.is_some() && !compiled {
         eprintln!("scion: note: --algorithm is used by --backend jit|llvm only");
     }
+    let mut peaks = crate::memory::Peaks::start();
     // What --layout and --algorithm name (a library name or a file), for the compiled backends.
     let resolved = match compiled {
         true => Some(
@@ -110,6 +111,7 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         },
     };
 
+    peaks.mark("compile");
     progress(&format!("loading {}", args.scene.display()));
     let t = Instant::now();
     let scene = load_obj(&args.scene).map_err(|e| {
@@ -120,10 +122,12 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         }
     })?;
     let load_time = t.elapsed();
+    peaks.mark("load");
 
     let t = Instant::now();
     let tree = build(&scene, args);
     let build_time = t.elapsed();
+    peaks.mark("build");
     // FCPW's builder makes a larger leaf at its depth limit only.
     let cap = match args.builder {
         BuilderArg::Fcpw if tree.stats().depth > FcpwOptions::default().max_depth => {
@@ -190,6 +194,7 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         Engine::Layout { code, driver, .. } => {
             progress(&format!("packing the tree into layout `{}`", code.layout()));
             let packed = Packed::new(code.as_ref(), &tree).map_err(CliError::new)?;
+            peaks.mark("pack");
             tracing();
             let (hits, timing) = timed(args.runs, || {
                 packed.trace(code.as_ref(), &rays, driver).map_err(|f| {
@@ -214,6 +219,7 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         }
     };
 
+    peaks.mark("trace");
     let stats = tree.stats();
     let node_bytes = tree.nodes.len() * std::mem::size_of::<LogicalNode>();
     let prim_bytes = tree.primitives.len() * std::mem::size_of::<Triangle>();
@@ -267,6 +273,9 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         "structure    {bytes} bytes, {:.1} bytes/node",
         bytes as f64 / stats.nodes.max(1) as f64
     );
+    if let Some(m) = peaks.report() {
+        outln!("memory       peak resident per phase: {m}");
+    }
     outln!("rays         {} {source}", rays.len());
     outln!("backend      {} on {threads} threads", engine.name());
     outln!(
