@@ -1,7 +1,9 @@
 //! `scion explore`: the design space swept (paper §9.2): every scene × query kind × query set
 //! (primary or secondary rays, points) × size × backend × layout that has an entry of the kind,
-//! each timed by the paper's method on the same queries and checked against the reference,
-//! one CSV row per measurement (`ROW_FIELDS`), appended and flushed as it comes. A rerun with
+//! timed by the paper's method on the same queries (the layouts of a context interleaved round
+//! by round: one warm-up round, then `--runs` rounds, the middle ones averaged) and checked
+//! against the reference, one CSV row per measurement (`ROW_FIELDS`), appended and flushed as
+//! each context ends. A rerun with
 //! the same output skips the rows already there (the key: scene, kind, queries, size, backend,
 //! threads, builder, layout), so a sweep stopped halfway resumes; rows of another commit are
 //! kept and measured again. Every row carries the machine, the commit and the toolchain.
@@ -14,7 +16,7 @@
 //! kind and backend. `--plots DIR` then draws the results (`crate::plot`).
 
 use crate::io::outln;
-use crate::trace::{build_with, timed};
+use crate::trace::build_with;
 use crate::{CliError, ExploreArgs, RunBackend};
 use scion_host::entries::Entries;
 use scion_host::jit::Codegen;
@@ -385,141 +387,247 @@ fn sweep(
     let mut scene_cache: Option<(String, Scene, LogicalTree)> = None;
     let mut queries_cache: Option<(QueryKey, Queries)> = None;
     let mut measured = 0usize;
-    // One measurement: its CSV fields (an error skips it, with a warning).
-    let mut measure = |job: &Job| -> Result<Vec<String>, CliError> {
-        if scene_cache.as_ref().is_none_or(|c| c.0 != job.scene) {
-            let path = scion_runtime::scene::manifest::resolve(Path::new(&job.scene))
-                .map_err(|e| CliError::new(format!("--scenes {}: {e}", job.scene)))?;
-            let scene = load_obj(&path)
-                .map_err(|e| CliError::new(format!("cannot load {}: {e}", job.scene)))?;
-            let tree = build_with(&scene, args.builder, args.leaf_size);
-            scene_cache = Some((job.scene.clone(), scene, tree));
+    // The layouts of one context (scene, kind, queries, size, backend) are timed together, round
+    // by round as the paper's method does for contenders (one warm-up round, then `runs`
+    // rounds, each timing every layout once), so drifts of this shared machine fall on all of
+    // them alike; then each gets its CSV fields (an error skips a layout, with a warning).
+    let mut measure_group = |group: &[Job]| -> Vec<Result<Vec<String>, CliError>> {
+        let job0 = &group[0];
+        if scene_cache.as_ref().is_none_or(|c| c.0 != job0.scene) {
+            let loaded = scion_runtime::scene::manifest::resolve(Path::new(&job0.scene))
+                .map_err(|e| format!("--scenes {}: {e}", job0.scene))
+                .and_then(|path| {
+                    load_obj(&path).map_err(|e| format!("cannot load {}: {e}", job0.scene))
+                });
+            match loaded {
+                Ok(scene) => {
+                    let tree = build_with(&scene, args.builder, args.leaf_size);
+                    scene_cache = Some((job0.scene.clone(), scene, tree));
+                }
+                Err(e) => {
+                    return group
+                        .iter()
+                        .map(|_| Err(CliError::new(e.clone())))
+                        .collect()
+                }
+            }
         }
         let (_, scene, tree) = scene_cache.as_ref().expect("loaded above");
-        let qkey = (job.scene.clone(), job.kind.name(), job.queries, job.n);
+        let qkey = (job0.scene.clone(), job0.kind.name(), job0.queries, job0.n);
         if queries_cache.as_ref().is_none_or(|c| c.0 != qkey) {
-            let q = make_queries(job.kind, job.queries, scene, job.n).map_err(CliError::new)?;
-            queries_cache = Some((qkey, q));
+            match make_queries(job0.kind, job0.queries, scene, job0.n) {
+                Ok(q) => queries_cache = Some((qkey, q)),
+                Err(e) => {
+                    return group
+                        .iter()
+                        .map(|_| Err(CliError::new(e.clone())))
+                        .collect()
+                }
+            }
         }
         let (_, queries) = queries_cache.as_ref().expect("made above");
-        let ckey = (
-            job.layout.clone(),
-            job.kind.name(),
-            backend_name(job.backend),
-        );
-        if !compiled.contains_key(&ckey) {
-            let resolved = resolve_kind(&job.layout, None, job.kind).map_err(CliError::new)?;
-            let codegen = match job.backend {
-                RunBackend::Jit => Codegen::Cranelift,
-                RunBackend::Llvm => Codegen::Llvm(3),
-            };
-            let entries = Entries::compile(&resolved.program, codegen, args.stack_size)
-                .map_err(|e| CliError::new(format!("cannot compile for {}: {e}", job.layout)))?;
-            compiled.insert(ckey.clone(), (entries, resolved));
-        }
-        let (entries, resolved) = &compiled[&ckey];
-        let packed = entries.pack(tree).map_err(CliError::new)?;
-        let init = queries.initial_results();
-        let (results, timing) = timed(args.runs, || {
-            let mut r = init.clone();
-            entries
-                .run(&packed, &queries.bytes, &mut r, &driver)
-                .map_err(|e| CliError::new(format!("{} on {}: {e}", job.layout, job.scene)))?;
-            Ok(r)
-        })?;
-        // An eight-wide layout's hits are those of the wide reference over the tree collapsed
-        // to eight children (with its decoded boxes when quantized), which can differ from the
-        // binary one's on rays grazing axis-aligned geometry (docs/runtime.md).
-        let wide = resolved.tree_type == "BVH8" && job.kind != QueryKind::ClosestPoint;
-        let checked = if wide {
-            check_wide(resolved.boxes, tree, queries, &results)
-        } else {
-            queries.check(
-                &scene.triangles,
-                &resolved.boxes.decoded_tree(tree),
-                &results,
-                1024,
-                &driver,
+        let ckey = |job: &Job| {
+            (
+                job.layout.clone(),
+                job.kind.name(),
+                backend_name(job.backend),
             )
         };
-        let check = match checked {
-            Ok(_) => "identical".to_string(),
-            Err(e) => {
-                say(
-                    &bar,
-                    format!(
-                        "scion: warning: {} {} {} {}: {e}",
-                        job.scene,
-                        job.kind.name(),
-                        job.queries,
-                        job.layout
-                    ),
-                );
-                "differs".to_string()
-            }
-        };
-        let err = match job.kind {
-            QueryKind::ClosestPoint => None,
-            _ => crate::quant_error::measure(resolved.boxes, tree, &queries.rays, &driver),
-        };
-        let n = queries.len();
-        let bytes = packed.bytes();
-        let f = |x: f64| format!("{x:.6}");
-        let row: Vec<String> = vec![
-            prov.commit.clone(),
-            prov.machine.clone(),
-            prov.cpus.clone(),
-            prov.toolchain.clone(),
-            now_utc(),
-            job.scene.clone(),
-            scene.len().to_string(),
-            job.kind.name().to_string(),
-            job.queries.to_string(),
-            job.n.to_string(),
-            backend_name(job.backend).to_string(),
-            threads.to_string(),
-            builder.to_string(),
-            job.layout.clone(),
-            bytes.to_string(),
-            f(bytes as f64 / scene.len().max(1) as f64),
-            format!("{:.9}", timing.mean.as_secs_f64()),
-            f(timing.ns_per_query(n)),
-            f(timing.queries_per_second(n) / 1e6),
-            check,
-            err.as_ref().map_or(String::new(), |e| f(e.inflation.area)),
-            err.as_ref().map_or(String::new(), |e| f(e.extra()[0])),
-            err.as_ref().map_or(String::new(), |e| f(e.extra()[1])),
-            args.runs.to_string(),
-        ];
-        Ok(row)
-    };
-    let mut failed = 0usize;
-    for job in jobs {
-        bar.set_message(format!("{} {} {}", job.scene, job.kind.name(), job.layout));
-        let row = match measure(&job) {
-            Ok(row) => row,
-            Err(e) => {
-                say(
-                    &bar,
-                    format!(
-                        "scion: warning: {} {} {} {}: not measured: {}",
-                        job.scene,
-                        job.kind.name(),
-                        job.queries,
-                        job.layout,
-                        e.message
-                    ),
-                );
-                failed += 1;
-                bar.inc(1);
+        let mut compile_errors: BTreeMap<String, String> = BTreeMap::new();
+        for job in group {
+            if compiled.contains_key(&ckey(job)) {
                 continue;
             }
-        };
-        let line: Vec<String> = row.iter().map(|c| csv_field(c)).collect();
-        writeln!(out, "{}", line.join(",")).map_err(write_err)?;
-        out.flush().map_err(write_err)?;
-        measured += 1;
-        bar.inc(1);
+            let made = resolve_kind(&job.layout, None, job.kind).and_then(|resolved| {
+                let codegen = match job.backend {
+                    RunBackend::Jit => Codegen::Cranelift,
+                    RunBackend::Llvm => Codegen::Llvm(3),
+                };
+                Entries::compile(&resolved.program, codegen, args.stack_size)
+                    .map(|entries| (entries, resolved))
+                    .map_err(|e| format!("cannot compile for {}: {e}", job.layout))
+            });
+            match made {
+                Ok(m) => {
+                    compiled.insert(ckey(job), m);
+                }
+                Err(e) => {
+                    compile_errors.insert(job.layout.clone(), e);
+                }
+            }
+        }
+        // Pack every layout of the context.
+        let init = queries.initial_results();
+        let mut ready = Vec::new();
+        let mut out: Vec<Result<Vec<String>, CliError>> = Vec::new();
+        for job in group {
+            if let Some(e) = compile_errors.get(&job.layout) {
+                ready.push(None);
+                out.push(Err(CliError::new(e.clone())));
+                continue;
+            }
+            let (entries, resolved) = &compiled[&ckey(job)];
+            match entries.pack(tree) {
+                Ok(packed) => {
+                    ready.push(Some((entries, resolved, packed, init.clone(), Vec::new())));
+                    out.push(Ok(Vec::new()));
+                }
+                Err(e) => {
+                    ready.push(None);
+                    out.push(Err(CliError::new(e)));
+                }
+            }
+        }
+        // The rounds: a warm-up, then the timed ones.
+        let runs = args.runs as usize;
+        let rounds = if runs > 1 { 1 + runs } else { 1 };
+        for round in 0..rounds {
+            for (k, slot) in ready.iter_mut().enumerate() {
+                let Some((entries, _, packed, results, times)) = slot else {
+                    continue;
+                };
+                results.copy_from_slice(&init);
+                let t = std::time::Instant::now();
+                let ran = entries.run(packed, &queries.bytes, results, &driver);
+                let took = t.elapsed();
+                if let Err(e) = ran {
+                    out[k] = Err(CliError::new(format!(
+                        "{} on {}: {e}",
+                        group[k].layout, group[k].scene
+                    )));
+                    *slot = None;
+                    continue;
+                }
+                if round > 0 || rounds == 1 {
+                    times.push(took);
+                }
+            }
+        }
+        for (k, slot) in ready.into_iter().enumerate() {
+            let Some((_, resolved, packed, results, times)) = slot else {
+                continue;
+            };
+            let job = &group[k];
+            let drop = (runs.saturating_sub(1)) / 4;
+            let mean = scion_runtime::timing::trimmed_mean(&times, drop, drop);
+            let timing = scion_runtime::timing::Timing { raw: times, mean };
+            // An eight-wide layout's hits are those of the wide reference over the tree
+            // collapsed to eight children (with its decoded boxes when quantized), which can
+            // differ from the binary one's on rays grazing axis-aligned geometry
+            // (docs/runtime.md).
+            let wide = resolved.tree_type == "BVH8" && job.kind != QueryKind::ClosestPoint;
+            let checked = if wide {
+                check_wide(resolved.boxes, tree, queries, &results)
+            } else {
+                queries.check(
+                    &scene.triangles,
+                    &resolved.boxes.decoded_tree(tree),
+                    &results,
+                    1024,
+                    &driver,
+                )
+            };
+            let check = match checked {
+                Ok(_) => "identical".to_string(),
+                Err(e) => {
+                    say(
+                        &bar,
+                        format!(
+                            "scion: warning: {} {} {} {}: {e}",
+                            job.scene,
+                            job.kind.name(),
+                            job.queries,
+                            job.layout
+                        ),
+                    );
+                    "differs".to_string()
+                }
+            };
+            let err = match job.kind {
+                QueryKind::ClosestPoint => None,
+                _ => crate::quant_error::measure(resolved.boxes, tree, &queries.rays, &driver),
+            };
+            let n = queries.len();
+            let bytes = packed.bytes();
+            let f = |x: f64| format!("{x:.6}");
+            out[k] = Ok(vec![
+                prov.commit.clone(),
+                prov.machine.clone(),
+                prov.cpus.clone(),
+                prov.toolchain.clone(),
+                now_utc(),
+                job.scene.clone(),
+                scene.len().to_string(),
+                job.kind.name().to_string(),
+                job.queries.to_string(),
+                job.n.to_string(),
+                backend_name(job.backend).to_string(),
+                threads.to_string(),
+                builder.to_string(),
+                job.layout.clone(),
+                bytes.to_string(),
+                f(bytes as f64 / scene.len().max(1) as f64),
+                format!("{:.9}", timing.mean.as_secs_f64()),
+                f(timing.ns_per_query(n)),
+                f(timing.queries_per_second(n) / 1e6),
+                check,
+                err.as_ref().map_or(String::new(), |e| f(e.inflation.area)),
+                err.as_ref().map_or(String::new(), |e| f(e.extra()[0])),
+                err.as_ref().map_or(String::new(), |e| f(e.extra()[1])),
+                args.runs.to_string(),
+            ]);
+        }
+        out
+    };
+    let mut failed = 0usize;
+    let context = |j: &Job| {
+        (
+            j.scene.clone(),
+            j.kind.name(),
+            j.queries,
+            j.n,
+            backend_name(j.backend),
+        )
+    };
+    let mut start = 0;
+    while start < jobs.len() {
+        let mut end = start + 1;
+        while end < jobs.len() && context(&jobs[end]) == context(&jobs[start]) {
+            end += 1;
+        }
+        let group = &jobs[start..end];
+        bar.set_message(format!(
+            "{} {} {}",
+            group[0].scene,
+            group[0].kind.name(),
+            group[0].queries
+        ));
+        for (job, row) in group.iter().zip(measure_group(group)) {
+            match row {
+                Ok(row) => {
+                    let line: Vec<String> = row.iter().map(|c| csv_field(c)).collect();
+                    writeln!(out, "{}", line.join(",")).map_err(write_err)?;
+                    out.flush().map_err(write_err)?;
+                    measured += 1;
+                }
+                Err(e) => {
+                    say(
+                        &bar,
+                        format!(
+                            "scion: warning: {} {} {} {}: not measured: {}",
+                            job.scene,
+                            job.kind.name(),
+                            job.queries,
+                            job.layout,
+                            e.message
+                        ),
+                    );
+                    failed += 1;
+                }
+            }
+            bar.inc(1);
+        }
+        start = end;
     }
     bar.finish_and_clear();
     outln!(
