@@ -168,9 +168,10 @@ fn both_traversals_are_brute_force_on_every_layout() {
     let cases = cases();
     assert!(cases.len() >= 10, "{} scenes", cases.len());
     let mut checked = 0;
-    let mut wide = 0;
+    let mut others = Vec::new();
     // Every library layout with a closest-point entry over its type (the registry's, so a new
-    // file is covered): both traversals of the prelude's BVH, `closest_point8` of BVH8.
+    // file is covered): both traversals of the prelude's BVH, `closest_point8` of BVH8,
+    // `closest_point_dop14` of the DOP-14 tree.
     for &(stem, _) in scion_host::library::LAYOUT_FILES {
         let Ok(r) = resolve_kind(stem, None, QueryKind::ClosestPoint) else {
             continue;
@@ -181,8 +182,8 @@ fn both_traversals_are_brute_force_on_every_layout() {
                 &["closest_point_best_first", "closest_point_query"]
             }
             "BVH" => &["closest_point_best_first"],
-            _ => {
-                wide += 1;
+            other => {
+                others.push(other.to_string());
                 &[r.program.algorithm.as_str()][..]
             }
         };
@@ -204,9 +205,11 @@ fn both_traversals_are_brute_force_on_every_layout() {
             }
         }
     }
+    let wide = others.iter().filter(|t| *t == "BVH8").count();
+    assert!(wide >= 3, "{wide} eight-wide layouts with a closest-point entry");
     assert!(
-        wide >= 3,
-        "{wide} eight-wide layouts with a closest-point entry"
+        others.iter().any(|t| t == "DopBVH"),
+        "the DOP-14 split layout: {others:?}"
     );
     assert!(checked > 10_000, "{checked} answers");
 }
