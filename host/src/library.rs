@@ -607,11 +607,10 @@ mod tests {
             "{:?}",
             r.program.files.iter().map(|f| &f.0).collect::<Vec<_>>()
         );
-        let e = resolve_kind("dop14-split", None, QueryKind::ClosestPoint).unwrap_err();
-        assert!(
-            e.contains("no closest-point entry traverses `DopBVH`"),
-            "{e}"
-        );
+        let r = resolve_kind("dop14-split", None, QueryKind::ClosestPoint).unwrap();
+        assert_eq!(r.program.algorithm, "closest_point_dop14");
+        let e = resolve_kind("dop14-split", None, QueryKind::Collide).unwrap_err();
+        assert!(e.contains("no collide entry traverses `DopBVH`"), "{e}");
     }
 
     #[test]

@@ -171,7 +171,7 @@ fn both_traversals_are_brute_force_on_every_layout() {
     let mut others = Vec::new();
     // Every library layout with a closest-point entry over its type (the registry's, so a new
     // file is covered): both traversals of the prelude's BVH, `closest_point8` of BVH8,
-    // `closest_point_dop14` of the DOP-14 tree.
+    // `closest_point_dop14` of the DOP-14 tree, `closest_point_hair` of the hair BVH.
     for &(stem, _) in scion_host::library::LAYOUT_FILES {
         let Ok(r) = resolve_kind(stem, None, QueryKind::ClosestPoint) else {
             continue;
@@ -206,10 +206,13 @@ fn both_traversals_are_brute_force_on_every_layout() {
         }
     }
     let wide = others.iter().filter(|t| *t == "BVH8").count();
-    assert!(wide >= 3, "{wide} eight-wide layouts with a closest-point entry");
     assert!(
-        others.iter().any(|t| t == "DopBVH"),
-        "the DOP-14 split layout: {others:?}"
+        wide >= 3,
+        "{wide} eight-wide layouts with a closest-point entry"
+    );
+    assert!(
+        others.iter().any(|t| t == "DopBVH") && others.iter().any(|t| t == "Hair"),
+        "the DOP-14 split and hair layouts: {others:?}"
     );
     assert!(checked > 10_000, "{checked} answers");
 }
