@@ -266,13 +266,13 @@ fn run_answers_every_query_kind_and_checks_it_against_its_reference() {
     let o = scion(&[
         "run",
         "--algorithm",
-        "closest-point",
+        "any-hit",
         "--scene",
         &scene,
         "--layout",
         "hair-bvh",
     ]);
-    fails_with(&o, 2, "no closest-point entry traverses `Hair`");
+    fails_with(&o, 2, "no any-hit entry traverses `Hair`");
 }
 
 #[test]

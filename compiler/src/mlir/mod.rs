@@ -230,18 +230,20 @@ impl<'m> Emitter<'m> {
         Ok(())
     }
 
+    /// The values' names and their types, each joined by commas.
+    fn names_and_types(&self, vals: &[ValueId]) -> Result<(String, String), Diagnostic> {
+        let names: Vec<String> = vals.iter().map(|&a| self.v(a)).collect();
+        let tys: Vec<String> = vals.iter().map(|&a| self.ty(a)).collect::<Result<_, _>>()?;
+        Ok((names.join(", "), tys.join(", ")))
+    }
+
     fn succ(&self, s: &Successor) -> Result<String, Diagnostic> {
         let label = format!("^bb{}", raw_index(s.block));
         if s.args.is_empty() {
             return Ok(label);
         }
-        let args: Vec<String> = s.args.iter().map(|&a| self.v(a)).collect();
-        let tys: Vec<String> = s
-            .args
-            .iter()
-            .map(|&a| self.ty(a))
-            .collect::<Result<_, _>>()?;
-        Ok(format!("{label}({} : {})", args.join(", "), tys.join(", ")))
+        let (args, tys) = self.names_and_types(&s.args)?;
+        Ok(format!("{label}({args} : {tys})"))
     }
 
     /// `%name = arith.constant V : T` for an integer of type `t`.
@@ -621,31 +623,16 @@ impl<'m> Emitter<'m> {
             }
             L::Call => {
                 let callee = o.callee().unwrap_or("?");
-                let args: Vec<String> = o.operands.iter().map(|&x| self.v(x)).collect();
-                let tys: Vec<String> = o
-                    .operands
-                    .iter()
-                    .map(|&x| self.ty(x))
-                    .collect::<Result<_, _>>()?;
-                let rs: Vec<String> = o.results.iter().map(|&x| self.v(x)).collect();
-                let rts: Vec<String> = o
-                    .results
-                    .iter()
-                    .map(|&x| self.ty(x))
-                    .collect::<Result<_, _>>()?;
+                let (args, tys) = self.names_and_types(&o.operands)?;
+                let (rs, rts) = self.names_and_types(&o.results)?;
                 let lhs = if rs.is_empty() {
                     String::new()
                 } else {
-                    format!("{} = ", rs.join(", "))
+                    format!("{rs} = ")
                 };
                 w(
                     out,
-                    format!(
-                        "{lhs}func.call @{callee}({}) : ({}) -> ({})",
-                        args.join(", "),
-                        tys.join(", "),
-                        rts.join(", ")
-                    ),
+                    format!("{lhs}func.call @{callee}({args}) : ({tys}) -> ({rts})"),
                 );
             }
             L::Br => w(out, format!("cf.br {}", self.succ(&o.successors[0])?)),
@@ -662,16 +649,8 @@ impl<'m> Emitter<'m> {
                 if o.operands.is_empty() {
                     w(out, "func.return".into());
                 } else {
-                    let args: Vec<String> = o.operands.iter().map(|&x| self.v(x)).collect();
-                    let tys: Vec<String> = o
-                        .operands
-                        .iter()
-                        .map(|&x| self.ty(x))
-                        .collect::<Result<_, _>>()?;
-                    w(
-                        out,
-                        format!("func.return {} : {}", args.join(", "), tys.join(", ")),
-                    );
+                    let (args, tys) = self.names_and_types(&o.operands)?;
+                    w(out, format!("func.return {args} : {tys}"));
                 }
             }
             L::AddRd | L::AddRu | L::MulRd | L::MulRu => {
