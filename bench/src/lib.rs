@@ -18,7 +18,7 @@ pub mod records;
 
 use scion_runtime::bvh::{build_sah_binned, LogicalTree, SahOptions};
 use scion_runtime::geom::{Hit, Ray, Triangle};
-use scion_runtime::query::{primary_rays, secondary_rays};
+use scion_runtime::query::{primary_rays_n, secondary_rays};
 use scion_runtime::scene::load_obj;
 use scion_runtime::timing::{trimmed_mean, TimingPlan};
 use std::fmt::Write as _;
@@ -81,14 +81,9 @@ impl Workload {
         let tree = build_sah_binned(&loaded.triangles, &SahOptions::default());
         let b = loaded.bounds();
         let rays = match kind {
-            RayKind::Primary => {
-                let w = (n as f64).sqrt().ceil().max(1.0) as usize;
-                let h = n.div_ceil(w).max(1);
-                let as_u32 = |v: usize| u32::try_from(v).map_err(|_| format!("{n} rays: too many"));
-                let mut r = primary_rays(b, as_u32(w)?, as_u32(h)?, seed);
-                r.truncate(n);
-                r
-            }
+            // The rays `scion trace` and `scion explore` make for the same size and seed.
+            RayKind::Primary => primary_rays_n(b, n as u64, seed)
+                .ok_or_else(|| format!("{n} primary rays: none, or too many"))?,
             RayKind::Secondary => secondary_rays(b, n, seed),
         };
         let stem = scene.file_stem().map_or_else(
@@ -262,6 +257,45 @@ pub fn table(w: &Workload, threads: usize, outcomes: &[Outcome]) -> String {
         );
     }
     s
+}
+
+/// The rows of a peers file (`scion_runtime::timing::PEER_FIELDS`, no header) for the peer
+/// libraries among `outcomes` (every row but Scion's own, `llvm-O3 ...`, `cranelift ...`,
+/// `interpreter ...`, and the `reference`), each anchored to `anchor` measured in the same run;
+/// `n` is the size asked for (the context's).
+pub fn peer_csv_rows(
+    w: &Workload,
+    n: usize,
+    threads: usize,
+    outcomes: &[Outcome],
+    anchor: &str,
+) -> Result<String, String> {
+    let ns = |o: &Outcome| o.mean.as_secs_f64() * 1e9 / o.rays.max(1) as f64;
+    let a = outcomes
+        .iter()
+        .find(|o| o.name == anchor)
+        .ok_or_else(|| format!("--peer-csv: no `{anchor}` row in this run to anchor the peers"))?;
+    let ours = |name: &str| {
+        name == "reference"
+            || ["llvm-O", "cranelift ", "interpreter"]
+                .iter()
+                .any(|p| name.starts_with(p))
+    };
+    let mut s = String::new();
+    for o in outcomes.iter().filter(|o| !ours(&o.name)) {
+        let _ = writeln!(
+            s,
+            "{},closest-hit,{},{n},{threads},{},{},{},{:.4},{anchor},{:.4}",
+            w.scene,
+            w.kind.name(),
+            o.name,
+            o.bytes.map_or_else(String::new, |b| b.to_string()),
+            w.triangles.len(),
+            ns(o),
+            ns(a),
+        );
+    }
+    Ok(s)
 }
 
 /// The outcomes as tab-separated lines (no header): scene, triangles, ray kind, rays, threads,

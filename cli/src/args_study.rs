@@ -1,7 +1,7 @@
 //! The arguments of the commands that study the design space: `scion render` (pictures),
 //! `scion explore` (sweeps and plots) and `scion tune` (a layout chosen for a scene).
 
-use crate::{BuilderArg, RunBackend};
+use crate::{BuilderArg, DeviceArg, RunBackend};
 use clap::ValueEnum;
 use std::path::PathBuf;
 
@@ -39,6 +39,10 @@ pub struct TuneArgs {
     /// The code generator.
     #[arg(long, value_enum, default_value = "llvm")]
     pub backend: RunBackend,
+    /// Where the layouts are measured: cpu (with --backend), gpu (an NVIDIA GPU through CUDA),
+    /// gpu-emulated (the GPU kernels on this CPU).
+    #[arg(long, value_enum, default_value = "cpu")]
+    pub device: DeviceArg,
     /// Threads (0: one per core).
     #[arg(long, default_value_t = 1)]
     pub threads: usize,
@@ -116,6 +120,21 @@ pub(crate) fn parse_size(s: &str) -> Result<usize, String> {
     Ok(n)
 }
 
+/// Where `scion explore` measures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ExploreDevice {
+    /// This CPU, and an NVIDIA GPU when one opens.
+    Auto,
+    /// This CPU, with each of `--backends`.
+    Cpu,
+    /// An NVIDIA GPU: the kernels compiled to PTX by LLVM, run through CUDA, timed by CUDA
+    /// events.
+    Gpu,
+    /// The GPU kernels compiled for this CPU and launched as grids of host threads (checks the
+    /// GPU path without a GPU; its times are not a GPU's).
+    GpuEmulated,
+}
+
 /// Arguments of `scion explore`.
 #[derive(clap::Args, Debug)]
 #[command(
@@ -142,9 +161,14 @@ pub struct ExploreArgs {
     /// Queries per measurement, comma-separated, `N` or `2^K` (the paper sweeps 2^18 to 2^23).
     #[arg(long, value_delimiter = ',', default_value = "65536", value_parser = parse_size)]
     pub sizes: Vec<usize>,
-    /// Code generators, comma-separated: llvm, jit.
+    /// Code generators of the CPU measurements, comma-separated: llvm, jit.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "llvm")]
     pub backends: Vec<RunBackend>,
+    /// Devices, comma-separated: cpu (with each of --backends), gpu (an NVIDIA GPU through
+    /// CUDA: the `ptx` rows), gpu-emulated (the GPU kernels on this CPU), auto (cpu, and gpu
+    /// when one opens).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "auto")]
+    pub devices: Vec<ExploreDevice>,
     /// Threads (0: one per core).
     #[arg(long, default_value_t = 1)]
     pub threads: usize,
@@ -169,9 +193,15 @@ pub struct ExploreArgs {
         default_value = "explore.csv"
     )]
     pub output: PathBuf,
-    /// Also draw the plots of every context in the file (SVG) and their index.md into DIR.
+    /// Also draw the plots of every context in the file (SVG and PNG) and their index.md into
+    /// DIR.
     #[arg(long, value_name = "DIR")]
     pub plots: Option<PathBuf>,
+    /// Peer libraries to draw on the plots: a CSV of their measurements, each with a Scion
+    /// layout's in the same run (written by `cargo bench -p scion-bench --bench peers --
+    /// --peer-csv FILE` and scripts/bench-closest-point.sh; scripts/explore-docs.sh makes it).
+    #[arg(long, value_name = "PEERS.csv", requires = "plots")]
+    pub peers: Option<PathBuf>,
 }
 
 /// How `scion render` colours a hit.

@@ -15,9 +15,11 @@
 //! (`crate::quant_error`). Trees are built once per scene, entries compiled once per layout,
 //! kind and backend. `--plots DIR` then draws the results (`crate::plot`).
 
+use crate::args_study::ExploreDevice;
 use crate::io::outln;
+use crate::results::{csv_field, key, now_utc, provenance, read_csv, read_rows, ROW_FIELDS};
 use crate::trace::build_with;
-use crate::{CliError, ExploreArgs, RunBackend};
+use crate::{CliError, DeviceArg, ExploreArgs, RunBackend};
 use scion_host::entries::Entries;
 use scion_host::jit::Codegen;
 use scion_host::library::{self, resolve_kind, QueryKind, Resolved};
@@ -31,171 +33,63 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::io::Write;
 use std::path::Path;
 
-/// The CSV's columns, in order.
-pub const ROW_FIELDS: [&str; 24] = [
-    "commit",
-    "machine",
-    "cpus",
-    "toolchain",
-    "date",
-    "scene",
-    "triangles",
-    "kind",
-    "queries",
-    "n",
-    "backend",
-    "threads",
-    "builder",
-    "layout",
-    "bytes",
-    "bytes_per_triangle",
-    "seconds",
-    "ns_per_query",
-    "mqueries_per_s",
-    "check",
-    "area_inflation",
-    "extra_box_tests",
-    "extra_node_visits",
-    "runs",
-];
-
-/// The columns that identify a measurement (a rerun skips a key already present).
-const KEY_FIELDS: [&str; 8] = [
-    "scene", "kind", "queries", "n", "backend", "threads", "builder", "layout",
-];
-
-/// One measurement's fields, by column name.
-pub type Row = BTreeMap<String, String>;
-
-/// Reads the rows of a results CSV (`None` when there is no such file).
-pub fn read_rows(path: &Path) -> Result<Option<Vec<Row>>, CliError> {
-    let text = match std::fs::read_to_string(path) {
-        Ok(t) => t,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e) => {
-            return Err(CliError::new(format!(
-                "cannot read {}: {e}",
-                path.display()
-            )))
-        }
-    };
-    let mut lines = text.lines();
-    let Some(header) = lines.next() else {
-        return Ok(Some(Vec::new()));
-    };
-    let names: Vec<&str> = header.split(',').collect();
-    if names != ROW_FIELDS {
-        return Err(CliError::new(format!(
-            "{}: not a results file of this version of `scion explore` (its header is `{header}`); \
-             give another -o",
-            path.display()
-        )));
-    }
-    let mut rows = Vec::new();
-    for (k, line) in lines.enumerate() {
-        let cells = split_csv(line);
-        if cells.len() != names.len() {
-            return Err(CliError::new(format!(
-                "{}:{}: {} fields where the header has {}",
-                path.display(),
-                k + 2,
-                cells.len(),
-                names.len()
-            )));
-        }
-        rows.push(names.iter().map(|n| n.to_string()).zip(cells).collect());
-    }
-    Ok(Some(rows))
-}
-
-/// A CSV line's fields (double quotes around a field with a comma or a quote, `""` inside).
-fn split_csv(line: &str) -> Vec<String> {
-    let mut out = Vec::new();
-    let mut cur = String::new();
-    let mut quoted = false;
-    let mut chars = line.chars().peekable();
-    while let Some(c) = chars.next() {
-        match (c, quoted) {
-            ('"', true) if chars.peek() == Some(&'"') => {
-                cur.push('"');
-                chars.next();
-            }
-            ('"', _) => quoted = !quoted,
-            (',', false) => out.push(std::mem::take(&mut cur)),
-            _ => cur.push(c),
-        }
-    }
-    out.push(cur);
-    out
-}
-
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\"").replace('\n', " "))
-    } else {
-        s.to_string()
-    }
-}
-
-fn key(row: &Row) -> Vec<String> {
-    KEY_FIELDS
-        .iter()
-        .map(|f| row.get(*f).cloned().unwrap_or_default())
-        .collect()
-}
-
-/// The machine, the commit and the toolchain, for every row.
-struct Provenance {
-    commit: String,
-    machine: String,
-    cpus: String,
-    toolchain: String,
-}
-
-fn provenance() -> Provenance {
-    // The commit of the checkout the binary was built in (it lives in its target folder),
-    // else of the current folder.
-    let exe_dir = std::env::current_exe()
-        .ok()
-        .and_then(|p| p.parent().map(Path::to_path_buf));
-    let commit = exe_dir
-        .into_iter()
-        .chain(std::iter::once(std::path::PathBuf::from(".")))
-        .find_map(|dir| {
-            std::process::Command::new("git")
-                .arg("-C")
-                .arg(&dir)
-                .args(["rev-parse", "--short", "HEAD"])
-                .output()
-                .ok()
-                .filter(|o| o.status.success())
-                .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown".into());
-    let machine = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|t| {
-            t.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_string())
-        })
-        .unwrap_or_else(|| std::env::consts::ARCH.to_string());
-    let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
-    Provenance {
-        commit,
-        machine,
-        cpus: cpus.to_string(),
-        toolchain: format!(
-            "scion {} LLVM {}",
-            env!("CARGO_PKG_VERSION"),
-            scion_llvm::llvm_version()
-        ),
-    }
-}
-
 /// What a set of queries is made from: scene, kind, query set, size.
 type QueryKey = (String, &'static str, &'static str, usize);
+
+/// Where a measurement runs: this CPU through one of the code generators, or a GPU (an NVIDIA
+/// one through CUDA, or the same kernels emulated on this CPU).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Target {
+    Cpu(RunBackend),
+    Gpu { emulated: bool },
+}
+
+impl Target {
+    /// The `backend` column.
+    fn name(self) -> &'static str {
+        match self {
+            Target::Cpu(RunBackend::Jit) => "cranelift",
+            Target::Cpu(RunBackend::Llvm) => "llvm-O3",
+            Target::Gpu { emulated: false } => "ptx",
+            Target::Gpu { emulated: true } => "gpu-emulated",
+        }
+    }
+}
+
+/// The `backend` column of the rows measured on `device` (with `backend` on the CPU).
+pub fn backend_column(device: DeviceArg, backend: RunBackend) -> &'static str {
+    match device {
+        DeviceArg::Cpu => Target::Cpu(backend),
+        DeviceArg::Gpu => Target::Gpu { emulated: false },
+        DeviceArg::GpuEmulated => Target::Gpu { emulated: true },
+    }
+    .name()
+}
+
+/// The targets of `--devices` and `--backends`: every backend on the CPU, and a GPU when named
+/// (or, for `auto`, when one opens).
+fn targets(args: &ExploreArgs) -> Vec<Target> {
+    let mut out = Vec::new();
+    for d in &args.devices {
+        match d {
+            ExploreDevice::Cpu | ExploreDevice::Auto => {
+                out.extend(args.backends.iter().map(|&b| Target::Cpu(b)));
+                if *d == ExploreDevice::Auto && crate::gpu::open_device(0).is_ok() {
+                    out.push(Target::Gpu { emulated: false });
+                }
+            }
+            ExploreDevice::Gpu => out.push(Target::Gpu { emulated: false }),
+            ExploreDevice::GpuEmulated => out.push(Target::Gpu { emulated: true }),
+        }
+    }
+    let mut unique = Vec::new();
+    for t in out {
+        if !unique.contains(&t) {
+            unique.push(t);
+        }
+    }
+    unique
+}
 
 /// A sweep's plan: what to measure, in order.
 struct Job {
@@ -203,15 +97,8 @@ struct Job {
     kind: QueryKind,
     queries: &'static str,
     n: usize,
-    backend: RunBackend,
+    target: Target,
     layout: String,
-}
-
-fn backend_name(b: RunBackend) -> &'static str {
-    match b {
-        RunBackend::Jit => "cranelift",
-        RunBackend::Llvm => "llvm-O3",
-    }
 }
 
 /// The query sets of a kind: rays for hits, points for closest points.
@@ -293,6 +180,11 @@ pub fn run(args: &ExploreArgs) -> Result<(), CliError> {
     let threads = args.threads.to_string();
     let builder = args.builder.describe(args.leaf_size);
 
+    let all_targets = targets(args);
+    if args.devices.contains(&ExploreDevice::Gpu) {
+        // Fail now rather than on every measurement.
+        crate::gpu::open_device(0)?;
+    }
     // The plan, in the order it runs (scene by scene, so each tree is built once).
     let mut jobs = Vec::new();
     let mut layouts_by_kind = BTreeMap::new();
@@ -303,14 +195,14 @@ pub fn run(args: &ExploreArgs) -> Result<(), CliError> {
         for kind in &kinds {
             for set in query_sets(*kind, &args.rays) {
                 for &n in &args.sizes {
-                    for &backend in &args.backends {
+                    for &target in &all_targets {
                         for layout in &layouts_by_kind[kind.name()] {
                             let job = Job {
                                 scene: scene.clone(),
                                 kind: *kind,
                                 queries: set,
                                 n,
-                                backend,
+                                target,
                                 layout: layout.clone(),
                             };
                             let k = vec![
@@ -318,7 +210,7 @@ pub fn run(args: &ExploreArgs) -> Result<(), CliError> {
                                 kind.name().to_string(),
                                 set.to_string(),
                                 n.to_string(),
-                                backend_name(backend).to_string(),
+                                target.name().to_string(),
                                 threads.clone(),
                                 builder.clone(),
                                 layout.clone(),
@@ -345,7 +237,15 @@ pub fn run(args: &ExploreArgs) -> Result<(), CliError> {
     };
     if let Some(dir) = &args.plots {
         let rows = read_rows(&args.output)?.unwrap_or_default();
-        let written = crate::plot::write_all(&rows, dir)?;
+        let peers = match &args.peers {
+            Some(path) => {
+                read_csv(path, &crate::plot::PEER_FIELDS, "a peers file")?.ok_or_else(|| {
+                    CliError::usage(format!("--peers: there is no file {}", path.display()))
+                })?
+            }
+            None => Vec::new(),
+        };
+        let written = crate::plot::write_all(&rows, &peers, dir)?;
         outln!("plots        {} files in {}", written, dir.display());
     }
     if failed > 0 {
@@ -426,20 +326,122 @@ fn sweep(
             }
         }
         let (_, queries) = queries_cache.as_ref().expect("made above");
-        let ckey = |job: &Job| {
-            (
+        let init = queries.initial_results();
+        // A measured layout's row: its answers checked, its error measured when quantized.
+        let finish = |job: &Job,
+                      resolved: &Resolved,
+                      bytes: u64,
+                      results: &[u8],
+                      timing: scion_runtime::timing::Timing|
+         -> Vec<String> {
+            // An eight-wide layout's hits are those of the wide reference over the tree
+            // collapsed to eight children (with its decoded boxes when quantized), which can
+            // differ from the binary one's on rays grazing axis-aligned geometry
+            // (docs/runtime.md).
+            let wide = resolved.tree_type == "BVH8" && job.kind != QueryKind::ClosestPoint;
+            let checked = if wide {
+                check_wide(resolved.boxes, tree, queries, results)
+            } else {
+                queries.check(
+                    &scene.triangles,
+                    &resolved.boxes.decoded_tree(tree),
+                    results,
+                    1024,
+                    &driver,
+                )
+            };
+            let check = match checked {
+                Ok(_) => "identical".to_string(),
+                Err(e) => {
+                    say(
+                        &bar,
+                        format!(
+                            "scion: warning: {} {} {} {} {}: {e}",
+                            job.scene,
+                            job.kind.name(),
+                            job.queries,
+                            job.target.name(),
+                            job.layout
+                        ),
+                    );
+                    "differs".to_string()
+                }
+            };
+            let err = match job.kind {
+                QueryKind::ClosestPoint => None,
+                _ => crate::quant_error::measure(resolved.boxes, tree, &queries.rays, &driver),
+            };
+            let n = queries.len();
+            let f = |x: f64| format!("{x:.6}");
+            vec![
+                prov.commit.clone(),
+                prov.machine.clone(),
+                prov.cpus.clone(),
+                prov.toolchain.clone(),
+                now_utc(),
+                job.scene.clone(),
+                scene.len().to_string(),
+                job.kind.name().to_string(),
+                job.queries.to_string(),
+                job.n.to_string(),
+                job.target.name().to_string(),
+                threads.to_string(),
+                builder.to_string(),
                 job.layout.clone(),
-                job.kind.name(),
-                backend_name(job.backend),
-            )
+                bytes.to_string(),
+                f(bytes as f64 / scene.len().max(1) as f64),
+                format!("{:.9}", timing.mean.as_secs_f64()),
+                f(timing.ns_per_query(n)),
+                f(timing.queries_per_second(n) / 1e6),
+                check,
+                err.as_ref().map_or(String::new(), |e| f(e.inflation.area)),
+                err.as_ref().map_or(String::new(), |e| f(e.extra()[0])),
+                err.as_ref().map_or(String::new(), |e| f(e.extra()[1])),
+                args.runs.to_string(),
+            ]
         };
+        let backend = match job0.target {
+            Target::Cpu(b) => b,
+            // On a GPU each layout runs alone (its kernels timed by the device: CUDA events, or
+            // the emulated launch's wall clock), one warm-up and `--runs` runs, as `scion run
+            // --device` does.
+            Target::Gpu { emulated } => {
+                let options = crate::run_gpu::GpuOptions {
+                    device: if emulated {
+                        DeviceArg::GpuEmulated
+                    } else {
+                        DeviceArg::Gpu
+                    },
+                    threads: args.threads,
+                    runs: args.runs,
+                    quiet: true,
+                };
+                return group
+                    .iter()
+                    .map(|job| {
+                        let resolved =
+                            resolve_kind(&job.layout, None, job.kind).map_err(CliError::new)?;
+                        let g = crate::run_gpu::run(
+                            &options,
+                            &resolved,
+                            args.stack_size,
+                            tree,
+                            (&queries.bytes, &init),
+                            queries.record_sizes(),
+                        )?;
+                        Ok(finish(job, &resolved, g.bytes, &g.results, g.timing))
+                    })
+                    .collect();
+            }
+        };
+        let ckey = |job: &Job| (job.layout.clone(), job.kind.name(), job.target.name());
         let mut compile_errors: BTreeMap<String, String> = BTreeMap::new();
         for job in group {
             if compiled.contains_key(&ckey(job)) {
                 continue;
             }
             let made = resolve_kind(&job.layout, None, job.kind).and_then(|resolved| {
-                let codegen = match job.backend {
+                let codegen = match backend {
                     RunBackend::Jit => Codegen::Cranelift,
                     RunBackend::Llvm => Codegen::Llvm(3),
                 };
@@ -457,7 +459,6 @@ fn sweep(
             }
         }
         // Pack every layout of the context.
-        let init = queries.initial_results();
         let mut ready = Vec::new();
         let mut out: Vec<Result<Vec<String>, CliError>> = Vec::new();
         for job in group {
@@ -507,75 +508,11 @@ fn sweep(
             let Some((_, resolved, packed, results, times)) = slot else {
                 continue;
             };
-            let job = &group[k];
             let drop = (runs.saturating_sub(1)) / 4;
             let mean = scion_runtime::timing::trimmed_mean(&times, drop, drop);
             let timing = scion_runtime::timing::Timing { raw: times, mean };
-            // An eight-wide layout's hits are those of the wide reference over the tree
-            // collapsed to eight children (with its decoded boxes when quantized), which can
-            // differ from the binary one's on rays grazing axis-aligned geometry
-            // (docs/runtime.md).
-            let wide = resolved.tree_type == "BVH8" && job.kind != QueryKind::ClosestPoint;
-            let checked = if wide {
-                check_wide(resolved.boxes, tree, queries, &results)
-            } else {
-                queries.check(
-                    &scene.triangles,
-                    &resolved.boxes.decoded_tree(tree),
-                    &results,
-                    1024,
-                    &driver,
-                )
-            };
-            let check = match checked {
-                Ok(_) => "identical".to_string(),
-                Err(e) => {
-                    say(
-                        &bar,
-                        format!(
-                            "scion: warning: {} {} {} {}: {e}",
-                            job.scene,
-                            job.kind.name(),
-                            job.queries,
-                            job.layout
-                        ),
-                    );
-                    "differs".to_string()
-                }
-            };
-            let err = match job.kind {
-                QueryKind::ClosestPoint => None,
-                _ => crate::quant_error::measure(resolved.boxes, tree, &queries.rays, &driver),
-            };
-            let n = queries.len();
-            let bytes = packed.bytes();
-            let f = |x: f64| format!("{x:.6}");
-            out[k] = Ok(vec![
-                prov.commit.clone(),
-                prov.machine.clone(),
-                prov.cpus.clone(),
-                prov.toolchain.clone(),
-                now_utc(),
-                job.scene.clone(),
-                scene.len().to_string(),
-                job.kind.name().to_string(),
-                job.queries.to_string(),
-                job.n.to_string(),
-                backend_name(job.backend).to_string(),
-                threads.to_string(),
-                builder.to_string(),
-                job.layout.clone(),
-                bytes.to_string(),
-                f(bytes as f64 / scene.len().max(1) as f64),
-                format!("{:.9}", timing.mean.as_secs_f64()),
-                f(timing.ns_per_query(n)),
-                f(timing.queries_per_second(n) / 1e6),
-                check,
-                err.as_ref().map_or(String::new(), |e| f(e.inflation.area)),
-                err.as_ref().map_or(String::new(), |e| f(e.extra()[0])),
-                err.as_ref().map_or(String::new(), |e| f(e.extra()[1])),
-                args.runs.to_string(),
-            ]);
+            let bytes = packed.bytes() as u64;
+            out[k] = Ok(finish(&group[k], resolved, bytes, &results, timing));
         }
         out
     };
@@ -586,7 +523,7 @@ fn sweep(
             j.kind.name(),
             j.queries,
             j.n,
-            backend_name(j.backend),
+            j.target.name(),
         )
     };
     let mut start = 0;
@@ -673,48 +610,5 @@ fn say(bar: &indicatif::ProgressBar, line: String) {
         eprintln!("{line}");
     } else {
         bar.println(line);
-    }
-}
-
-/// The time now, `YYYY-MM-DDTHH:MM:SSZ`.
-fn now_utc() -> String {
-    let s = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_secs());
-    let (days, rem) = (s / 86_400, s % 86_400);
-    // Civil from days (Howard Hinnant's algorithm).
-    let z = days as i64 + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = doy - (153 * mp + 2) / 5 + 1;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    let y = yoe + era * 400 + i64::from(m <= 2);
-    format!(
-        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z",
-        rem / 3600,
-        rem % 3600 / 60,
-        rem % 60
-    )
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn csv_fields_round_trip() {
-        let cells = ["a", "b,c", "say \"hi\"", ""];
-        let line: Vec<String> = cells.iter().map(|c| csv_field(c)).collect();
-        assert_eq!(split_csv(&line.join(",")), cells);
-    }
-
-    #[test]
-    fn dates_are_civil() {
-        let d = now_utc();
-        assert_eq!(d.len(), 20, "{d}");
-        assert!(d.starts_with("20"), "{d}");
     }
 }

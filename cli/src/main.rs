@@ -21,6 +21,7 @@ mod memory;
 mod plot;
 mod quant_error;
 mod render;
+mod results;
 mod run;
 mod run_gpu;
 mod trace;

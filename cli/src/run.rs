@@ -106,8 +106,14 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
     let (results, timing, ran) = match &entries {
         Some(entries) => run_cpu(entries, &queries, &init, &tree, &driver, args, kind)?,
         None => {
+            let options = crate::run_gpu::GpuOptions {
+                device: args.device,
+                threads: args.threads,
+                runs: args.runs,
+                quiet: false,
+            };
             let g = crate::run_gpu::run(
-                args,
+                &options,
                 &resolved,
                 stack_size,
                 &tree,

@@ -8,7 +8,7 @@
 
 use crate::gpu::{compile_program_kit, gpu_err, open_device, own_cpu};
 use crate::trace::progress;
-use crate::{CliError, DeviceArg, RunArgs};
+use crate::{CliError, DeviceArg};
 use scion_compiler::abi::{EntrySig, EntryTarget};
 use scion_cuda::trace::GpuPipeline;
 use scion_cuda::Launcher;
@@ -35,11 +35,30 @@ pub struct GpuRun {
     pub device: String,
 }
 
+/// Where and how often a GPU run goes (`scion run`'s and `scion explore`'s flags).
+#[derive(Clone, Copy, Debug)]
+pub struct GpuOptions {
+    /// A real or an emulated GPU (not the CPU).
+    pub device: DeviceArg,
+    /// Host threads of the emulated GPU's grid.
+    pub threads: usize,
+    /// Timed runs after the warm-up (the paper's method: 9).
+    pub runs: u32,
+    /// No progress lines (a caller with its own progress bar).
+    pub quiet: bool,
+}
+
+fn step(args: &GpuOptions, what: &str) {
+    if !args.quiet {
+        progress(what);
+    }
+}
+
 /// Compiles `resolved`'s program for the device `args.device` names and runs `queries` (records
 /// of the algorithm's query size) from the result records `initial` over `tree`; `expected`
 /// are the query kind's record sizes, which the entry's must be.
 pub fn run(
-    args: &RunArgs,
+    args: &GpuOptions,
     resolved: &Resolved,
     stack_size: Option<u32>,
     tree: &LogicalTree,
@@ -64,10 +83,13 @@ pub fn run(
     match args.device {
         DeviceArg::Cpu => unreachable!("the CPU path is `scion run`'s own"),
         DeviceArg::GpuEmulated => {
-            progress(&format!(
-                "compiling the GPU kernels of {} for layout `{}` for this CPU",
-                p.algorithm, p.layout
-            ));
+            step(
+                args,
+                &format!(
+                    "compiling the GPU kernels of {} for layout `{}` for this CPU",
+                    p.algorithm, p.layout
+                ),
+            );
             let gpu = EmulatedGpu::compile_program(
                 p,
                 &LoOptions {
@@ -104,10 +126,10 @@ pub fn run(
         }
         DeviceArg::Gpu => {
             let device = open_device(0)?;
-            progress(&format!(
-                "compiling {} for layout `{}` to PTX",
-                p.algorithm, p.layout
-            ));
+            step(
+                args,
+                &format!("compiling {} for layout `{}` to PTX", p.algorithm, p.layout),
+            );
             let own = own_cpu(&device);
             let (kit, sig, compile_time) =
                 compile_program_kit(p, resolved.boxes, stack_size, own.as_deref())?;
@@ -140,7 +162,7 @@ pub fn run(
 #[allow(clippy::too_many_arguments)]
 fn launch<L: Launcher>(
     pipeline: &GpuPipeline<L>,
-    args: &RunArgs,
+    args: &GpuOptions,
     tree: &LogicalTree,
     queries: &[u8],
     initial: &[u8],
@@ -148,13 +170,13 @@ fn launch<L: Launcher>(
     compile_time: Duration,
     device: String,
 ) -> Result<GpuRun, CliError> {
-    progress("packing the tree on the device");
+    step(args, "packing the tree on the device");
     let packed = pipeline.pack(tree, tree.stats().depth).map_err(gpu_err)?;
     let on_device = pipeline.upload_queries(queries, qs, rs).map_err(gpu_err)?;
-    progress(&format!(
-        "running {} queries on the device",
-        queries.len() / qs
-    ));
+    step(
+        args,
+        &format!("running {} queries on the device", queries.len() / qs),
+    );
     let stack_note = |e: scion_cuda::CudaError| {
         gpu_err(e).note(
             "a traversal deeper than its stack stops with status 1: try a larger --stack-size",

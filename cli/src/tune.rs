@@ -11,9 +11,11 @@
 //! FILE` compiles the chosen layout's entries (a host object file, a PTX kit for `scion trace
 //! --device gpu --ptx`, or the C header of the entries).
 
-use crate::explore::read_rows;
+use crate::args_study::ExploreDevice;
 use crate::io::outln;
 use crate::plot::{contexts, frontier, Point};
+use crate::results::read_rows;
+use crate::DeviceArg;
 use crate::{CliError, ExploreArgs, TuneArgs, TuneEmit};
 use scion_host::jit::{program_lo, LoOptions};
 use scion_host::library::{resolve_kind, QueryKind};
@@ -55,6 +57,11 @@ pub fn run(args: &TuneArgs) -> Result<(), CliError> {
         rays: vec![queries.to_string()],
         sizes: vec![args.n],
         backends: vec![args.backend],
+        devices: vec![match args.device {
+            DeviceArg::Cpu => ExploreDevice::Cpu,
+            DeviceArg::Gpu => ExploreDevice::Gpu,
+            DeviceArg::GpuEmulated => ExploreDevice::GpuEmulated,
+        }],
         threads: args.threads,
         runs: args.runs,
         builder: crate::BuilderArg::Sah,
@@ -62,6 +69,7 @@ pub fn run(args: &TuneArgs) -> Result<(), CliError> {
         stack_size: None,
         output: results.clone(),
         plots: None,
+        peers: None,
     };
     crate::explore::run(&sweep)?;
     let rows = read_rows(&results)?.unwrap_or_default();
@@ -71,10 +79,7 @@ pub fn run(args: &TuneArgs) -> Result<(), CliError> {
         kind.name(),
         queries,
         &args.n.to_string(),
-        match args.backend {
-            crate::RunBackend::Jit => "cranelift",
-            crate::RunBackend::Llvm => "llvm-O3",
-        },
+        crate::explore::backend_column(args.device, args.backend),
         &args.threads.to_string(),
     ];
     let points: Vec<Point> = contexts(&rows)

@@ -97,6 +97,126 @@ fn a_sweep_writes_checked_rows_resumes_and_plots() {
     assert!(plots
         .join("teapot-closest-hit-primary-4096-llvm-O3-1-error.svg")
         .exists());
+    // Every figure is also a PNG (its text drawn with the embedded font).
+    for stem in [
+        "teapot-closest-hit-primary-4096-llvm-O3-1",
+        "teapot-closest-hit-primary-4096-llvm-O3-1-error",
+        "teapot-closest-point-points-4096-llvm-O3-1",
+    ] {
+        let png = std::fs::read(plots.join(format!("{stem}.png"))).unwrap();
+        assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n", "{stem}.png is a PNG");
+    }
+
+    // Peers on the plots: their time scaled by the ratio to their anchor in their own run.
+    let r = rows(&csv);
+    let pbrt_ns: f64 = r[1..]
+        .iter()
+        .find(|row| {
+            row[col("layout")] == "pbrt"
+                && row[col("queries")] == "primary"
+                && row[col("kind")] == "closest-hit"
+        })
+        .map(|row| row[col("ns_per_query")].parse().unwrap())
+        .unwrap();
+    let peers = dir.join("peers.csv");
+    std::fs::write(
+        &peers,
+        "scene,kind,queries,n,threads,peer,bytes,triangles,ns_per_query,anchor,anchor_ns_per_query\n\
+         teapot.obj,closest-hit,primary,4096,1,embree,99200,992,50.0,llvm-O3 pbrt,200.0\n\
+         teapot.obj,closest-hit,primary,4096,1,tinybvh bvh8_cpu,,992,100.0,llvm-O3 pbrt,200.0\n\
+         teapot.obj,closest-hit,primary,4096,2,other threads,99200,992,1.0,llvm-O3 pbrt,200.0\n",
+    )
+    .unwrap();
+    let mut with_peers = args.to_vec();
+    with_peers.extend(["--peers", peers.to_str().unwrap()]);
+    succeeds_with(&scion(&with_peers), "plots ");
+    let index = std::fs::read_to_string(plots.join("index.md")).unwrap();
+    let embree = format!("| peer: embree | 100.0 | {:.1} | |", pbrt_ns * 0.25);
+    let tiny = format!("| peer: tinybvh bvh8_cpu | ? | {:.1} | |", pbrt_ns * 0.5);
+    assert!(index.contains(&embree), "{embree} in {index}");
+    assert!(index.contains(&tiny), "{tiny} in {index}");
+    assert!(!index.contains("other threads"), "{index}");
+    let bad = dir.join("bad.csv");
+    std::fs::write(&bad, "scene,peer\nteapot,x\n").unwrap();
+    let mut bad_args = args.to_vec();
+    bad_args.extend(["--peers", bad.to_str().unwrap()]);
+    fails_with(&scion(&bad_args), 1, "not a peers file");
+}
+
+#[test]
+fn a_gpu_sweep_runs_the_gpu_kernels() {
+    let dir = scratch("gpu");
+    let csv = dir.join("r.csv");
+    let o = scion(&[
+        "explore",
+        "--scenes",
+        "teapot",
+        "--layouts",
+        "pbrt,bvh8",
+        "--kinds",
+        "closest-hit,closest-point",
+        "--rays",
+        "primary",
+        "--devices",
+        "gpu-emulated",
+        "--sizes",
+        "2^12",
+        "--runs",
+        "1",
+        "-o",
+        csv.to_str().unwrap(),
+    ]);
+    succeeds_with(&o, "4 measurements to make");
+    let r = rows(&csv);
+    assert_eq!(r.len(), 5, "a header and four rows");
+    let h = &r[0];
+    let col = |name: &str| h.iter().position(|c| c == name).unwrap();
+    for row in &r[1..] {
+        assert_eq!(row[col("backend")], "gpu-emulated", "{row:?}");
+        assert_eq!(row[col("check")], "identical", "{row:?}");
+    }
+    // `--devices gpu` measures on an NVIDIA GPU, or says there is none.
+    let o = scion(&[
+        "explore",
+        "--scenes",
+        "teapot",
+        "--layouts",
+        "pbrt",
+        "--rays",
+        "primary",
+        "--devices",
+        "gpu",
+        "--sizes",
+        "2^12",
+        "--runs",
+        "1",
+        "-o",
+        dir.join("gpu.csv").to_str().unwrap(),
+    ]);
+    if !o.status.success() {
+        fails_with(&o, 1, "NVIDIA GPU");
+    } else {
+        let r = rows(&dir.join("gpu.csv"));
+        assert!(r[1..].iter().all(|row| row.contains(&"ptx".to_string())));
+    }
+    // tune on the emulated GPU: chooses among what it measured there.
+    let o = scion(&[
+        "tune",
+        "--scene",
+        "teapot",
+        "--layouts",
+        "pbrt,bvh8",
+        "--device",
+        "gpu-emulated",
+        "--n",
+        "2^12",
+        "--runs",
+        "1",
+        "--results",
+        dir.join("tune.csv").to_str().unwrap(),
+    ]);
+    succeeds_with(&o, "choice       ");
+    succeeds_with(&o, "gpu-emulated");
 }
 
 #[test]

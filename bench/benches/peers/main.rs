@@ -14,7 +14,10 @@
 //! the reference: `hand-pbrt` (the hand-written kernel over the pbrt layout's bytes,
 //! `scion_bench::pbrt_kernel`), `obvhs-bvh2,obvhs-cwbvh,embree,tinybvh-bvh2,tinybvh-bvh8`; all by
 //! default; `--peers ''` runs none), `--tsv PATH` (also append one tab-separated line per row to
-//! PATH, the input of scripts/bench-peers.sh), `--trace-only NAME` (trace only the row NAME, once,
+//! PATH, the input of scripts/bench-peers.sh), `--peer-csv PATH` (also append the peer
+//! libraries' rows to the peers file PATH, each anchored to the LLVM row of the first of
+//! `--layouts`: what `scion explore --peers` draws on its plots; see
+//! `scion_runtime::timing::PEER_FIELDS`), `--trace-only NAME` (trace only the row NAME, once,
 //! untimed: what scripts/perf-counters.sh runs under valgrind), `--builders` (instead of timing,
 //! compare the trees of Scion's builder, tinybvh's and obvhs's: SAH cost and the reference
 //! traversal's work per ray on each, see `builders`), `--tree scion|tinybvh|obvhs` (the tree the
@@ -31,7 +34,7 @@ mod obvhs_peer;
 mod scion_rows;
 mod tinybvh_peer;
 
-use scion_bench::{race, table, tsv_rows, Contender, RayKind, Workload};
+use scion_bench::{peer_csv_rows, race, table, tsv_rows, Contender, RayKind, Workload};
 use scion_host::oracle::ClosestHit;
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::reference::closest_hits_tree;
@@ -50,6 +53,7 @@ struct Args {
     interp_rays: usize,
     peers: Vec<String>,
     tsv: Option<PathBuf>,
+    peer_csv: Option<PathBuf>,
     trace_only: Option<String>,
     builders: bool,
     tree: String,
@@ -83,6 +87,7 @@ fn parse() -> Result<Args, String> {
         interp_rays: 1024,
         peers: PEERS.map(str::to_string).to_vec(),
         tsv: None,
+        peer_csv: None,
         trace_only: None,
         builders: false,
         tree: "scion".into(),
@@ -117,6 +122,7 @@ fn parse() -> Result<Args, String> {
             }
             "--interp-rays" => a.interp_rays = num(value()?)? as usize,
             "--tsv" => a.tsv = Some(PathBuf::from(value()?)),
+            "--peer-csv" => a.peer_csv = Some(PathBuf::from(value()?)),
             "--trace-only" => a.trace_only = Some(value()?),
             "--builders" => a.builders = true,
             "--tree" => a.tree = value()?,
@@ -279,6 +285,25 @@ fn run(a: &Args) -> Result<(), String> {
             .open(path)
             .map_err(|e| format!("{}: {e}", path.display()))?;
         f.write_all(tsv_rows(&w, a.threads, &outcomes).as_bytes())
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    if let Some(path) = &a.peer_csv {
+        let anchor = format!(
+            "llvm-O3 {}",
+            a.layouts.first().map_or("pbrt", String::as_str)
+        );
+        let rows = peer_csv_rows(&w, a.n, a.threads, &outcomes, &anchor)?;
+        let new = !path.exists();
+        let mut f = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(path)
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        if new {
+            writeln!(f, "{}", scion_runtime::timing::PEER_FIELDS.join(","))
+                .map_err(|e| format!("{}: {e}", path.display()))?;
+        }
+        f.write_all(rows.as_bytes())
             .map_err(|e| format!("{}: {e}", path.display()))?;
     }
     Ok(())
