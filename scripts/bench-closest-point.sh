@@ -17,8 +17,14 @@
 # `<!-- bench-closest-point:begin -->` and `<!-- bench-closest-point:end -->` (BENCH_NO_DOC=1:
 # print only).
 #
+# With PEER_CSV=FILE, also appends the peers' rows to the peers file FILE (the columns of
+# `scion_runtime::timing::PEER_FIELDS`), each anchored to Scion's pbrt (LLVM -O3) measured by the
+# same benchmark binary, for `scion explore --peers` (scripts/explore-docs.sh): parry3d from the
+# same run, FCPW from its own process just before it.
+#
 # Usage: scripts/bench-closest-point.sh [SCENE_NAME...]   (default: the ten library scenes)
-#   Environment: BENCH_N (points, default 65536), BENCH_RUNS (9).
+#   Environment: BENCH_N (points, default 65536), BENCH_RUNS (9), PEER_CSV (none),
+#   BENCH_NO_DOC=1 (print only).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 . scripts/bench-lib.sh
@@ -51,6 +57,17 @@ table=$out/table.md
     fv=$(taskset -c 0 python3 bench/fcpw/fcpw_closest.py "$out/tris.bin" "$out/points.bin" "$runs" "$out/fcpw.out" | awk '{ print $3 }')
     fs=$(taskset -c 0 python3 bench/fcpw/fcpw_closest.py "$out/tris.bin" "$out/points.bin" "$runs" "$out/fcpw-scalar.out" scalar | awk '{ print $3 }')
     "$bin" --scene "$f" --n "$n" --runs "$runs" --peer "fcpw=$out/fcpw.out" > "$out/run.txt"
+    if [ -n "${PEER_CSV:-}" ]; then
+      [ -f "$PEER_CSV" ] || echo "scene,kind,queries,n,threads,peer,bytes,triangles,ns_per_query,anchor,anchor_ns_per_query" > "$PEER_CSV"
+      awk -v s="$name" -v n="$n" -v fv="$fv" -v fs="$fs" '
+        $1 == "triangles" { t = $2 } $1 == "scion_ms" { sm[$2] = $3 } $1 == "parry_ms" { pm = $2 }
+        END {
+          ns = 1e6 / n; a = sm["pbrt"] * ns
+          printf "%s,closest-point,points,%d,1,parry3d,,%d,%.4f,llvm-O3 pbrt,%.4f\n", s, n, t, pm * ns, a
+          printf "%s,closest-point,points,%d,1,fcpw,,%d,%.4f,llvm-O3 pbrt,%.4f\n", s, n, t, fv * ns, a
+          printf "%s,closest-point,points,%d,1,fcpw scalar,,%d,%.4f,llvm-O3 pbrt,%.4f\n", s, n, t, fs * ns, a
+        }' "$out/run.txt" >> "$PEER_CSV"
+    fi
     awk -v s="$name" -v n="$n" -v fv="$fv" -v fs="$fs" '
       $1 == "triangles" { t = $2 } $1 == "scion_ms" { sm[$2] = $3 } $1 == "parry_ms" { pm = $2 }
       $1 == "scion_layouts_differ" && $2 != 0 { print "bench-closest-point: the layouts differ on " $2 " answers" > "/dev/stderr"; bad = 1 }

@@ -179,6 +179,24 @@ if [ "$mode" = scion ] && [ $no_device -eq 0 ]; then
   done
 fi
 
+# A design-space sweep on the device (issue 17: `scion explore --devices`), the kit's layouts
+# over the two smallest scenes, closest hit with primary rays, every answer checked: its CSV,
+# Pareto plots and index under $RESULTS/explore (mode scion only). Not counted as a failure of
+# the check: its warnings say what did not run.
+if [ "$mode" = scion ] && [ $no_device -eq 0 ]; then
+  say ""
+  say "== scion explore --devices $DEVICE =="
+  log=$RESULTS/logs/explore.log
+  scenes_arg=$(IFS=,; echo "${objs[*]:0:2}")
+  cmd=("$KIT/bin/scion" explore --devices "$DEVICE" --scenes "$scenes_arg"
+       --layouts "$(echo "$LAYOUTS" | tr ' ' ,)" --kinds closest-hit --rays primary
+       --sizes "$N" --runs "$RUNS" -o "$RESULTS/explore/results.csv" --plots "$RESULTS/explore")
+  mkdir -p "$RESULTS/explore"
+  echo "\$ ${cmd[*]}" > "$log"
+  timeout $((TIMEOUT * 4)) "${cmd[@]}" >> "$log" 2>&1
+  say "explore: rc $?, $(grep -m1 '^results' "$log" || tail -1 "$log")"
+fi
+
 say ""
 say "== GPU tests of scion-cuda =="
 tests_failed=0

@@ -1,12 +1,15 @@
 //! `scion explore`: the design space swept (paper §9.2): every scene × query kind × query set
-//! (primary or secondary rays, points) × size × backend × layout that has an entry of the kind,
-//! timed by the paper's method on the same queries (the layouts of a context interleaved round
-//! by round: one warm-up round, then `--runs` rounds, the middle ones averaged) and checked
-//! against the reference, one CSV row per measurement (`ROW_FIELDS`), appended and flushed as
-//! each context ends. A rerun with
-//! the same output skips the rows already there (the key: scene, kind, queries, size, backend,
-//! threads, builder, layout), so a sweep stopped halfway resumes; rows of another commit are
-//! kept and measured again. Every row carries the machine, the commit and the toolchain.
+//! (primary or secondary rays, points) × size × target (this CPU through each backend; an
+//! NVIDIA GPU, or its kernels emulated on this CPU: `--devices`) × layout that has an entry of
+//! the kind, timed by the paper's method on the same queries (on the CPU the layouts of a
+//! context interleaved round by round: one warm-up round, then `--runs` rounds, the middle ones
+//! averaged; on a GPU each layout's kernels timed by the device after a warm-up, as `scion run
+//! --device` does) and checked against the reference, one CSV row per measurement
+//! (`ROW_FIELDS`), appended and flushed as each context ends. A rerun with the same output
+//! skips the rows already there (the key: scene, kind, queries, size, backend, threads,
+//! builder, layout), so a sweep stopped halfway resumes; rows of an earlier commit count as
+//! measured (delete the file, or give another, to measure again). Every row carries the
+//! machine, the commit and the toolchain.
 //!
 //! Per row: the packed bytes and bytes per triangle, the mean time of the middle runs, the
 //! time per query and the throughput, whether the answers equal the reference, and for a

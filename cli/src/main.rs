@@ -71,10 +71,11 @@ enum Command {
     /// the camera `scion trace` uses, each hit checked against the reference, shaded by the hit
     /// triangle's normal. Every layout that returns the reference's hits draws the same bytes.
     Render(RenderArgs),
-    /// Sweep the design space: scenes × query kinds × query sets × sizes × backends × every
-    /// library layout with an entry of the kind, timed by the paper's method and checked, one
-    /// CSV row per measurement (resumable: a rerun skips what the file has), then optionally
-    /// Pareto plots of time against memory and of speed against error (`--plots DIR`).
+    /// Sweep the design space: scenes × query kinds × query sets × sizes × devices and backends
+    /// × every library layout with an entry of the kind, timed by the paper's method and
+    /// checked, one CSV row per measurement (resumable: a rerun skips what the file has), then
+    /// optionally Pareto plots of time against memory, with peer libraries as reference points
+    /// (`--peers`), and of speed against error (`--plots DIR`, SVG and PNG).
     Explore(ExploreArgs),
     /// Choose the layout for one scene and query kind ("model only what a scene needs"): every
     /// candidate measured as `scion explore` does, the Pareto frontier of time against memory,

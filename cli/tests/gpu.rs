@@ -417,6 +417,17 @@ fn gpu_check_script_passes_on_the_emulated_device() {
     );
     assert!(rows.iter().all(|r| !r.contains("(!)")), "{table}");
     assert!(table.contains("closest hit, 400 rays"), "{table}");
+    // The sweep on the device: every kit layout on both scenes, checked, with its plots.
+    let csv = std::fs::read_to_string(results.join("explore/results.csv")).unwrap();
+    let swept: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(swept.len(), 8, "{csv}");
+    assert!(
+        swept
+            .iter()
+            .all(|r| r.contains(",gpu-emulated,") && r.contains(",identical,")),
+        "{csv}"
+    );
+    assert!(results.join("explore/index.md").exists());
     let tsv = std::fs::read_to_string(results.join("traces.tsv")).unwrap();
     assert_eq!(
         tsv.lines().filter(|l| l.ends_with("\tok")).count(),
