@@ -39,6 +39,9 @@ use std::path::Path;
 /// What a set of queries is made from: scene, kind, query set, size.
 type QueryKey = (String, &'static str, &'static str, usize);
 
+/// Closest points checked against brute force per context (the first ones).
+const CHECKED_POINTS: usize = 1024;
+
 /// Where a measurement runs: this CPU through one of the code generators, or a GPU (an NVIDIA
 /// one through CUDA, or the same kernels emulated on this CPU).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -330,6 +333,7 @@ fn sweep(
         }
         let (_, queries) = queries_cache.as_ref().expect("made above");
         let init = queries.initial_results();
+        let points_want = std::cell::OnceCell::new();
         // A measured layout's row: its answers checked, its error measured when quantized.
         let finish = |job: &Job,
                       resolved: &Resolved,
@@ -344,12 +348,18 @@ fn sweep(
             let wide = resolved.tree_type == "BVH8" && job.kind != QueryKind::ClosestPoint;
             let checked = if wide {
                 check_wide(resolved.boxes, tree, queries, results)
+            } else if job.kind == QueryKind::ClosestPoint {
+                // Brute force's answers, computed once for every layout of the context.
+                let want = points_want.get_or_init(|| {
+                    queries.expected(&scene.triangles, tree, CHECKED_POINTS, &driver)
+                });
+                queries.compare(want, results)
             } else {
                 queries.check(
                     &scene.triangles,
                     &resolved.boxes.decoded_tree(tree),
                     results,
-                    1024,
+                    CHECKED_POINTS,
                     &driver,
                 )
             };

@@ -376,6 +376,11 @@ pub struct TraceArgs {
     /// code (the test suite checks the generated program's own counts against it).
     #[arg(long)]
     pub stats: bool,
+    /// Do not compare the hits of generated code (`--backend jit|llvm`) with the reference
+    /// traversal of the tree the layout traverses (its decoded boxes when quantized; the
+    /// eight-wide reference for eight-wide layouts), which `scion trace` does by default.
+    #[arg(long)]
+    pub no_check: bool,
 }
 
 fn main() -> ExitCode {

@@ -23,11 +23,13 @@ use scion_runtime::bvh::wide::collapse;
 use scion_runtime::bvh::{
     build_fcpw, build_median, build_sah_binned, FcpwOptions, LogicalNode, LogicalTree, SahOptions,
 };
-use scion_runtime::geom::{Ray, Triangle};
+use scion_runtime::geom::{Hit, Ray, Triangle};
 use scion_runtime::query::{
     axis_rays, hits_checksum, primary_rays_n, read_rays, secondary_rays, write_hits,
 };
-use scion_runtime::reference::{closest_hits_tree_stats, closest_hits_wide_stats};
+use scion_runtime::reference::{
+    closest_hit_wide, closest_hits_tree, closest_hits_tree_stats, closest_hits_wide_stats,
+};
 use scion_runtime::scene::{load_obj, Scene};
 use scion_runtime::timing::{measure_with, Timing, TimingPlan};
 use std::time::{Duration, Instant};
@@ -289,6 +291,10 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         timing.ns_per_query(rays.len())
     );
     outln!("hits         {hit_count} of {} rays", rays.len());
+    if compiled && !args.no_check {
+        let wide = resolved.as_ref().is_some_and(|r| r.tree_type == "BVH8");
+        check_hits(&hits, boxes, wide, &tree, &rays, threads)?;
+    }
     if args.stats {
         let traversed = boxes.decoded_tree(&tree);
         // Quantized boxes of the binary tree (not per wide node, reported below).
@@ -347,6 +353,58 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         outln!("output       {} ({} bytes)", path.display(), hits.len() * 8);
     }
     Ok(())
+}
+
+/// Compares generated code's hits with the reference traversal of the tree the layout
+/// traverses (its decoded boxes; for an eight-wide layout the wide reference over the tree
+/// collapsed to eight children, whose hits can differ from the binary one's on rays grazing
+/// axis-aligned geometry, docs/runtime.md), bit for bit; prints the verdict or fails naming the
+/// first ray that differs.
+fn check_hits(
+    hits: &[Hit],
+    boxes: Boxes,
+    wide: bool,
+    tree: &LogicalTree,
+    rays: &[Ray],
+    threads: usize,
+) -> Result<(), CliError> {
+    progress("checking every hit against the reference");
+    let driver = BatchDriver::new(threads).map_err(CliError::new)?;
+    let want: Vec<Hit> = if wide {
+        let exact = collapse::<8>(tree);
+        let w8 = scion_host::quantized::decoded_wide(boxes, &exact);
+        rays.iter()
+            .map(|r| closest_hit_wide(&w8, &tree.primitives, r))
+            .collect()
+    } else {
+        closest_hits_tree(&boxes.decoded_tree(tree), rays, &driver)
+    };
+    let differs = |(g, w): (&Hit, &Hit)| g.t.to_bits() != w.t.to_bits() || g.prim != w.prim;
+    let which = if wide {
+        "eight-wide reference"
+    } else {
+        "reference"
+    };
+    match hits.iter().zip(&want).position(differs) {
+        None => {
+            outln!(
+                "check        identical to the {which} on all {} rays",
+                rays.len()
+            );
+            Ok(())
+        }
+        Some(i) => {
+            let count = hits.iter().zip(&want).filter(|p| differs(*p)).count();
+            Err(CliError::new(format!(
+                "ray {i}: the hit differs from the {which}'s: got {:?}, reference {:?} ({count} of \
+                 {} rays differ)",
+                hits[i],
+                want[i],
+                rays.len()
+            ))
+            .note("--no-check traces without this comparison"))
+        }
+    }
 }
 
 /// How `scion trace` traces: a layout-free backend, or code specialized to a layout driven

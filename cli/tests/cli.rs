@@ -570,3 +570,61 @@ fn stats_of_a_quantized_layout_report_its_error_against_the_exact_boxes() {
     ]);
     assert!(o.status.success() && !text(&o.stdout).contains("error/ray"));
 }
+
+/// Generated code's hits are compared with the reference by default: a correct layout says so,
+/// an algorithm that skips far children is caught (naming the ray), and `--no-check` skips the
+/// comparison.
+#[test]
+fn generated_hits_are_checked_against_the_reference() {
+    let dir = scratch("check");
+    let scene = write(&dir, "soup.obj", &soup(400));
+    let base = [
+        "trace",
+        "--scene",
+        &scene,
+        "--rays",
+        "secondary",
+        "--n",
+        "2000",
+        "--runs",
+        "1",
+    ];
+    for (backend, layout, which) in [
+        ("jit", "pbrt", "the reference"),
+        ("llvm", "pbrt-q16", "the reference"),
+        ("llvm", "bvh8", "the eight-wide reference"),
+    ] {
+        let mut args = base.to_vec();
+        args.extend(["--backend", backend, "--layout", layout]);
+        let o = scion(&args);
+        let out = text(&o.stdout);
+        assert!(o.status.success(), "{layout}: {}", text(&o.stderr));
+        assert!(
+            out.contains(&format!(
+                "check        identical to {which} on all 2000 rays"
+            )),
+            "{out}"
+        );
+    }
+    // Closest hit that never enters a right child.
+    let library = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../library/algorithms/closest_hit.scion"
+    );
+    let wrong = std::fs::read_to_string(library).unwrap().replace(
+        "closest_hit_node(ray, r, right, dr, best);",
+        "closest_hit_node(ray, r, left, dl, best);",
+    );
+    let file = write(&dir, "left_only.scion", &wrong);
+    let mut args = base.to_vec();
+    args.extend(["--backend", "llvm", "--algorithm", &file]);
+    let o = scion(&args);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o.stdout));
+    let e = text(&o.stderr);
+    assert!(e.contains("the hit differs from the reference's"), "{e}");
+    assert!(e.contains("--no-check"), "{e}");
+    args.push("--no-check");
+    let o = scion(&args);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(!text(&o.stdout).contains("check "));
+}

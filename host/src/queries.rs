@@ -121,15 +121,42 @@ impl Queries {
         max_brute: usize,
         driver: &BatchDriver,
     ) -> Result<String, String> {
+        let want = self.expected(triangles, traversed, max_brute, driver);
+        self.compare(&want, results)
+    }
+
+    /// The reference's answers [`Queries::check`] compares with (computed once, they can be
+    /// compared with the results of several layouts that traverse the same tree; closest
+    /// points' do not depend on the tree).
+    pub fn expected(
+        &self,
+        triangles: &[Triangle],
+        traversed: &LogicalTree,
+        max_brute: usize,
+        driver: &BatchDriver,
+    ) -> Expected {
+        match self.kind {
+            QueryKind::ClosestHit | QueryKind::AnyHit => {
+                Expected::Hits(closest_hits_tree(traversed, &self.rays, driver))
+            }
+            QueryKind::ClosestPoint => {
+                let k = self.points.len().min(max_brute);
+                Expected::Points(brute_points(triangles, &self.points[..k], driver))
+            }
+            QueryKind::Collide => unreachable!("{NOT_BATCHED}"),
+        }
+    }
+
+    /// Compares `results` with the reference's answers `want` (of [`Queries::expected`]).
+    pub fn compare(&self, want: &Expected, results: &[u8]) -> Result<String, String> {
         let word = |i: usize| u32::from_le_bytes(results[i..i + 4].try_into().unwrap());
         let differ = |i: usize, got: String, want: String| {
             Err(format!(
                 "query {i}: the answer differs from the reference: got {got}, reference {want}"
             ))
         };
-        match self.kind {
-            QueryKind::ClosestHit | QueryKind::AnyHit => {
-                let want = closest_hits_tree(traversed, &self.rays, driver);
+        match want {
+            Expected::Hits(want) => {
                 for (i, w) in want.iter().enumerate() {
                     if self.kind == QueryKind::ClosestHit {
                         let got = Hit::from_best(f32::from_bits(word(8 * i)), word(8 * i + 4));
@@ -143,13 +170,11 @@ impl Queries {
                 Ok(format!(
                     "identical to the reference on all {} queries (checksum of its hits {:016x})",
                     self.rays.len(),
-                    hits_checksum(&want)
+                    hits_checksum(want)
                 ))
             }
-            QueryKind::ClosestPoint => {
-                let n = self.points.len();
-                let k = n.min(max_brute);
-                let want = brute_points(triangles, &self.points[..k], driver);
+            Expected::Points(want) => {
+                let (n, k) = (self.points.len(), want.len());
                 for (i, w) in want.iter().enumerate() {
                     let got = closest_point_from(&results[20 * i..20 * i + 20]);
                     if !got.bit_eq(w) {
@@ -160,9 +185,17 @@ impl Queries {
                     "identical to brute force on {k} of {n} queries (the first {k})"
                 ))
             }
-            QueryKind::Collide => unreachable!("{NOT_BATCHED}"),
         }
     }
+}
+
+/// The reference's answers to a set of queries ([`Queries::expected`]).
+#[derive(Clone, Debug)]
+pub enum Expected {
+    /// The reference traversal's hits, one per ray.
+    Hits(Vec<Hit>),
+    /// Brute force's closest points of the first points.
+    Points(Vec<ClosestPoint>),
 }
 
 /// Brute force's closest point of each of `points`, on `driver`'s threads.
