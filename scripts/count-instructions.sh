@@ -11,7 +11,8 @@
 #   default: pbrt LinearBVH closest_hit BVH bunny 65536 (primary rays, one thread).
 #   e.g.   scripts/count-instructions.sh bvh8 Bvh8 closest_hit8 BVH8 fzk_haus
 #   Environment: CPU (scionc --cpu, default x86-64-v3: valgrind runs no AVX-512), BLOCKS=1,
-#   ALGORITHM (a .scion file instead of library/algorithms/ENTRY.scion).
+#   ALGORITHM (a .scion file instead of library/algorithms/ENTRY.scion), RAYS (primary, or
+#   secondary: `scion trace --rays secondary`'s).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh >/dev/null
@@ -39,11 +40,11 @@ ${CXX:-g++} -std=c++17 -O2 -I"$work" -Iruntime/capi/include -DSCION_LAYOUT="$lay
   -o "$work/trace"
 scene_path=$(scene_file "$scene" 2>/dev/null || echo "$scene")
 valgrind --tool=callgrind --dump-instr=yes --toggle-collect="scion_${entry}_$layout" \
-  --callgrind-out-file="$work/cg.out" "$work/trace" "$scene_path" "$n" 1 1 > "$work/run.out" \
+  --callgrind-out-file="$work/cg.out" "$work/trace" "$scene_path" "$n" 1 1 "${RAYS:-primary}" > "$work/run.out" \
   2> "$work/run.err" || { cat "$work/run.err" "$work/run.out" >&2; exit 1; }
 grep -q "mismatches: 0" "$work/run.out" || { cat "$work/run.out" >&2; echo "count-instructions: hits differ from the reference" >&2; exit 1; }
 total=$(sed -n 's/.*Collected : *\([0-9]*\).*/\1/p' "$work/run.err")
-awk -v t="$total" -v n="$n" -v what="$layout_file $entry $scene ($n primary rays, --cpu=$cpu)" \
+awk -v t="$total" -v n="$n" -v what="$layout_file $entry $scene ($n ${RAYS:-primary} rays, --cpu=$cpu)" \
   'BEGIN { printf "%s: %.1f instructions per ray\n", what, t / n }'
 if [ "${BLOCKS:-0}" = 1 ]; then
   (cd "$work" && python3 "$OLDPWD/scripts/callgrind-blocks.py" ./trace "scion_${entry}_$layout" "$n")

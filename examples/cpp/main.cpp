@@ -3,12 +3,13 @@
 // Loads an OBJ scene and builds its logical BVH with the runtime's C library
 // (libscion_runtime.a), packs it into layout SCION_LAYOUT with the generated entry points
 // (scion_L_sizes, scion_L_build, scion_L_root; one allocation per buffer, aligned to
-// SCION_L_BUFFER_ALIGN), traces the primary rays of `scion trace` with scion_A_L (A: closest_hit
+// SCION_L_BUFFER_ALIGN), traces the primary (or secondary) rays of `scion trace` with scion_A_L (A: closest_hit
 // by default) split into ranges over std::threads, prints `checksum: ...` (the number `scion trace`
 // prints) and checks every hit against the runtime's reference. Exit status: 0 when every hit
 // matches, 1 on a mismatch or an error (also out of memory), 2 for bad arguments.
 //
 // Usage: trace SCENE.obj [N rays = 65536, 1..2^32] [SEED = 1] [THREADS = 4, 1..1024]
+//              [RAYS = primary | secondary]
 // Built by the Makefile next to this file, which passes -DSCION_LAYOUT=<layout name>,
 // -DSCION_ENTRY=<closest-hit function> (default closest_hit), -DSCION_TREE=<its tree type>
 // (default BVH) and -DSCION_HEADER="<header of scionc --emit=header>". Any closest hit whose
@@ -85,8 +86,9 @@ int run(int argc, char **argv);
 }  // namespace
 
 int main(int argc, char **argv) {
-    if (argc < 2 || argc > 5) {
-        std::fprintf(stderr, "usage: %s SCENE.obj [N] [SEED] [THREADS]\n", argv[0]);
+    if (argc < 2 || argc > 6) {
+        std::fprintf(stderr, "usage: %s SCENE.obj [N] [SEED] [THREADS] [primary|secondary]\n",
+                     argv[0]);
         return 2;
     }
     // Nothing escapes as an uncaught exception: memory for the rays and results, and threads,
@@ -142,9 +144,14 @@ int run(int argc, char **argv) {
     }
     const LAYOUT_REF root = LAYOUT_FN(root)(&view, buffers);
 
-    // The primary rays of `scion trace --n N --seed SEED`.
+    // The rays of `scion trace --rays primary|secondary --n N --seed SEED`.
+    const std::string kind = argc > 5 ? argv[5] : "primary";
+    if (kind != "primary" && kind != "secondary") {
+        return fail("rays", ("`" + kind + "` is not primary or secondary").c_str());
+    }
     std::vector<ScionRay> rays(n);
-    if (scion_primary_rays(scene, n, seed, rays.data(), err, sizeof err) != SCION_RT_OK) {
+    const auto make = kind == "primary" ? scion_primary_rays : scion_secondary_rays;
+    if (make(scene, n, seed, rays.data(), err, sizeof err) != SCION_RT_OK) {
         return fail("generating rays", err);
     }
     std::vector<RESULT> results(n);

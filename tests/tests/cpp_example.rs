@@ -2,7 +2,7 @@
 //! `scionc -O3 --emit=obj --layout L --entry closest_hit` and `libscion_runtime.a`, runs it on
 //! a real scene, and the checksum it prints must equal the Rust path's (the runtime's
 //! reference closest hits of the same tree and rays, `hits_checksum`, what `scion trace`
-//! prints), for pbrt and ptr. The program also checks every hit against the reference itself
+//! prints), for pbrt (primary rays) and ptr (secondary rays). The program also checks every hit against the reference itself
 //! and exits nonzero on a mismatch. The collision program (`collide.cpp`, two trees and a sink
 //! of pairs through the C ABI) finds the Rust reference's pairs on the same layouts.
 //!
@@ -11,7 +11,7 @@
 
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::{build_sah_binned, SahOptions};
-use scion_runtime::query::{hits_checksum, primary_rays_n};
+use scion_runtime::query::{hits_checksum, primary_rays_n, secondary_rays};
 use scion_runtime::reference::closest_hits_tree;
 use scion_runtime::reference::collide::{collide_sweep, rotated};
 use scion_runtime::scene::{load_obj, manifest::scenes_dir};
@@ -24,12 +24,15 @@ mod tools;
 const RAYS: u64 = 20_000;
 const SEED: u64 = 3;
 
-/// The checksum of the Rust path for `scene`: binned SAH with the defaults, the primary rays
-/// of `scion trace --n RAYS --seed SEED`, the reference closest hits.
-fn rust_checksum(scene: &Path) -> u64 {
+/// The checksum of the Rust path for `scene`: binned SAH with the defaults, the primary (or
+/// secondary) rays of `scion trace --n RAYS --seed SEED`, the reference closest hits.
+fn rust_checksum(scene: &Path, kind: &str) -> u64 {
     let s = load_obj(scene).unwrap();
     let tree = build_sah_binned(&s.triangles, &SahOptions::default());
-    let rays = primary_rays_n(s.bounds(), RAYS, SEED).unwrap();
+    let rays = match kind {
+        "primary" => primary_rays_n(s.bounds(), RAYS, SEED).unwrap(),
+        _ => secondary_rays(s.bounds(), RAYS as usize, SEED),
+    };
     let hits = closest_hits_tree(&tree, &rays, &BatchDriver::new(2).unwrap());
     assert!(hits.iter().any(|h| h.is_hit()), "the rays miss the scene");
     hits_checksum(&hits)
@@ -46,7 +49,10 @@ fn cpp_example_prints_the_rust_checksum() {
     let scenes = scenes_dir().expect("the repository's scenes/ folder (or SCION_SCENES)");
     let target = build_tools(true);
     let build = std::env::temp_dir().join(format!("scion-cpp-example-{}", std::process::id()));
-    for (layout, file, scene) in [("LinearBVH", "pbrt", "teapot"), ("PtrBVH", "ptr", "pine")] {
+    for (layout, file, scene, kind) in [
+        ("LinearBVH", "pbrt", "teapot", "primary"),
+        ("PtrBVH", "ptr", "pine", "secondary"),
+    ] {
         let scene = scion_runtime::scene::manifest::find(scene)
             .unwrap()
             .path(&scenes);
@@ -72,6 +78,7 @@ fn cpp_example_prints_the_rust_checksum() {
                 format!("N={RAYS}"),
                 format!("SEED={SEED}"),
                 "THREADS=3".into(),
+                format!("RAYS={kind}"),
             ],
         );
         let stdout = String::from_utf8_lossy(&out.stdout);
@@ -87,7 +94,7 @@ fn cpp_example_prints_the_rust_checksum() {
         let printed = u64::from_str_radix(printed.trim(), 16).expect("a hex checksum");
         assert_eq!(
             printed,
-            rust_checksum(&scene),
+            rust_checksum(&scene, kind),
             "{layout}: the C++ checksum differs from the Rust path's\n{stdout}"
         );
         assert!(stdout.contains("mismatches: 0"), "{stdout}");

@@ -136,6 +136,11 @@ void scion_tree_free(ScionTree *tree);
 int32_t scion_primary_rays(const ScionScene *scene, uint64_t n, uint64_t seed, ScionRay *rays,
                            char *err, size_t err_len);
 
+/* Writes the `n` secondary rays of `scion trace --rays secondary --n N --seed S` for `scene`
+ * (origins and directions uniform in and around its box) to rays[0..n) (1 <= n <= 2^32). */
+int32_t scion_secondary_rays(const ScionScene *scene, uint64_t n, uint64_t seed, ScionRay *rays,
+                             char *err, size_t err_len);
+
 /* The runtime's reference closest hits of rays[0..n) against `tree`, on `threads` threads
  * (0: one per core), into hits[0..n). */
 int32_t scion_reference_closest_hits(const ScionTree *tree, const ScionRay *rays, uint64_t n,

@@ -5,7 +5,7 @@ use crate::ffi::{bad_arg, guard, report, Status, SCION_RT_ERR_EMPTY};
 use crate::scene::{ScionScene, ScionTree};
 use rt::batch::BatchDriver;
 use rt::geom::{Hit, Ray, Vec3};
-use rt::query::{hits_checksum, primary_rays_n};
+use rt::query::{hits_checksum, primary_rays_n, secondary_rays};
 use rt::reference::closest_hits_tree;
 use std::ffi::c_char;
 
@@ -95,6 +95,51 @@ pub unsafe extern "C" fn scion_primary_rays(
         }
         let made = primary_rays_n(s.scene.bounds(), n, seed)
             .ok_or_else(|| bad_arg(format!("scion_primary_rays: n = {n} is not in 1..=2^32")))?;
+        // SAFETY: `rays` has room for `n` rays and `made` has exactly `n`.
+        let out = unsafe { std::slice::from_raw_parts_mut(rays, made.len()) };
+        for (o, r) in out.iter_mut().zip(made) {
+            *o = r.into();
+        }
+        Ok(())
+    });
+    // SAFETY: `err` is NULL or has `err_len` writable bytes (the caller's contract).
+    unsafe { report(err, err_len, r) }
+}
+
+/// `scion_secondary_rays`.
+///
+/// # Safety
+/// `scene` is NULL or a live handle; `rays` is NULL or has room for `n` rays; `err` as
+/// `ffi::write_error`.
+#[no_mangle]
+pub unsafe extern "C" fn scion_secondary_rays(
+    scene: *const ScionScene,
+    n: u64,
+    seed: u64,
+    rays: *mut ScionRay,
+    err: *mut c_char,
+    err_len: usize,
+) -> Status {
+    let r = guard(|| {
+        // SAFETY: NULL or a live handle.
+        let Some(s) = (unsafe { scene.as_ref() }) else {
+            return Err(bad_arg("scion_secondary_rays: `scene` must not be NULL"));
+        };
+        if rays.is_null() {
+            return Err(bad_arg("scion_secondary_rays: `rays` must not be NULL"));
+        }
+        if s.scene.is_empty() {
+            return Err((
+                SCION_RT_ERR_EMPTY,
+                "the scene has no triangles, so there is no box to aim rays at".into(),
+            ));
+        }
+        if n == 0 || n > 1 << 32 {
+            return Err(bad_arg(format!(
+                "scion_secondary_rays: n = {n} is not in 1..=2^32"
+            )));
+        }
+        let made = secondary_rays(s.scene.bounds(), n as usize, seed);
         // SAFETY: `rays` has room for `n` rays and `made` has exactly `n`.
         let out = unsafe { std::slice::from_raw_parts_mut(rays, made.len()) };
         for (o, r) in out.iter_mut().zip(made) {
