@@ -572,10 +572,14 @@ fn stats_of_a_quantized_layout_report_its_error_against_the_exact_boxes() {
 }
 
 /// Generated code's hits are compared with the reference by default: a correct layout says so,
-/// an algorithm that skips far children is caught (naming the ray), and `--no-check` skips the
-/// comparison.
+/// an algorithm choosing its children as values agrees, one that skips far children is caught
+/// (naming the ray), and `--no-check` skips the comparison.
 #[test]
 fn generated_hits_are_checked_against_the_reference() {
+    let library = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../library/algorithms/closest_hit.scion"
+    );
     let dir = scratch("check");
     let scene = write(&dir, "soup.obj", &soup(400));
     let base = [
@@ -604,6 +608,48 @@ fn generated_hits_are_checked_against_the_reference() {
                 "check        identical to {which} on all 2000 rays"
             )),
             "{out}"
+        );
+    }
+    // Closest hit choosing the near and far child as values (`tree.if` on tree values: a
+    // select of node references) visits the same nodes in the same order.
+    let source = std::fs::read_to_string(library).unwrap();
+    let start = source.find("        let dl: f32").unwrap();
+    let end = source.find("      | Leaf(").unwrap();
+    let selects = format!(
+        "{}{}{}",
+        &source[..start],
+        "        let dl: f32 = distmin(r, left.bounds, best[0]);
+        let dr: f32 = distmin(r, right.bounds, best[0]);
+        let swap: bool = dr < dl;
+        let near: BVH = if swap { right } else { left };
+        let far: BVH = if swap { left } else { right };
+        let dn: f32 = if swap { dr } else { dl };
+        let df: f32 = if swap { dl } else { dr };
+        if dn < inf {
+          closest_hit_node(ray, r, near, dn, best);
+          if df < inf { closest_hit_node(ray, r, far, df, best); }
+        }
+      }
+",
+        &source[end..]
+    );
+    let file = write(&dir, "selects.scion", &selects);
+    for (backend, layout) in [("jit", "pbrt"), ("llvm", "ptr")] {
+        let mut args = base.to_vec();
+        args.extend([
+            "--backend",
+            backend,
+            "--layout",
+            layout,
+            "--algorithm",
+            &file,
+        ]);
+        let o = scion(&args);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        assert!(
+            text(&o.stdout).contains("check        identical to the reference on all 2000 rays"),
+            "{}",
+            text(&o.stdout)
         );
     }
     // Closest hit that never enters a right child.

@@ -21,6 +21,9 @@
 //! (a match's bound children, a child array's elements), and its reads use that parameter's
 //! table; a call passes, for each tree argument in order, the table of the tree it descends from.
 //!
+//! * a `tree.if` yielding tree values (`let near: BVH = if swap { right } else { left }`)
+//!   yields their references.
+//!
 //! Tree values used any other way (built with `tree.ctor`, returned, stored in a cell, put in a
 //! tuple) are reported (E0380), never miscompiled.
 
@@ -249,6 +252,7 @@ fn specialize_func(
     for (op, t) in matches {
         destruct(m, spec, op, tables[t], tree_ty, ref_ty)?;
         retype_children(m, f, tree_ty);
+        retype_tree_ifs(m, f, tree_ty, ref_ty);
     }
     for (op, t) in reads {
         read_op(m, spec, op, tables[t])?;
@@ -323,6 +327,41 @@ fn tree_provenance(
             _ => {}
         }
     }
+    // A `tree.if`'s tree result descends from the tree its arms' values descend from (post-
+    // order: an inner if's result is known before the outer one yields it).
+    for &op in ops.iter().rev() {
+        let o = &m.ops[op];
+        if !matches!(o.kind, OpKind::Tree(Op::If)) {
+            continue;
+        }
+        for (i, &r) in o.results.iter().enumerate() {
+            if m.values[r].ty != tree_ty {
+                continue;
+            }
+            let mut from = None;
+            let mut agree = true;
+            for &region in &o.regions {
+                let term = m.regions[region]
+                    .blocks
+                    .last()
+                    .and_then(|&b| m.blocks[b].ops.last().copied());
+                let Some(term) = term else { continue };
+                if !matches!(m.ops[term].kind, OpKind::Tree(Op::Yield)) {
+                    continue;
+                }
+                let v = m.ops[term].operands.get(i).copied();
+                let t = v.and_then(|v| tree_of.get(&scion_ir::rewrite::resolve_value(m, v)));
+                match (from, t) {
+                    (_, None) => agree = false,
+                    (None, Some(&t)) => from = Some(t),
+                    (Some(a), Some(&t)) => agree &= a == t,
+                }
+            }
+            if let (true, Some(t)) = (agree, from) {
+                tree_of.insert(r, t);
+            }
+        }
+    }
     tree_of
 }
 
@@ -357,6 +396,43 @@ fn retype_children(m: &mut Module, f: FuncId, tree_ty: TypeId) {
                 }
             }
             _ => {}
+        }
+    }
+}
+
+/// A `tree.if` choosing between tree values (`let near: BVH = if swap { right } else { left }`)
+/// chooses between their references once every value it yields is one: its result is retyped
+/// to the reference type (a select of node references after lowering). Arms that return
+/// instead of yielding do not constrain it.
+fn retype_tree_ifs(m: &mut Module, f: FuncId, tree_ty: TypeId, ref_ty: TypeId) {
+    for op in func_ops(m, f, Order::Pre) {
+        if !matches!(m.ops[op].kind, OpKind::Tree(Op::If)) {
+            continue;
+        }
+        let results = m.ops[op].results.clone();
+        for (i, &r) in results.iter().enumerate() {
+            if m.values[r].ty != tree_ty {
+                continue;
+            }
+            let all_refs = m.ops[op].regions.iter().all(|&region| {
+                let Some(&block) = m.regions[region].blocks.last() else {
+                    return false;
+                };
+                let Some(&term) = m.blocks[block].ops.last() else {
+                    return false;
+                };
+                let t = &m.ops[term];
+                match t.kind {
+                    OpKind::Tree(Op::Yield) => t.operands.get(i).is_some_and(|&v| {
+                        m.values[scion_ir::rewrite::resolve_value(m, v)].ty == ref_ty
+                    }),
+                    OpKind::Tree(Op::Return) => true,
+                    _ => false,
+                }
+            });
+            if all_refs {
+                m.values[r].ty = ref_ty;
+            }
         }
     }
 }
