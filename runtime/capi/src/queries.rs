@@ -79,38 +79,18 @@ pub unsafe extern "C" fn scion_primary_rays(
     err: *mut c_char,
     err_len: usize,
 ) -> Status {
-    let r = guard(|| {
-        // SAFETY: NULL or a live handle.
-        let Some(s) = (unsafe { scene.as_ref() }) else {
-            return Err(bad_arg("scion_primary_rays: `scene` must not be NULL"));
-        };
-        if rays.is_null() {
-            return Err(bad_arg("scion_primary_rays: `rays` must not be NULL"));
-        }
-        if s.scene.is_empty() {
-            return Err((
-                SCION_RT_ERR_EMPTY,
-                "the scene has no triangles, so there is no box to aim rays at".into(),
-            ));
-        }
-        let made = primary_rays_n(s.scene.bounds(), n, seed)
-            .ok_or_else(|| bad_arg(format!("scion_primary_rays: n = {n} is not in 1..=2^32")))?;
-        // SAFETY: `rays` has room for `n` rays and `made` has exactly `n`.
-        let out = unsafe { std::slice::from_raw_parts_mut(rays, made.len()) };
-        for (o, r) in out.iter_mut().zip(made) {
-            *o = r.into();
-        }
-        Ok(())
-    });
-    // SAFETY: `err` is NULL or has `err_len` writable bytes (the caller's contract).
-    unsafe { report(err, err_len, r) }
+    // SAFETY: the caller's contract, passed on.
+    unsafe {
+        make_rays("scion_primary_rays", scene, n, rays, (err, err_len), |b| {
+            primary_rays_n(b, n, seed)
+        })
+    }
 }
 
 /// `scion_secondary_rays`.
 ///
 /// # Safety
-/// `scene` is NULL or a live handle; `rays` is NULL or has room for `n` rays; `err` as
-/// `ffi::write_error`.
+/// As [`scion_primary_rays`].
 #[no_mangle]
 pub unsafe extern "C" fn scion_secondary_rays(
     scene: *const ScionScene,
@@ -120,13 +100,43 @@ pub unsafe extern "C" fn scion_secondary_rays(
     err: *mut c_char,
     err_len: usize,
 ) -> Status {
+    // SAFETY: the caller's contract, passed on.
+    unsafe {
+        make_rays(
+            "scion_secondary_rays",
+            scene,
+            n,
+            rays,
+            (err, err_len),
+            |b| {
+                (1..=1 << 32)
+                    .contains(&n)
+                    .then(|| secondary_rays(b, n as usize, seed))
+            },
+        )
+    }
+}
+
+/// The body of the ray makers: checks the handles, makes `n` rays of the scene's box with
+/// `make` (`None` when `n` is out of range) and writes them to `rays`.
+///
+/// # Safety
+/// As [`scion_primary_rays`].
+unsafe fn make_rays(
+    name: &str,
+    scene: *const ScionScene,
+    n: u64,
+    rays: *mut ScionRay,
+    (err, err_len): (*mut c_char, usize),
+    make: impl FnOnce(rt::geom::Aabb) -> Option<Vec<Ray>>,
+) -> Status {
     let r = guard(|| {
         // SAFETY: NULL or a live handle.
         let Some(s) = (unsafe { scene.as_ref() }) else {
-            return Err(bad_arg("scion_secondary_rays: `scene` must not be NULL"));
+            return Err(bad_arg(format!("{name}: `scene` must not be NULL")));
         };
         if rays.is_null() {
-            return Err(bad_arg("scion_secondary_rays: `rays` must not be NULL"));
+            return Err(bad_arg(format!("{name}: `rays` must not be NULL")));
         }
         if s.scene.is_empty() {
             return Err((
@@ -134,12 +144,8 @@ pub unsafe extern "C" fn scion_secondary_rays(
                 "the scene has no triangles, so there is no box to aim rays at".into(),
             ));
         }
-        if n == 0 || n > 1 << 32 {
-            return Err(bad_arg(format!(
-                "scion_secondary_rays: n = {n} is not in 1..=2^32"
-            )));
-        }
-        let made = secondary_rays(s.scene.bounds(), n as usize, seed);
+        let made = make(s.scene.bounds())
+            .ok_or_else(|| bad_arg(format!("{name}: n = {n} is not in 1..=2^32")))?;
         // SAFETY: `rays` has room for `n` rays and `made` has exactly `n`.
         let out = unsafe { std::slice::from_raw_parts_mut(rays, made.len()) };
         for (o, r) in out.iter_mut().zip(made) {
