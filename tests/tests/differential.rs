@@ -330,7 +330,7 @@ fn oracle_reports_bad_programs() {
 #[test]
 fn empty_scene_misses() {
     let p = scion_host::oracle::ClosestHit::compile(1).unwrap();
-    let tree = LogicalTree::empty();
+    let tree = LogicalTree::<scion_runtime::geom::Triangle>::empty();
     let rays = vec![Ray::new(
         scion_runtime::geom::Vec3::new(0.0, 0.0, 0.0),
         scion_runtime::geom::Vec3::new(0.0, 0.0, 1.0),

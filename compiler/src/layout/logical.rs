@@ -20,6 +20,7 @@ use scion_ir::module::{AdtDef, Module};
 use scion_ir::types::Type;
 use scion_ir::TypeId;
 use scion_runtime::bvh::schema::{Role, Schema, SchemaField, SHARED};
+use scion_runtime::primitive::PRIMITIVE_TYPES;
 
 /// How a logical field sits in a node.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -112,8 +113,6 @@ pub struct LogicalAbi {
     pub schema: Schema,
 }
 
-/// Byte size of a primitive (`Triangle`).
-pub const PRIM_STRIDE: u64 = 40;
 
 /// The fields of record type `ty`, when it is a declared record.
 fn record_fields(m: &Module, ty: TypeId) -> Option<&[scion_ir::module::Field]> {
@@ -154,9 +153,16 @@ fn is_obb(m: &Module, ty: TypeId) -> bool {
     })
 }
 
-fn is_triangle(m: &Module, ty: TypeId) -> bool {
-    matches!(m.types.get(ty), Type::Adt(n) if n == "Triangle")
-        && size_align(m, ty) == Some((PRIM_STRIDE, 4))
+/// The runtime's name of primitive type `ty` (`Triangle`, `Segment`: a type of
+/// `scion_runtime::primitive::PRIMITIVE_TYPES` with the runtime's record size), if it is one.
+fn primitive_type(m: &Module, ty: TypeId) -> Option<&'static str> {
+    let Type::Adt(n) = m.types.get(ty) else {
+        return None;
+    };
+    PRIMITIVE_TYPES
+        .iter()
+        .find(|(name, size)| name == n && size_align(m, ty) == Some((*size, 4)))
+        .map(|(name, _)| *name)
 }
 
 /// A type as the source writes it (`DOP14`, not `!tree.adt<"DOP14">`).
@@ -278,6 +284,7 @@ impl LogicalAbi {
             .unwrap_or(1);
         let base = align_up(at, ualign);
         let mut end = at;
+        let mut primitive = "Triangle";
         let mut variants = Vec::new();
         for (k, v) in def.variants.iter().enumerate() {
             let mut next_slot = 0u64;
@@ -304,15 +311,21 @@ impl LogicalAbi {
                 } else {
                     match m.types.get(f.ty) {
                         Type::Array { elem, len: None } => {
-                            if !is_triangle(m, *elem) {
+                            let Some(p) = primitive_type(m, *elem) else {
+                                let known: Vec<String> = PRIMITIVE_TYPES
+                                    .iter()
+                                    .map(|(n, _)| format!("`{n}`"))
+                                    .collect();
                                 return bad(
                                     &f.name,
                                     format!(
-                                        "an array of {} (the runtime's primitives are `Triangle`s)",
-                                        source_type(m, *elem)
+                                        "an array of {} (the runtime's primitives are {})",
+                                        source_type(m, *elem),
+                                        known.join(" or ")
                                     ),
                                 );
-                            }
+                            };
+                            primitive = p;
                             let Some(len) = length_name(model, &v.name, &f.name) else {
                                 return bad(&f.name, "its length is not a field".into());
                             };
@@ -437,6 +450,7 @@ impl LogicalAbi {
             leaf: leaf as u32,
             arity: arity as u32,
             fields,
+            primitive: primitive.to_string(),
         };
         schema.validate()?;
         Ok(LogicalAbi {

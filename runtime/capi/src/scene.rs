@@ -204,6 +204,8 @@ pub unsafe extern "C" fn scion_tree_view(
         };
         let schema = Schema {
             adt: "ScionLogicalSchema".to_string(),
+            // The C API's scenes are OBJ triangle meshes.
+            primitive: "Triangle".to_string(),
             node_size: c.node_size,
             node_align: c.node_align,
             interior: c.interior,

@@ -11,6 +11,7 @@
 
 use super::logical::LogicalTree;
 use crate::geom::{Triangle, Vec3};
+use crate::primitive::Primitive;
 
 /// The four diagonal normals, as signs of (y, z) with x positive.
 pub const DIAGONALS: [(f64, f64); 4] = [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)];
@@ -75,6 +76,37 @@ impl Dop14 {
             .fold(Dop14::EMPTY, |d, t| d.grow(t.p0).grow(t.p1).grow(t.p2))
     }
 
+    /// The DOP of primitives: their hulls' points (exactly as [`Dop14::of_triangles`] for
+    /// triangles), grown by their padding where they have one.
+    pub fn of_primitives<P: Primitive>(prims: &[P]) -> Dop14 {
+        prims.iter().fold(Dop14::EMPTY, |acc, p| {
+            let h = p.hull();
+            let d = h.points().iter().fold(Dop14::EMPTY, |d, &q| d.grow(q));
+            acc.union(&d.padded(h.pad))
+        })
+    }
+
+    /// Every slab widened by `pad` (times the diagonal normals' length, sqrt 3), rounded
+    /// outward; itself when `pad` is 0.
+    fn padded(&self, pad: f32) -> Dop14 {
+        if pad == 0.0 {
+            return *self;
+        }
+        let p1 = f64::from(pad);
+        // sqrt(3) rounded up, times a little more for the product's rounding.
+        let p2 = f64::from(pad) * 1.732_050_808 * (1.0 + 4.0 * f64::EPSILON);
+        let mut r = *self;
+        for k in 0..3 {
+            r.lo1[k] = round_down(f64::from(r.lo1[k]) - p1);
+            r.hi1[k] = round_up(f64::from(r.hi1[k]) + p1);
+        }
+        for k in 0..4 {
+            r.lo2[k] = round_down(f64::from(r.lo2[k]) - p2);
+            r.hi2[k] = round_up(f64::from(r.hi2[k]) + p2);
+        }
+        r
+    }
+
     /// The 14 floats in field order (`lo1`, `hi1`, `lo2`, `hi2`).
     pub fn to_array(&self) -> [f32; 14] {
         let mut a = [0.0; 14];
@@ -121,7 +153,7 @@ fn step_up(f: f32) -> f32 {
 
 /// Every node's DOP-14, by node index: a leaf's from its triangles, an interior node's the
 /// union of its children's.
-pub fn node_dops(tree: &LogicalTree) -> Vec<Dop14> {
+pub fn node_dops<P: Primitive>(tree: &LogicalTree<P>) -> Vec<Dop14> {
     let mut dops = vec![Dop14::EMPTY; tree.nodes.len()];
     if tree.is_empty() {
         return dops;
@@ -132,7 +164,7 @@ pub fn node_dops(tree: &LogicalTree) -> Vec<Dop14> {
         let n = &tree.nodes[i as usize];
         if n.is_leaf() {
             let (a, c) = (n.prim_offset as usize, n.prim_count as usize);
-            dops[i as usize] = Dop14::of_triangles(&tree.primitives[a..a + c]);
+            dops[i as usize] = Dop14::of_primitives(&tree.primitives[a..a + c]);
         } else if children_done {
             dops[i as usize] = dops[n.child[0] as usize].union(&dops[n.child[1] as usize]);
         } else {

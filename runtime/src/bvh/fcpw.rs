@@ -18,7 +18,8 @@
 //! uses 8 slices rather than 32, and has no leaf cost, no traversal cost and no reinsertion.
 
 use super::{build_top_down, median_split, Decide, Decision, Item, LogicalTree};
-use crate::geom::{Aabb, Triangle};
+use crate::geom::Aabb;
+use crate::primitive::Primitive;
 
 /// The builder's parameters, FCPW's defaults by default.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -121,7 +122,7 @@ impl Decide for Fcpw {
 }
 
 /// Builds FCPW's tree over `tris` with `options`.
-pub fn build_fcpw(tris: &[Triangle], options: &FcpwOptions) -> LogicalTree {
+pub fn build_fcpw<P: Primitive>(tris: &[P], options: &FcpwOptions) -> LogicalTree<P> {
     build_top_down(tris, &Fcpw(*options))
 }
 

@@ -7,6 +7,7 @@ use super::logical::{LogicalTree, NO_NODE};
 use super::oriented::{fit, OrientedNode, OrientedOptions};
 use super::schema::{Role, Schema, SHARED};
 use crate::geom::{Aabb, Vec3};
+use crate::primitive::Primitive;
 
 /// A tree's logical nodes in a schema's form (the primitives they index are the tree's).
 #[derive(Clone, Debug, Default)]
@@ -45,17 +46,25 @@ impl LogicalBytes {
     /// `tree` in `schema`'s form; an error names a schema the runtime cannot fill (see
     /// [`Schema::validate`]) or a tree too large for `u32` indices. A schema with an
     /// oriented interior variant orients nodes by [`OrientedOptions::default`].
-    pub fn fill(tree: &LogicalTree, schema: &Schema) -> Result<LogicalBytes, String> {
+    pub fn fill<P: Primitive>(tree: &LogicalTree<P>, schema: &Schema) -> Result<LogicalBytes, String> {
         Self::fill_oriented(tree, schema, &OrientedOptions::default())
     }
 
     /// [`LogicalBytes::fill`] with the rule for orienting nodes ([`super::oriented::fit`]).
-    pub fn fill_oriented(
-        tree: &LogicalTree,
+    pub fn fill_oriented<P: Primitive>(
+        tree: &LogicalTree<P>,
         schema: &Schema,
         oriented: &OrientedOptions,
     ) -> Result<LogicalBytes, String> {
         schema.validate()?;
+        if schema.primitive != P::TYPE_NAME {
+            return Err(format!(
+                "`{}` holds `{}` primitives, and this tree's are `{}`s",
+                schema.adt,
+                schema.primitive,
+                P::TYPE_NAME
+            ));
+        }
         let wants_dop = schema
             .fields
             .iter()
@@ -95,7 +104,7 @@ impl LogicalBytes {
     }
 }
 
-fn binary_nodes(tree: &LogicalTree, schema: &Schema, dops: &[Dop14]) -> Vec<Node> {
+fn binary_nodes<P: Primitive>(tree: &LogicalTree<P>, schema: &Schema, dops: &[Dop14]) -> Vec<Node> {
     tree.nodes
         .iter()
         .zip(dops)
@@ -130,8 +139,8 @@ fn binary_nodes(tree: &LogicalTree, schema: &Schema, dops: &[Dop14]) -> Vec<Node
 /// Collapsed to `schema.arity` slots: interior nodes in pre-order (the root first), then the
 /// leaves, then one empty leaf per empty slot. With an oriented variant, each interior node
 /// that [`fit`] orients takes it.
-fn wide_nodes(
-    tree: &LogicalTree,
+fn wide_nodes<P: Primitive>(
+    tree: &LogicalTree<P>,
     schema: &Schema,
     dops: &[Dop14],
     oriented: &OrientedOptions,

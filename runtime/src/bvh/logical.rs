@@ -14,6 +14,7 @@
 //! [`LogicalTree::validate`] checks the whole contract; [`LogicalTree::stats`] summarizes.
 
 use crate::geom::{Aabb, Triangle};
+use crate::primitive::Primitive;
 
 /// `kind` of an interior node.
 pub const KIND_INTERIOR: u32 = 0;
@@ -76,15 +77,16 @@ impl LogicalNode {
     }
 }
 
-/// A logical BVH over triangles (see the module documentation for the contract).
+/// A logical BVH over primitives `P` (triangles unless said otherwise; see the module
+/// documentation for the contract).
 #[derive(Clone, Debug, PartialEq)]
-pub struct LogicalTree {
+pub struct LogicalTree<P: Primitive = Triangle> {
     /// The nodes, in any order.
     pub nodes: Vec<LogicalNode>,
     /// Index of the root in `nodes`, [`NO_NODE`] for the empty tree.
     pub root: u32,
-    /// The triangles, reordered so that every leaf's are contiguous.
-    pub primitives: Vec<Triangle>,
+    /// The primitives, reordered so that every leaf's are contiguous.
+    pub primitives: Vec<P>,
 }
 
 /// Summary numbers of a tree.
@@ -113,9 +115,9 @@ pub struct TreeStats {
     pub sah_cost: f64,
 }
 
-impl LogicalTree {
+impl<P: Primitive> LogicalTree<P> {
     /// The tree of an empty scene.
-    pub fn empty() -> LogicalTree {
+    pub fn empty() -> LogicalTree<P> {
         LogicalTree {
             nodes: Vec::new(),
             root: NO_NODE,
@@ -135,7 +137,7 @@ impl LogicalTree {
 
     /// The same tree with every node's box replaced by `f` of it: the tree a layout that
     /// stores boxes differently (quantized) really traverses.
-    pub fn map_boxes(&self, f: impl Fn(&[f32; 6]) -> [f32; 6]) -> LogicalTree {
+    pub fn map_boxes(&self, f: impl Fn(&[f32; 6]) -> [f32; 6]) -> LogicalTree<P> {
         let mut out = self.clone();
         for n in &mut out.nodes {
             n.bounds = f(&n.bounds);
@@ -144,7 +146,7 @@ impl LogicalTree {
     }
 
     /// The primitives of leaf `node`.
-    pub fn leaf_primitives(&self, node: &LogicalNode) -> &[Triangle] {
+    pub fn leaf_primitives(&self, node: &LogicalNode) -> &[P] {
         let start = node.prim_offset as usize;
         &self.primitives[start..start + node.prim_count as usize]
     }
@@ -250,14 +252,14 @@ impl LogicalTree {
         for (k, t) in self.primitives.iter().enumerate() {
             if !t.is_finite() {
                 return Err(format!(
-                    "primitive {k} (id {}) has a non-finite corner",
-                    t.id
+                    "primitive {k} (id {}) has a non-finite coordinate",
+                    t.id()
                 ));
             }
-            if t.id == u32::MAX {
+            if t.id() == u32::MAX {
                 return Err(format!("primitive {k} has the reserved id u32::MAX"));
             }
-            ids.push(t.id);
+            ids.push(t.id());
         }
         ids.sort_unstable();
         if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
@@ -369,8 +371,8 @@ mod tests {
             (s.nodes, s.interior, s.leaves, s.depth, s.max_leaf),
             (3, 1, 2, 2, 1)
         );
-        LogicalTree::empty().validate().unwrap();
-        assert_eq!(LogicalTree::empty().stats().depth, 0);
+        LogicalTree::<Triangle>::empty().validate().unwrap();
+        assert_eq!(LogicalTree::<Triangle>::empty().stats().depth, 0);
     }
 
     #[test]
@@ -422,7 +424,7 @@ mod tests {
         t.nodes[1].kind = 7;
         assert!(t.validate().unwrap_err().contains("unknown kind"));
 
-        let mut t = LogicalTree::empty();
+        let mut t = LogicalTree::<Triangle>::empty();
         t.root = 0;
         assert!(t.validate().is_err());
         assert_eq!(t.stats().nodes, 0);

@@ -6,7 +6,8 @@
 //! stops at single primitives. The tree is balanced: depth `ceil(log2 n) + 1`.
 
 use super::{build_top_down, median_split, Decide, Decision, Item, LogicalTree};
-use crate::geom::{Aabb, Triangle};
+use crate::geom::Aabb;
+use crate::primitive::Primitive;
 
 struct Median;
 
@@ -21,7 +22,7 @@ impl Decide for Median {
 }
 
 /// Builds the median-split tree over `tris` (one primitive per leaf).
-pub fn build_median(tris: &[Triangle]) -> LogicalTree {
+pub fn build_median<P: Primitive>(tris: &[P]) -> LogicalTree<P> {
     build_top_down(tris, &Median)
 }
 

@@ -30,7 +30,8 @@ pub use logical::{
 pub use median::build_median;
 pub use sah_binned::{build_sah_binned, SahOptions};
 
-use crate::geom::{Aabb, Triangle, Vec3};
+use crate::geom::{Aabb, Vec3};
+use crate::primitive::Primitive;
 
 /// Ranges with at least this many primitives build their subtrees in parallel.
 pub const PARALLEL_MIN: usize = 16 * 1024;
@@ -84,7 +85,7 @@ pub(crate) trait Decide: Sync {
 }
 
 /// Builds the tree over `tris` with the rule `rule` (see the module documentation).
-pub(crate) fn build_top_down(tris: &[Triangle], rule: &impl Decide) -> LogicalTree {
+pub(crate) fn build_top_down<P: Primitive>(tris: &[P], rule: &impl Decide) -> LogicalTree<P> {
     if tris.is_empty() {
         return LogicalTree::empty();
     }
@@ -96,7 +97,7 @@ pub(crate) fn build_top_down(tris: &[Triangle], rule: &impl Decide) -> LogicalTr
             Item {
                 bounds,
                 centroid: bounds.center(),
-                id: t.id,
+                id: t.id(),
                 index: i as u32,
             }
         })

@@ -14,6 +14,7 @@
 use super::dop14::{round_down, round_up};
 use super::logical::LogicalTree;
 use crate::geom::{Aabb, Triangle, Vec3};
+use crate::primitive::Primitive;
 
 /// The scale of the quantized orientation (the catalog's `round(127·R)`).
 pub const ORIENTATION_SCALE: f64 = 127.0;
@@ -55,13 +56,28 @@ impl Orientation {
 
     /// The box of `tris`' corners in `M`-space, rounded outward ([`Aabb::EMPTY`] for none).
     pub fn bounds(&self, tris: &[Triangle]) -> Aabb {
+        self.bounds_of(tris)
+    }
+
+    /// The box of primitives in `M`-space, rounded outward ([`Aabb::EMPTY`] for none): their
+    /// hulls' points mapped, each row grown by the hull's padding times the row's length
+    /// (for triangles, exactly [`Orientation::bounds`]).
+    pub fn bounds_of<P: Primitive>(&self, prims: &[P]) -> Aabb {
         let mut lo = [f32::INFINITY; 3];
         let mut hi = [f32::NEG_INFINITY; 3];
-        for t in tris {
-            for p in [t.p0, t.p1, t.p2] {
+        let norms = self.rows.map(|r| {
+            let sq: i32 = r.iter().map(|v| v * v).sum();
+            // Rounded up: the square root of an integer, with room for its rounding.
+            f64::from(sq).sqrt() * (1.0 + 4.0 * f64::EPSILON)
+        });
+        for t in prims {
+            let h = t.hull();
+            let pad = f64::from(h.pad);
+            for &p in h.points() {
                 for (k, (s, e)) in self.apply(p).into_iter().enumerate() {
-                    lo[k] = lo[k].min(round_down(s - e));
-                    hi[k] = hi[k].max(round_up(s + e));
+                    let g = e + pad * norms[k];
+                    lo[k] = lo[k].min(round_down(s - g));
+                    hi[k] = hi[k].max(round_up(s + g));
                 }
             }
         }
@@ -178,8 +194,8 @@ pub struct OrientedNode {
     pub boxes: Vec<Aabb>,
 }
 
-/// The triangles under binary node `n`.
-fn subtree_triangles(tree: &LogicalTree, n: u32, out: &mut Vec<Triangle>) {
+/// The primitives under binary node `n`.
+fn subtree_primitives<P: Primitive>(tree: &LogicalTree<P>, n: u32, out: &mut Vec<P>) {
     let mut work = vec![n];
     while let Some(i) = work.pop() {
         let node = &tree.nodes[i as usize];
@@ -194,25 +210,32 @@ fn subtree_triangles(tree: &LogicalTree, n: u32, out: &mut Vec<Triangle>) {
 
 /// The oriented form of the wide node whose children are binary nodes `slots`, when
 /// `options` prefer it to the axis-aligned one.
-pub fn fit(tree: &LogicalTree, slots: &[u32], options: &OrientedOptions) -> Option<OrientedNode> {
+pub fn fit<P: Primitive>(
+    tree: &LogicalTree<P>,
+    slots: &[u32],
+    options: &OrientedOptions,
+) -> Option<OrientedNode> {
     if options.max_area_ratio <= 0.0 {
         return None;
     }
-    let per_slot: Vec<Vec<Triangle>> = slots
+    let per_slot: Vec<Vec<P>> = slots
         .iter()
         .map(|&c| {
             let mut v = Vec::new();
-            subtree_triangles(tree, c, &mut v);
+            subtree_primitives(tree, c, &mut v);
             v
         })
         .collect();
     let corners: Vec<Vec3> = per_slot
         .iter()
         .flatten()
-        .flat_map(|t| [t.p0, t.p1, t.p2])
+        .flat_map(|t| {
+            let h = t.hull();
+            h.points().to_vec()
+        })
         .collect();
     let orientation = Orientation::principal(&corners)?;
-    let boxes: Vec<Aabb> = per_slot.iter().map(|t| orientation.bounds(t)).collect();
+    let boxes: Vec<Aabb> = per_slot.iter().map(|t| orientation.bounds_of(t)).collect();
     let s2 = ORIENTATION_SCALE * ORIENTATION_SCALE;
     let oriented: f64 = boxes.iter().map(|b| b.half_area() / s2).sum();
     let aligned: f64 = slots

@@ -278,7 +278,7 @@ impl Ord for Candidate {
 }
 
 /// Optimizes `tree` in place by at most `passes` passes (see the module documentation).
-pub fn optimize(tree: &mut LogicalTree, passes: usize) {
+pub fn optimize<P: crate::primitive::Primitive>(tree: &mut LogicalTree<P>, passes: usize) {
     if tree.is_empty() || passes == 0 || tree.nodes.len() < 7 {
         return;
     }
@@ -427,7 +427,7 @@ mod tests {
 
     #[test]
     fn tiny_and_empty_trees_are_left_alone() {
-        let mut t = LogicalTree::empty();
+        let mut t = LogicalTree::<crate::geom::Triangle>::empty();
         optimize(&mut t, 8);
         assert!(t.is_empty());
         let s = gen::one_triangle();

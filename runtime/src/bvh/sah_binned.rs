@@ -14,7 +14,8 @@
 //! Deterministic: the same tree whatever the number of threads (see [`super`]).
 
 use super::{build_top_down, median_split, Decide, Decision, Item, LogicalTree, DEFAULT_MAX_LEAF};
-use crate::geom::{Aabb, Triangle};
+use crate::geom::Aabb;
+use crate::primitive::Primitive;
 
 /// Parameters of the binned SAH builder.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -71,7 +72,7 @@ struct Sah {
 }
 
 /// Builds a binned-SAH tree over `tris` (see the module documentation).
-pub fn build_sah_binned(tris: &[Triangle], options: &SahOptions) -> LogicalTree {
+pub fn build_sah_binned<P: Primitive>(tris: &[P], options: &SahOptions) -> LogicalTree<P> {
     let max_leaf = options.max_leaf.max(1);
     let rule = Sah {
         max_leaf,

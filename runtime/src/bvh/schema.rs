@@ -129,6 +129,9 @@ pub struct Schema {
     pub arity: u32,
     /// The fields the runtime writes.
     pub fields: Vec<SchemaField>,
+    /// The prelude type of the primitives the leaves hold (`Triangle`, `Segment`:
+    /// [`crate::primitive::Primitive::TYPE_NAME`]); a tree of other primitives is refused.
+    pub primitive: String,
 }
 
 /// The binary tree's shape in schema form: the prelude's
@@ -143,6 +146,7 @@ pub fn binary_bvh() -> Schema {
     };
     Schema {
         adt: "BVH".to_string(),
+        primitive: "Triangle".to_string(),
         node_size: 36,
         node_align: 4,
         interior: 0,
@@ -274,7 +278,8 @@ impl Schema {
             .map(|f| f.variant)
     }
 
-    /// One line of text (`BVH 36 4 0 1 2 1,4294967295,4,0,1,0;...`): the tree type's name,
+    /// One line of text (`BVH 36 4 0 1 2 1,4294967295,4,0,1,0;...`): the tree type's name
+    /// (`NAME:PRIMITIVE` when its primitives are not `Triangle`s),
     /// node size and alignment, interior and leaf kinds, arity, then each field's six numbers.
     pub fn to_text(&self) -> String {
         let fields: Vec<String> = self
@@ -287,9 +292,15 @@ impl Schema {
                 )
             })
             .collect();
+        // The primitive type follows the name after a colon unless it is `Triangle`.
+        let name = if self.primitive == "Triangle" {
+            self.adt.clone()
+        } else {
+            format!("{}:{}", self.adt, self.primitive)
+        };
         format!(
             "{} {} {} {} {} {} {}",
-            self.adt,
+            name,
             self.node_size,
             self.node_align,
             self.interior,
@@ -327,8 +338,10 @@ impl Schema {
                 width,
             });
         }
+        let (adt, primitive) = parts[0].split_once(':').unwrap_or((parts[0], "Triangle"));
         let s = Schema {
-            adt: parts[0].to_string(),
+            adt: adt.to_string(),
+            primitive: primitive.to_string(),
             node_size: n(parts[1])?,
             node_align: n(parts[2])?,
             interior: n(parts[3])?,
@@ -438,6 +451,7 @@ mod tests {
         let t = tree(500);
         let s = Schema {
             adt: "BVH8".into(),
+            primitive: "Triangle".into(),
             node_size: 228,
             node_align: 4,
             interior: 0,
@@ -540,13 +554,19 @@ mod tests {
     fn text_round_trips() {
         let s = binary_bvh();
         assert_eq!(Schema::from_text(&s.to_text()).unwrap(), s);
+        let strands = Schema {
+            primitive: "Segment".into(),
+            ..binary_bvh()
+        };
+        assert!(strands.to_text().starts_with("BVH:Segment 36 "));
+        assert_eq!(Schema::from_text(&strands.to_text()).unwrap(), strands);
         assert!(Schema::from_text("BVH 36 4").is_err());
         assert!(Schema::from_text("BVH 36 4 0 1 2 9,9").is_err());
     }
 
     #[test]
     fn empty_and_single_leaf_trees() {
-        let e = LogicalTree::empty();
+        let e = LogicalTree::<crate::geom::Triangle>::empty();
         let lb = LogicalBytes::fill(&e, &binary_bvh()).unwrap();
         assert_eq!((lb.node_count, lb.root), (0, NO_NODE));
         let t = tree(1);

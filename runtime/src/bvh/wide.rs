@@ -16,6 +16,7 @@
 //! and the leaf cap carry over, and every child box is exactly a binary node's box.
 
 use super::logical::{LogicalTree, NO_NODE};
+use crate::primitive::Primitive;
 use crate::geom::Aabb;
 
 /// One child slot of a wide node.
@@ -83,7 +84,7 @@ pub struct WideStats {
 }
 
 /// Collapses `tree` into a tree of at most `W` children per node (`2 <= W <= 64`).
-pub fn collapse<const W: usize>(tree: &LogicalTree) -> WideTree<W> {
+pub fn collapse<const W: usize>(tree: &LogicalTree<impl Primitive>) -> WideTree<W> {
     assert!(
         (2..=64).contains(&W),
         "a wide tree has 2 to 64 children per node"
@@ -146,7 +147,7 @@ fn empty_node<const W: usize>() -> WideNode<W> {
 }
 
 /// The binary nodes that become the children of the wide node made from interior `bin`.
-pub(crate) fn open(tree: &LogicalTree, bin: u32, width: usize) -> Vec<u32> {
+pub(crate) fn open<P: Primitive>(tree: &LogicalTree<P>, bin: u32, width: usize) -> Vec<u32> {
     let mut slots: Vec<u32> = tree.nodes[bin as usize].child.to_vec();
     while slots.len() < width {
         let mut best: Option<(usize, f64)> = None;
@@ -180,7 +181,7 @@ impl<const W: usize> WideTree<W> {
     /// from the root, occupied slots first with at least two per node, every occupied slot's
     /// box the exact union of what it holds, leaves of at least one primitive covering each of
     /// `tree`'s primitives exactly once. Returns the first problem found.
-    pub fn validate(&self, tree: &LogicalTree) -> Result<(), String> {
+    pub fn validate<P: Primitive>(&self, tree: &LogicalTree<P>) -> Result<(), String> {
         let mut covered = vec![false; tree.primitives.len()];
         let mut seen = vec![false; self.nodes.len()];
         let mut stack: Vec<(WideChild, Aabb, String)> =
@@ -295,6 +296,7 @@ impl<const W: usize> WideTree<W> {
 mod tests {
     use super::*;
     use crate::bvh::{build_sah_binned, SahOptions};
+    use crate::geom::Triangle;
     use crate::scene::gen;
 
     #[test]
@@ -357,9 +359,9 @@ mod tests {
 
     #[test]
     fn small_scenes() {
-        let empty = collapse::<8>(&LogicalTree::empty());
+        let empty = collapse::<8>(&LogicalTree::<Triangle>::empty());
         assert!(empty.is_empty() && empty.nodes.is_empty());
-        empty.validate(&LogicalTree::empty()).unwrap();
+        empty.validate(&LogicalTree::<Triangle>::empty()).unwrap();
         let one = gen::one_triangle();
         let tree = build_sah_binned(&one.triangles, &SahOptions::default());
         let w = collapse::<4>(&tree);

@@ -21,10 +21,11 @@
 //! Results are normalized with [`Hit::from_best`]: a miss is `(+inf, u32::MAX)` whatever the
 //! ray's `tmax`.
 
-use super::prelude::{distmin_of, hit_distance, slab_interval, slab_ray};
+use super::prelude::{distmin_of, slab_interval, slab_ray};
 use crate::batch::BatchDriver;
 use crate::bvh::LogicalTree;
-use crate::geom::{Hit, Ray, Triangle};
+use crate::geom::{Hit, Ray};
+use crate::primitive::Primitive;
 
 /// Counters of one traversal, for comparing layouts' and traversals' work (e.g. extra visits of
 /// quantized layouts, paper §9). Each counts what the algorithm does, so generated code that
@@ -103,15 +104,15 @@ impl NodeStack {
 
 /// The algorithm's update of `best` by one triangle.
 #[inline]
-pub(crate) fn consider(ray: &Ray, tri: &Triangle, best: &mut (f32, u32)) {
-    let d = hit_distance(ray, tri);
-    if d < f32::INFINITY && (d < best.0 || (d == best.0 && tri.id < best.1)) {
-        *best = (d, tri.id);
+pub(crate) fn consider<P: Primitive>(ray: &Ray, prim: &P, best: &mut (f32, u32)) {
+    let d = prim.hit_distance(ray);
+    if d < f32::INFINITY && (d < best.0 || (d == best.0 && prim.id() < best.1)) {
+        *best = (d, prim.id());
     }
 }
 
 /// Closest hit by testing every triangle.
-pub fn closest_hit_brute(triangles: &[Triangle], ray: &Ray) -> Hit {
+pub fn closest_hit_brute<P: Primitive>(triangles: &[P], ray: &Ray) -> Hit {
     let mut best = (ray.tmax, u32::MAX);
     for tri in triangles {
         consider(ray, tri, &mut best);
@@ -120,12 +121,16 @@ pub fn closest_hit_brute(triangles: &[Triangle], ray: &Ray) -> Hit {
 }
 
 /// Closest hit by traversing the logical tree (see the module documentation).
-pub fn closest_hit_tree(tree: &LogicalTree, ray: &Ray) -> Hit {
+pub fn closest_hit_tree<P: Primitive>(tree: &LogicalTree<P>, ray: &Ray) -> Hit {
     closest_hit_tree_stats(tree, ray, &mut TraversalStats::default())
 }
 
 /// [`closest_hit_tree`] that also counts its work into `stats`.
-pub fn closest_hit_tree_stats(tree: &LogicalTree, ray: &Ray, stats: &mut TraversalStats) -> Hit {
+pub fn closest_hit_tree_stats<P: Primitive>(
+    tree: &LogicalTree<P>,
+    ray: &Ray,
+    stats: &mut TraversalStats,
+) -> Hit {
     let bounds = |i: u32| tree.nodes[i as usize].aabb();
     closest_hit_with(tree, ray, stats, |r, i, tmax| {
         distmin_of(r, &bounds(i), tmax)
@@ -135,8 +140,8 @@ pub fn closest_hit_tree_stats(tree: &LogicalTree, ray: &Ray, stats: &mut Travers
 /// The traversal of [`closest_hit_tree_stats`] with another bounding volume test:
 /// `distmin(r, node, tmax)` is node `node`'s entry distance, or `+inf` when the ray misses it
 /// before `tmax` (never NaN).
-pub fn closest_hit_with(
-    tree: &LogicalTree,
+pub fn closest_hit_with<P: Primitive>(
+    tree: &LogicalTree<P>,
     ray: &Ray,
     stats: &mut TraversalStats,
     distmin: impl Fn(&super::prelude::SlabRay, u32, f32) -> f32,
@@ -267,14 +272,18 @@ pub fn why_pruned_with(
 
 /// Closest hits of all `rays` by tree traversal, in parallel blocks of 64 (see
 /// [`BatchDriver`]).
-pub fn closest_hits_tree(tree: &LogicalTree, rays: &[Ray], driver: &BatchDriver) -> Vec<Hit> {
+pub fn closest_hits_tree<P: Primitive>(
+    tree: &LogicalTree<P>,
+    rays: &[Ray],
+    driver: &BatchDriver,
+) -> Vec<Hit> {
     driver.map(rays, |r| closest_hit_tree(tree, r))
 }
 
 /// The counters of tracing all `rays` through `tree` (in parallel blocks of 64, summed; the
 /// deepest stack is the largest): the work per ray that `scion trace --stats` reports.
-pub fn closest_hits_tree_stats(
-    tree: &LogicalTree,
+pub fn closest_hits_tree_stats<P: Primitive>(
+    tree: &LogicalTree<P>,
     rays: &[Ray],
     driver: &BatchDriver,
 ) -> TraversalStats {
@@ -302,7 +311,11 @@ pub(crate) fn sum_stats(
 }
 
 /// Closest hits of all `rays` by brute force, in parallel blocks of 64.
-pub fn closest_hits_brute(triangles: &[Triangle], rays: &[Ray], driver: &BatchDriver) -> Vec<Hit> {
+pub fn closest_hits_brute<P: Primitive>(
+    triangles: &[P],
+    rays: &[Ray],
+    driver: &BatchDriver,
+) -> Vec<Hit> {
     driver.map(rays, |r| closest_hit_brute(triangles, r))
 }
 
@@ -310,7 +323,7 @@ pub fn closest_hits_brute(triangles: &[Triangle], rays: &[Ray], driver: &BatchDr
 mod tests {
     use super::*;
     use crate::bvh::{build_median, build_sah_binned, SahOptions};
-    use crate::geom::Vec3;
+    use crate::geom::{Triangle, Vec3};
     use crate::scene::gen;
 
     #[test]
@@ -334,7 +347,7 @@ mod tests {
         assert_eq!(closest_hit_brute(&s.triangles, &r), Hit::MISS);
         let t = build_sah_binned(&s.triangles, &SahOptions::default());
         assert_eq!(closest_hit_tree(&t, &r), Hit::MISS);
-        assert_eq!(closest_hit_tree(&LogicalTree::empty(), &r), Hit::MISS);
+        assert_eq!(closest_hit_tree(&LogicalTree::<Triangle>::empty(), &r), Hit::MISS);
     }
 
     #[test]

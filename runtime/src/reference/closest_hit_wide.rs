@@ -14,13 +14,14 @@ use super::closest_hit::{consider, sum_stats, TraversalStats};
 use super::prelude::{distmin_of, slab_ray};
 use crate::batch::BatchDriver;
 use crate::bvh::wide::{WideChild, WideTree};
-use crate::geom::{Hit, Ray, Triangle};
+use crate::geom::{Hit, Ray};
+use crate::primitive::Primitive;
 
 /// Closest hit of `ray` over `tree`, whose leaves index `primitives` (the binary tree's
 /// reordered primitives it was collapsed from).
 pub fn closest_hit_wide<const W: usize>(
     tree: &WideTree<W>,
-    primitives: &[Triangle],
+    primitives: &[impl Primitive],
     ray: &Ray,
 ) -> Hit {
     closest_hit_wide_stats(tree, primitives, ray, &mut TraversalStats::default())
@@ -30,7 +31,7 @@ pub fn closest_hit_wide<const W: usize>(
 /// are its occupied slots; leaves count as visited nodes, as in the binary traversal).
 pub fn closest_hit_wide_stats<const W: usize>(
     tree: &WideTree<W>,
-    primitives: &[Triangle],
+    primitives: &[impl Primitive],
     ray: &Ray,
     stats: &mut TraversalStats,
 ) -> Hit {
@@ -103,7 +104,7 @@ pub fn closest_hit_wide_stats<const W: usize>(
 /// deepest stack is the largest), as [`super::closest_hits_tree_stats`] for binary trees.
 pub fn closest_hits_wide_stats<const W: usize>(
     tree: &WideTree<W>,
-    primitives: &[Triangle],
+    primitives: &[impl Primitive],
     rays: &[Ray],
     driver: &BatchDriver,
 ) -> TraversalStats {

@@ -18,6 +18,7 @@
 //! - The widening factor is the literal `1.0000004` rounded to `f32` (`1 + 3 * 2^-23`).
 
 use crate::geom::{Aabb, Ray, Triangle, Vec3};
+use crate::primitive::Segment;
 use std::cmp::Ordering;
 
 /// `1.0000004` as the prelude writes it, rounded to `f32`.
@@ -164,6 +165,42 @@ pub fn hit_distance(ray: &Ray, tri: &Triangle) -> f32 {
         return f32::INFINITY;
     }
     let t = e2.dot(qv) * inv_det;
+    if t > ray.tmin && t < ray.tmax {
+        return t;
+    }
+    f32::INFINITY
+}
+
+/// The prelude's `hit_distance(ray, segment)`: the ray against a strand segment as a flat
+/// ribbon facing the ray (Embree's flat linear curve). With `a = p0 - o` and `b = p1 - p0`
+/// split into their parts across the ray's direction (`ap`, `bp`), the axis point nearest the
+/// ray's line is at `u = clamp(-ap·bp / bp·bp, 0, 1)` (0 when `bp` is zero: a segment seen end
+/// on); the ray hits when that point is within the radius `r0 + (r1 - r0) u` of the line, at
+/// the distance of its projection, `t = (a + u b)·d / d·d`, when that is in `(tmin, tmax)`.
+/// A zero direction misses.
+#[inline]
+pub fn hit_distance_segment(ray: &Ray, s: &Segment) -> f32 {
+    let d = ray.dir;
+    let dd = d.dot(d);
+    if dd == 0.0 {
+        return f32::INFINITY;
+    }
+    let a = s.p0 - ray.origin;
+    let b = s.p1 - s.p0;
+    let ap = a - d * (a.dot(d) / dd);
+    let bp = b - d * (b.dot(d) / dd);
+    let bb = bp.dot(bp);
+    let u = if bb > 0.0 {
+        (-ap.dot(bp) / bb).max(0.0).min(1.0)
+    } else {
+        0.0
+    };
+    let q = ap + bp * u;
+    let r = s.r0 + (s.r1 - s.r0) * u;
+    if q.dot(q) > r * r {
+        return f32::INFINITY;
+    }
+    let t = (a + b * u).dot(d) / dd;
     if t > ray.tmin && t < ray.tmax {
         return t;
     }

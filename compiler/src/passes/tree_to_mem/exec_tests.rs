@@ -224,7 +224,7 @@ fn put_tree_as(
     prims: &[Tri],
     schema: &Schema,
 ) -> u64 {
-    let tree = scion_runtime::bvh::LogicalTree {
+    let tree: scion_runtime::bvh::LogicalTree = scion_runtime::bvh::LogicalTree {
         nodes: nodes
             .iter()
             .map(|n| scion_runtime::bvh::LogicalNode {

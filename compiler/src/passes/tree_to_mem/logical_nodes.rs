@@ -2,7 +2,8 @@
 //! kind to its variant's build function, and the loads of that node's logical fields
 //! (`layout::logical` says where each sits) that the build functions take.
 
-use crate::layout::logical::{LogicalField, Slot, PRIM_STRIDE};
+use crate::layout::logical::{LogicalField, Slot};
+use scion_ir::data_layout::size_align;
 use scion_ir::attr::Attr;
 use scion_ir::tree::CmpPred;
 use scion_ir::types::Type;
@@ -157,12 +158,16 @@ pub(super) fn logical_fields(
             },
             Slot::Prims { offset, count } => {
                 let start = load(bd, nodes, Some(i), *offset, stride, u32t);
-                let (Some(cf), Type::View(_)) = (fields.get(*count), bd.m.types.get(p)) else {
+                let (Some(cf), Type::View(elem)) = (fields.get(*count), bd.m.types.get(p)) else {
                     return Err(format!(
                         "the primitives `{}` as {}",
                         f.name,
                         bd.m.types.display(p)
                     ));
+                };
+                // The primitive record's size (the runtime's: the layout model checked it).
+                let Some((prim_stride, _)) = size_align(bd.m, *elem) else {
+                    return Err(format!("the primitives `{}` have no size", f.name));
                 };
                 let Slot::Value { offset: co } = cf.slot else {
                     return Err(format!("the length of `{}`", f.name));
@@ -177,7 +182,7 @@ pub(super) fn logical_fields(
                     OpSpec::new(mem::Op::View)
                         .operands(&[prims, start, len])
                         .results(&[p])
-                        .attr("stride", Attr::Int(PRIM_STRIDE as i128)),
+                        .attr("stride", Attr::Int(prim_stride as i128)),
                 );
                 bd.result(op, 0)
             }
