@@ -15,6 +15,7 @@ use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::schema::{LogicalBytes, Schema};
 use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Hit, Ray, Triangle};
+use scion_runtime::primitive::Primitive;
 use std::fmt;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
@@ -96,20 +97,24 @@ pub struct LogicalTreeView {
     pub node_count: u32,
     /// Index of the root, `u32::MAX` for the empty tree.
     pub root: u32,
-    /// `tree.primitives` (40-byte `Triangle`s).
-    pub prims: *const Triangle,
+    /// `tree.primitives`: records of the prelude type the layout's primitive array holds
+    /// (40-byte `Triangle`s, 36-byte `Segment`s).
+    pub prims: *const u8,
     /// Number of primitives.
     pub prim_count: u32,
 }
 
 impl LogicalTreeView {
     /// The view of `bytes`, the nodes of `tree`; `None` when a count does not fit `u32`.
-    pub fn new(tree: &LogicalTree, bytes: &LogicalBytes) -> Option<LogicalTreeView> {
+    pub fn new<P: Primitive>(
+        tree: &LogicalTree<P>,
+        bytes: &LogicalBytes,
+    ) -> Option<LogicalTreeView> {
         Some(LogicalTreeView {
             nodes: bytes.nodes().as_ptr(),
             node_count: u32::try_from(bytes.node_count).ok()?,
             root: bytes.root,
-            prims: tree.primitives.as_ptr(),
+            prims: tree.primitives.as_ptr().cast::<u8>(),
             prim_count: u32::try_from(tree.primitives.len()).ok()?,
         })
     }

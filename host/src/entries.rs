@@ -22,6 +22,7 @@ use scion_ir::types::Type;
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::schema::LogicalBytes;
 use scion_runtime::bvh::LogicalTree;
+use scion_runtime::primitive::Primitive;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
@@ -217,7 +218,7 @@ impl Entries {
 
     /// Packs `tree` (its logical nodes filled in the entry's schema) with the generated
     /// `sizes` and `build`.
-    pub fn pack(&self, tree: &LogicalTree) -> Result<PackedEntries, String> {
+    pub fn pack<P: Primitive>(&self, tree: &LogicalTree<P>) -> Result<PackedEntries, String> {
         let bytes = LogicalBytes::fill(tree, &self.lo.entry.logical)?;
         pack(&self.lo, self.code.as_ref(), tree, &bytes)
     }
@@ -249,10 +250,10 @@ fn function(code: &dyn JitCode, name: &str) -> Result<*const u8, String> {
 /// Packs `tree`, whose logical nodes the caller filled in `bytes` (in the schema of the
 /// entry's `logical`, e.g. `LogicalBytes::fill_oriented`), with the generated `sizes` and
 /// `build` of `lo` compiled to `code`.
-pub fn pack(
+pub fn pack<P: Primitive>(
     lo: &LibraryLo,
     code: &dyn JitCode,
-    tree: &LogicalTree,
+    tree: &LogicalTree<P>,
     bytes: &LogicalBytes,
 ) -> Result<PackedEntries, String> {
     let sig = &lo.entry;

@@ -179,7 +179,13 @@ mod tests {
 
     #[test]
     fn a_segments_box_holds_both_ends_and_the_radius() {
-        let s = Segment::new(Vec3::new(1.0, -2.0, 3.0), 0.5, Vec3::new(4.0, 5.0, -6.0), 0.25, 7);
+        let s = Segment::new(
+            Vec3::new(1.0, -2.0, 3.0),
+            0.5,
+            Vec3::new(4.0, 5.0, -6.0),
+            0.25,
+            7,
+        );
         let b = Primitive::bounds(&s);
         assert!(b.low.x <= 0.5 && b.low.y <= -2.5 && b.low.z <= -6.5);
         assert!(b.high.x >= 4.5 && b.high.y >= 5.5 && b.high.z >= 3.5);

@@ -191,3 +191,38 @@ pub fn compare(
     }
     Ok(a)
 }
+
+/// Rays for a strand scene, reproducible from `seed`: 300 secondary, 256 primary and 100
+/// axis-parallel rays over its box, and rays from outside aimed at segment ends, midpoints and
+/// the edges of their ribbons (a radius off the axis, across the ray), where rounding decides.
+pub fn strand_rays(scene: &scion_runtime::scene::strands::StrandScene, seed: u64) -> Vec<Ray> {
+    let b = scene.bounds();
+    if b.is_empty() {
+        return secondary_rays(b, 16, seed);
+    }
+    let mut rays = secondary_rays(b, 300, seed);
+    rays.extend(primary_rays(b, 16, 16, seed));
+    rays.extend(axis_rays(b, 100, seed));
+    let e = b.extent();
+    let span = e.x.max(e.y).max(e.z).max(f32::MIN_POSITIVE);
+    let eye = b.center() + Vec3::new(0.31, 0.57, 1.13) * (span * 2.0);
+    let step = (scene.segments.len() / 40).max(1);
+    for s in scene.segments.iter().step_by(step) {
+        let mid = (s.p0 + s.p1) * 0.5;
+        for target in [s.p0, s.p1, mid] {
+            rays.push(Ray::new(eye, target - eye));
+            // Across the ray and the axis: a point a radius (and a hair more) off the axis.
+            let d = target - eye;
+            let axis = s.p1 - s.p0;
+            let side = d.cross(axis);
+            let len = side.dot(side).sqrt();
+            if len > 0.0 && len.is_finite() {
+                for k in [0.999f32, 1.0, 1.001] {
+                    let off = side * (s.r0.max(s.r1) * k / len);
+                    rays.push(Ray::new(eye, target + off - eye));
+                }
+            }
+        }
+    }
+    rays
+}

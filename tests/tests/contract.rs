@@ -109,7 +109,11 @@ fn build_statuses_and_the_empty_tree() {
     assert!(e.contains("@refuses.build failed with status 3"), "{e}");
 
     // The empty tree packs nothing and every ray misses, without calling the code.
-    let packed = Packed::new(&Refuses, &LogicalTree::<scion_runtime::geom::Triangle>::empty()).unwrap();
+    let packed = Packed::new(
+        &Refuses,
+        &LogicalTree::<scion_runtime::geom::Triangle>::empty(),
+    )
+    .unwrap();
     assert_eq!(packed.bytes(), 0);
     let rays = [Ray::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 1.0))];
     let hits = packed

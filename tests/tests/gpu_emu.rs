@@ -117,7 +117,12 @@ fn a_small_stack_is_the_overflow_status() {
 fn the_empty_tree_and_no_rays_need_no_launch() {
     let p = pipeline("ptr", "PtrBVH", None, Codegen::Llvm(3));
     let rays = vec![Ray::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0)); 5];
-    let hits = trace(&p, &LogicalTree::<scion_runtime::geom::Triangle>::empty(), &rays).unwrap();
+    let hits = trace(
+        &p,
+        &LogicalTree::<scion_runtime::geom::Triangle>::empty(),
+        &rays,
+    )
+    .unwrap();
     assert!(hits.iter().all(|h| h.bit_eq(&Hit::MISS)));
     let scene = gen::random_soup(20, 0.1, 3);
     let tree = build_sah_binned(&scene.triangles, &SahOptions::default());

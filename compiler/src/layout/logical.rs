@@ -113,7 +113,6 @@ pub struct LogicalAbi {
     pub schema: Schema,
 }
 
-
 /// The fields of record type `ty`, when it is a declared record.
 fn record_fields(m: &Module, ty: TypeId) -> Option<&[scion_ir::module::Field]> {
     let Type::Adt(name) = m.types.get(ty) else {

@@ -46,7 +46,10 @@ impl LogicalBytes {
     /// `tree` in `schema`'s form; an error names a schema the runtime cannot fill (see
     /// [`Schema::validate`]) or a tree too large for `u32` indices. A schema with an
     /// oriented interior variant orients nodes by [`OrientedOptions::default`].
-    pub fn fill<P: Primitive>(tree: &LogicalTree<P>, schema: &Schema) -> Result<LogicalBytes, String> {
+    pub fn fill<P: Primitive>(
+        tree: &LogicalTree<P>,
+        schema: &Schema,
+    ) -> Result<LogicalBytes, String> {
         Self::fill_oriented(tree, schema, &OrientedOptions::default())
     }
 

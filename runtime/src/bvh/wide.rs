@@ -16,8 +16,8 @@
 //! and the leaf cap carry over, and every child box is exactly a binary node's box.
 
 use super::logical::{LogicalTree, NO_NODE};
-use crate::primitive::Primitive;
 use crate::geom::Aabb;
+use crate::primitive::Primitive;
 
 /// One child slot of a wide node.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

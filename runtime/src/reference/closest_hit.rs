@@ -347,7 +347,10 @@ mod tests {
         assert_eq!(closest_hit_brute(&s.triangles, &r), Hit::MISS);
         let t = build_sah_binned(&s.triangles, &SahOptions::default());
         assert_eq!(closest_hit_tree(&t, &r), Hit::MISS);
-        assert_eq!(closest_hit_tree(&LogicalTree::<Triangle>::empty(), &r), Hit::MISS);
+        assert_eq!(
+            closest_hit_tree(&LogicalTree::<Triangle>::empty(), &r),
+            Hit::MISS
+        );
     }
 
     #[test]

@@ -9,6 +9,7 @@
 pub mod gen;
 pub mod load;
 pub mod manifest;
+pub mod strands;
 pub mod transform;
 
 use std::fmt;
@@ -144,6 +145,13 @@ pub enum SceneError {
         /// What is out of range, with its value.
         what: String,
     },
+    /// A binary scene file (a strand scene's `.hair`) that does not hold what its header says.
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
     /// More triangles than ids: `u32::MAX` is reserved for "no primitive".
     TooManyTriangles {
         /// Where the triangles came from (file or composition).
@@ -165,6 +173,7 @@ impl SceneError {
             | SceneError::Compressed { path, .. }
             | SceneError::ShortFace { path, .. }
             | SceneError::OutOfRange { path, .. }
+            | SceneError::Invalid { path, .. }
             | SceneError::TooManyTriangles { path, .. } => path,
         }
     }
@@ -180,6 +189,7 @@ impl SceneError {
             | SceneError::OutOfRange { line, .. } => *line,
             SceneError::Io { .. }
             | SceneError::Compressed { .. }
+            | SceneError::Invalid { .. }
             | SceneError::TooManyTriangles { .. } => None,
         }
     }
@@ -231,6 +241,7 @@ impl fmt::Display for SceneError {
                  and a scene extent of at least {MIN_EXTENT:e} (beyond it the f32 triangle test \
                  overflows or underflows and hits are lost); scale the scene into that range"
             ),
+            SceneError::Invalid { message, .. } => write!(f, "{message}"),
             SceneError::TooManyTriangles { count, .. } => write!(
                 f,
                 "{count} triangles is too many: ids are u32 and u32::MAX means \"no primitive\""

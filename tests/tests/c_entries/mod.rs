@@ -16,6 +16,7 @@ use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::schema::LogicalBytes;
 use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Hit, Ray};
+use scion_runtime::primitive::Primitive;
 
 /// The program of `files` (paths from the repository root) with `layout` and `algorithm`.
 pub fn program(files: &[&str], layout: &str, algorithm: &str) -> Program {
@@ -56,10 +57,10 @@ pub fn host_lo_stack(program: &Program, entries: u32) -> LibraryLo {
 /// entry of algorithm `algorithm` over `queries`, updating `results` (which the caller
 /// initialized); returns the batch's status. `Q` and `R` are the `#[repr(C)]` query and result
 /// records, checked against the entry's sizes.
-pub fn run_batch<Q: Copy, R: Copy>(
+pub fn run_batch<Q: Copy, R: Copy, P: Primitive>(
     lo: &LibraryLo,
     code: &dyn JitCode,
-    tree: &LogicalTree,
+    tree: &LogicalTree<P>,
     algorithm: &str,
     queries: &[Q],
     results: &mut [R],
@@ -71,10 +72,10 @@ pub fn run_batch<Q: Copy, R: Copy>(
 /// [`run_batch`] over logical nodes filled by the caller (`LogicalBytes::fill_oriented`),
 /// through the host's runner (`scion_host::entries`: the entries called as a C host calls
 /// them) on the calling thread; 0, or the status of the first failing query.
-pub fn run_batch_bytes<Q: Copy, R: Copy>(
+pub fn run_batch_bytes<Q: Copy, R: Copy, P: Primitive>(
     lo: &LibraryLo,
     code: &dyn JitCode,
-    tree: &LogicalTree,
+    tree: &LogicalTree<P>,
     bytes: &LogicalBytes,
     algorithm: &str,
     queries: &[Q],
@@ -117,10 +118,10 @@ pub fn run_batch_bytes<Q: Copy, R: Copy>(
 
 /// The closest hits of `rays` by a closest-hit algorithm's batch entry (`best` starting at
 /// `(ray.tmax, u32::MAX)`); panics on a status other than 0.
-pub fn closest_hits(
+pub fn closest_hits<P: Primitive>(
     lo: &LibraryLo,
     code: &dyn JitCode,
-    tree: &LogicalTree,
+    tree: &LogicalTree<P>,
     algorithm: &str,
     rays: &[Ray],
 ) -> Vec<Hit> {
@@ -129,10 +130,10 @@ pub fn closest_hits(
 }
 
 /// [`closest_hits`] over logical nodes filled by the caller.
-pub fn closest_hits_bytes(
+pub fn closest_hits_bytes<P: Primitive>(
     lo: &LibraryLo,
     code: &dyn JitCode,
-    tree: &LogicalTree,
+    tree: &LogicalTree<P>,
     bytes: &LogicalBytes,
     algorithm: &str,
     rays: &[Ray],

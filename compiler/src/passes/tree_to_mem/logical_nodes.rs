@@ -3,8 +3,8 @@
 //! (`layout::logical` says where each sits) that the build functions take.
 
 use crate::layout::logical::{LogicalField, Slot};
-use scion_ir::data_layout::size_align;
 use scion_ir::attr::Attr;
+use scion_ir::data_layout::size_align;
 use scion_ir::tree::CmpPred;
 use scion_ir::types::Type;
 use scion_ir::{mem, Builder, OpSpec, TypeId, ValueId};
