@@ -37,6 +37,8 @@ unsafe impl<T: DeviceCopy, const N: usize> DeviceCopy for [T; N] {}
 unsafe impl DeviceCopy for Ray {}
 // SAFETY: `#[repr(C)]`, nine `f32`s and a `u32` (40 bytes), no padding.
 unsafe impl DeviceCopy for Triangle {}
+// SAFETY: `#[repr(C)]`, eight `f32`s and a `u32` (36 bytes, checked in the runtime), no padding.
+unsafe impl DeviceCopy for scion_runtime::primitive::Segment {}
 
 /// The bytes of a `DeviceCopy` slice.
 pub fn bytes_of<T: DeviceCopy>(data: &[T]) -> &[u8] {

@@ -15,6 +15,7 @@ use crate::error::CudaError;
 use crate::launcher::{CudaLauncher, Launcher};
 use scion_runtime::bvh::schema::{LogicalBytes, Schema};
 use scion_runtime::bvh::LogicalTree;
+use scion_runtime::primitive::Primitive;
 use scion_runtime::geom::{Hit, Ray};
 use std::time::{Duration, Instant};
 
@@ -51,8 +52,8 @@ const _: () = assert!(std::mem::size_of::<DeviceTreeView>() == 32);
 impl DeviceTreeView {
     /// The view of `tree`, its nodes `bytes`, whose arrays were uploaded at `nodes` and
     /// `prims`.
-    pub fn new(
-        tree: &LogicalTree,
+    pub fn new<P: Primitive>(
+        tree: &LogicalTree<P>,
         bytes: &LogicalBytes,
         nodes: DevicePtr,
         prims: DevicePtr,
@@ -69,7 +70,7 @@ impl DeviceTreeView {
             node_count: count(bytes.node_count, "nodes")?,
             root: bytes.root,
             prims: prims.0,
-            prim_count: count(tree.primitives.len(), "triangles")?,
+            prim_count: count(tree.primitives.len(), "primitives")?,
             pad: 0,
         })
     }
@@ -343,9 +344,9 @@ impl<L: Launcher> GpuPipeline<L> {
     }
 
     /// Packs `tree` (of depth `depth`, for the packing kernels' stack) on the device.
-    pub fn pack(
+    pub fn pack<P: Primitive + DeviceCopy>(
         &self,
-        tree: &LogicalTree,
+        tree: &LogicalTree<P>,
         depth: usize,
     ) -> Result<PackedTree<L::Buffer>, CudaError> {
         let start = Instant::now();
@@ -364,7 +365,7 @@ impl<L: Launcher> GpuPipeline<L> {
         let ptr = |b: &L::Buffer| KernelArg::Ptr(dev.address(b));
         let bytes = LogicalBytes::fill(tree, &self.logical).map_err(CudaError::Host)?;
         let nodes = dev.upload("logical nodes", bytes.nodes())?;
-        let prims = dev.upload("logical triangles", &tree.primitives)?;
+        let prims = dev.upload("logical primitives", &tree.primitives)?;
         let view = DeviceTreeView::new(tree, &bytes, dev.address(&nodes), dev.address(&prims))?;
         let view = dev.upload("logical tree view", &[view])?;
         let count = self.buffers.len();

@@ -234,7 +234,7 @@ fn pipeline_packs_on_the_device_and_traces() {
     );
     assert!(e.to_string().contains("traversal stack overflow"), "{e}");
     // The empty tree packs nothing; every ray misses.
-    let empty = build_sah_binned(&[], &SahOptions::default());
+    let empty = build_sah_binned::<scion_runtime::geom::Triangle>(&[], &SahOptions::default());
     let packed = p.pack(&empty, 0).unwrap();
     let t = p
         .trace(&packed, &p.upload_rays(&rays(10)).unwrap())

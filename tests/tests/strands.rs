@@ -201,3 +201,45 @@ fn too_big_a_leaf_and_triangles_are_refused_with_a_reason() {
     let e = LogicalBytes::fill(&t, &lo.entry.logical).unwrap_err();
     assert!(e.contains("`Segment`") && e.contains("`Triangle`"), "{e}");
 }
+
+#[test]
+fn the_emulated_gpu_pipeline_traces_strands_like_the_wide_reference() {
+    use scion_host::gpu_emu::EmulatedGpu;
+    use scion_host::jit::LoOptions;
+    let opts = LoOptions {
+        stack_size: None,
+        opt_level: 3,
+        dsl_opt: true,
+        target: scion_compiler::abi::EntryTarget::Gpu,
+    };
+    let mut compared = 0usize;
+    for codegen in [Codegen::Llvm(3), Codegen::Cranelift] {
+        let p = EmulatedGpu::compile_program(&program(), &opts, codegen, 2)
+            .and_then(EmulatedGpu::into_pipeline)
+            .unwrap();
+        for (i, scene) in scenes().iter().enumerate() {
+            let rays = strand_rays(scene, 100 + i as u64);
+            let (_, tree) = trees(scene).remove(1);
+            if tree.is_empty() {
+                continue;
+            }
+            let wide = collapse::<4>(&tree);
+            let packed = p.pack(&tree, tree.stats().depth).unwrap();
+            // Segments go to the device as their 36-byte records.
+            assert_eq!(packed.sizes[1], 36 * tree.primitives.len() as u64, "{:?}", packed.sizes);
+            let on_device = p.upload_rays(&rays).unwrap();
+            let got = p.trace(&packed, &on_device).unwrap().hits;
+            for (k, (ray, got)) in rays.iter().zip(&got).enumerate() {
+                compared += 1;
+                let want = closest_hit_wide(&wide, &tree.primitives, ray);
+                let brute = closest_hit_brute(&scene.segments, ray);
+                assert!(
+                    got.bit_eq(&want) || (got.bit_eq(&brute) && !want.bit_eq(&brute)),
+                    "{codegen:?} {} ray {k}: {got:?}, the wide reference {want:?}",
+                    scene.name
+                );
+            }
+        }
+    }
+    assert!(compared > 10_000, "{compared}");
+}
