@@ -15,7 +15,7 @@ cargo build --release -q -p scion-cli
 sweep=docs/explore/results.csv
 [ -f "$sweep" ] || { echo "$0: no $sweep: run scripts/explore-docs.sh first" >&2; exit 1; }
 if [ $# -gt 0 ]; then names=("$@"); else names=("${LIBRARY_SCENES[@]}"); fi
-layouts=$(target/release/scion layouts --names | grep -v '^hair-bvh$' | paste -sd, -)
+layouts=$(target/release/scion layouts --names --primitive Triangle | grep -v '^hair-bvh$' | paste -sd, -)
 rays=${RAYS:-primary}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT

@@ -25,7 +25,7 @@ if [ $# -gt 0 ]; then names=("$@"); else names=("${LIBRARY_SCENES[@]}"); fi
 scenes_arg=$(IFS=,; echo "${names[*]}")
 out=docs/explore
 mkdir -p "$out"
-all=$(target/release/scion layouts --names | grep -v '^hair-bvh$' | paste -sd, -)
+all=$(target/release/scion layouts --names --primitive Triangle | grep -v '^hair-bvh$' | paste -sd, -)
 layouts=(--layouts "${EXPLORE_LAYOUTS:-$all}")
 kinds=${EXPLORE_KINDS:-closest-hit,closest-point}
 target/release/scion explore --scenes "$scenes_arg" "${layouts[@]}" \

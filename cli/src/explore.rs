@@ -159,7 +159,10 @@ pub fn run(args: &ExploreArgs) -> Result<(), CliError> {
                 })
         })
         .collect::<Result<_, _>>()?;
-    let all_layouts = library::layout_names();
+    // The sweep's scenes are triangle meshes: the layouts over triangles.
+    let over_triangles =
+        |name: &str| library::resolve(name, None).map_or(true, |r| r.primitive == "Triangle");
+    let all_layouts: Vec<String> = library::layout_names();
     let layout_names: Vec<String> = match &args.layouts {
         Some(l) => {
             for name in l {
@@ -169,10 +172,19 @@ pub fn run(args: &ExploreArgs) -> Result<(), CliError> {
                         all_layouts.join(", ")
                     )));
                 }
+                if all_layouts.contains(name) && !over_triangles(name) {
+                    return Err(CliError::usage(format!(
+                        "--layouts: `{name}` holds strand segments, and the sweep's scenes are \
+                         triangle meshes (`scion strands trace --scene F.hair` traces strand scenes)"
+                    )));
+                }
             }
             l.clone()
         }
-        None => all_layouts,
+        None => all_layouts
+            .into_iter()
+            .filter(|n| over_triangles(n))
+            .collect(),
     };
     let scenes: Vec<String> = match &args.scenes {
         Some(s) => s.clone(),

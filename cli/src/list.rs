@@ -1,7 +1,8 @@
 //! `scion layouts`: the library's layouts as the registry (`scion_host::library`) finds them,
 //! one line each: the name `--layout` takes, the layout's name in its source, the sum type it
-//! realizes, the closest hit `scion trace` compiles for it, and how it stores boxes. `--names`
-//! prints only the names (for scripts), `--gpu` only the layouts the GPU path runs.
+//! realizes, the primitives its leaves hold, the closest hit `scion trace` compiles for it, and
+//! how it stores boxes. `--names` prints only the names (for scripts), `--gpu` only the layouts
+//! the GPU path runs, `--primitive Triangle|Segment` only those over that primitive.
 
 use crate::io::outln;
 use crate::CliError;
@@ -15,10 +16,11 @@ pub fn run(args: &crate::LayoutsArgs) -> Result<(), CliError> {
         .collect();
     if !args.names {
         outln!(
-            "{:<20} {:<18} {:<8} {:<18} boxes",
+            "{:<20} {:<18} {:<8} {:<9} {:<20} boxes",
             "name",
             "layout",
             "type",
+            "leaves",
             "closest hit"
         );
     }
@@ -27,16 +29,26 @@ pub fn run(args: &crate::LayoutsArgs) -> Result<(), CliError> {
             continue;
         }
         let name = library::layout_name(stem);
+        let resolved = library::resolve(stem, None);
+        if let Some(p) = &args.primitive {
+            if !resolved
+                .as_ref()
+                .is_ok_and(|r| r.primitive.eq_ignore_ascii_case(p))
+            {
+                continue;
+            }
+        }
         if args.names {
             outln!("{name}");
             continue;
         }
-        match library::resolve(stem, None) {
+        match resolved {
             Ok(r) => {
                 outln!(
-                    "{name:<20} {:<18} {:<8} {:<18} {}",
+                    "{name:<20} {:<18} {:<8} {:<9} {:<20} {}",
                     r.program.layout,
                     r.tree_type,
+                    r.primitive,
                     r.program.algorithm,
                     r.boxes.name()
                 );

@@ -24,6 +24,7 @@ mod render;
 mod results;
 mod run;
 mod run_gpu;
+mod strands;
 mod trace;
 mod tune;
 
@@ -82,6 +83,10 @@ enum Command {
     /// the fastest (or the fastest within a memory budget, or the smallest within a slowdown),
     /// why, and optionally its compiled code (`--emit obj|ptx|header`).
     Tune(TuneArgs),
+    /// Hair and fur (paper §8.2): generate a seeded strand scene as a `.hair` file, or trace a
+    /// `.hair` scene through a layout over strand segments (`hair-bvh-strands`), timed and
+    /// checked against the reference.
+    Strands(strands::StrandsArgs),
 }
 
 /// The code generators of `scion run`.
@@ -171,6 +176,10 @@ pub struct LayoutsArgs {
     /// closest hit over `BVH`.
     #[arg(long)]
     pub gpu: bool,
+    /// Only the layouts whose leaves hold this primitive: `Triangle` (meshes, OBJ scenes) or
+    /// `Segment` (strands, `.hair` scenes).
+    #[arg(long, value_name = "TYPE")]
+    pub primitive: Option<String>,
 }
 
 /// Where `scion trace` runs the traversal.
@@ -391,6 +400,7 @@ fn main() -> ExitCode {
         Command::Render(args) => preflight_render(args).and_then(|()| render::run(args)),
         Command::Explore(args) => io::check_threads(args.threads).and_then(|()| explore::run(args)),
         Command::Tune(args) => preflight_tune(args).and_then(|()| tune::run(args)),
+        Command::Strands(args) => strands::run(args),
         Command::Run(args) => preflight_run(args).and_then(|()| run::run(args)),
         Command::Ptx(args) => check_gpu_cpu(args.cpu.as_deref())
             .and_then(|()| io::check_output("-o", &args.output, &[]))

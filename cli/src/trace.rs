@@ -116,6 +116,13 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     peaks.mark("compile");
     progress(&format!("loading {}", args.scene.display()));
     let t = Instant::now();
+    let file = args.scene.to_string_lossy();
+    if file.ends_with(".hair") || file.ends_with(".hair.gz") {
+        return Err(CliError::usage(format!(
+            "{file} is a strand scene; `scion trace` traces triangle meshes"
+        ))
+        .note("`scion strands trace --scene FILE.hair` traces strands (layout hair-bvh-strands)"));
+    }
     let scene = load_obj(&args.scene).map_err(|e| {
         let err = CliError::new(format!("cannot load the scene: {e}"));
         match e.line() {

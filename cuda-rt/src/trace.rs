@@ -15,8 +15,8 @@ use crate::error::CudaError;
 use crate::launcher::{CudaLauncher, Launcher};
 use scion_runtime::bvh::schema::{LogicalBytes, Schema};
 use scion_runtime::bvh::LogicalTree;
-use scion_runtime::primitive::Primitive;
 use scion_runtime::geom::{Hit, Ray};
+use scion_runtime::primitive::Primitive;
 use std::time::{Duration, Instant};
 
 // The query record of closest hit is a 32-byte `Ray`; its result record is `(f32, u32)`.

@@ -64,6 +64,9 @@ pub struct DeclaredLayout {
     pub tree_type: Option<String>,
     /// How its build stores boxes.
     pub boxes: Boxes,
+    /// The record type its leaves hold (`Triangle`, `Segment`), when its tree type has a
+    /// primitive array.
+    pub primitive: Option<String>,
 }
 
 /// The kinds of query an entry answers, by its signature `(query, tree: T, result: mut R)`:
@@ -191,11 +194,28 @@ pub fn declared(files: &[(String, String)]) -> Result<Declared, String> {
                 name: l.name.clone(),
                 tree_type: l.adt.clone(),
                 boxes: build_boxes(&module, &l.name, l.adt.as_deref()),
+                primitive: l.adt.as_deref().and_then(|t| primitive_of(&module, t)),
             })
             .collect(),
         entries: entries(&module),
         called: called(&module),
     })
+}
+
+/// The element type of the primitive array (`data: Triangle[n]`) of sum type `adt`.
+fn primitive_of(module: &Module, adt: &str) -> Option<String> {
+    module
+        .adt(adt)?
+        .variants
+        .iter()
+        .flat_map(|v| &v.fields)
+        .find_map(|f| match module.types.get(f.ty) {
+            Type::Array { elem, len: None } => match module.types.get(*elem) {
+                Type::Adt(n) => Some(n.clone()),
+                _ => None,
+            },
+            _ => None,
+        })
 }
 
 /// The names of the functions that another function of `module` calls.
@@ -328,6 +348,9 @@ pub struct Resolved {
     pub tree_type: String,
     /// The library layout's file stem, `None` for a layout from a file.
     pub library_stem: Option<&'static str>,
+    /// The record type the layout's leaves hold (`Triangle` unless its tree type says
+    /// otherwise: `Segment` for strands); scenes of triangles need `Triangle`.
+    pub primitive: String,
 }
 
 /// True when `arg` names a file rather than a library entry.
@@ -510,6 +533,10 @@ pub fn resolve_kind(
         boxes: chosen.boxes,
         tree_type,
         library_stem,
+        primitive: chosen
+            .primitive
+            .clone()
+            .unwrap_or_else(|| "Triangle".to_string()),
     })
 }
 

@@ -226,7 +226,12 @@ fn the_emulated_gpu_pipeline_traces_strands_like_the_wide_reference() {
             let wide = collapse::<4>(&tree);
             let packed = p.pack(&tree, tree.stats().depth).unwrap();
             // Segments go to the device as their 36-byte records.
-            assert_eq!(packed.sizes[1], 36 * tree.primitives.len() as u64, "{:?}", packed.sizes);
+            assert_eq!(
+                packed.sizes[1],
+                36 * tree.primitives.len() as u64,
+                "{:?}",
+                packed.sizes
+            );
             let on_device = p.upload_rays(&rays).unwrap();
             let got = p.trace(&packed, &on_device).unwrap().hits;
             for (k, (ray, got)) in rays.iter().zip(&got).enumerate() {
