@@ -38,6 +38,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let layout = args.layout.as_deref().unwrap_or("pbrt");
     let resolved = resolve_kind(layout, args.algorithm.as_deref(), QueryKind::ClosestHit)
         .map_err(CliError::usage)?;
+    crate::trace::over_triangles(&resolved, layout)?;
     let p = &resolved.program;
     let codegen = match args.backend {
         RunBackend::Jit => Codegen::Cranelift,

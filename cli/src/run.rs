@@ -57,6 +57,7 @@ fn resolve(args: &RunArgs) -> Result<(QueryKind, Resolved), CliError> {
 /// Runs `scion run`.
 pub fn run(args: &RunArgs) -> Result<(), CliError> {
     let (kind, resolved) = resolve(args)?;
+    crate::trace::over_triangles(&resolved, args.layout.as_deref().unwrap_or("pbrt"))?;
     let p = &resolved.program;
     let codegen = match args.backend {
         crate::RunBackend::Jit => Codegen::Cranelift,

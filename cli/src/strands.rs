@@ -13,6 +13,7 @@ use clap::{Args, Subcommand};
 use scion_host::entries::Entries;
 use scion_host::jit::Codegen;
 use scion_runtime::batch::BatchDriver;
+use scion_runtime::bvh::oriented::OrientedOptions;
 use scion_runtime::bvh::wide::collapse;
 use scion_runtime::bvh::{build_sah_binned, SahOptions};
 use scion_runtime::geom::{Hit, Ray};
@@ -92,6 +93,11 @@ pub struct StrandTraceArgs {
     /// Largest leaf of the binned-SAH tree (the hair BVH's references count up to 7).
     #[arg(long, default_value_t = 7, value_parser = clap::value_parser!(u32).range(1..=255))]
     pub leaf_size: u32,
+    /// Which interior nodes below the root are oriented (`OBBNode`s): where their children's
+    /// oriented boxes have at most this fraction of the surface of their axis-aligned boxes
+    /// (0: none, the tree is axis-aligned; `inf`: every one). The default is the runtime's.
+    #[arg(long, default_value_t = OrientedOptions::default().max_area_ratio, value_name = "RATIO")]
+    pub max_area_ratio: f64,
     /// Threads (0: one per core).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
@@ -182,7 +188,16 @@ fn trace(args: &StrandTraceArgs) -> Result<(), CliError> {
         "packing the tree into layout `{}`",
         resolved.program.layout
     ));
-    let packed = entries.pack(&tree).map_err(|e| {
+    if args.max_area_ratio.is_nan() || args.max_area_ratio < 0.0 {
+        return Err(CliError::usage(format!(
+            "--max-area-ratio {}: a ratio at least 0 (inf: every node)",
+            args.max_area_ratio
+        )));
+    }
+    let oriented = OrientedOptions {
+        max_area_ratio: args.max_area_ratio,
+    };
+    let packed = entries.pack_oriented(&tree, &oriented).map_err(|e| {
         CliError::new(format!("layout `{}`: {e}", resolved.program.layout))
             .note("the hair BVH's references count at most 7 segments per leaf (--leaf-size)")
     })?;

@@ -83,6 +83,9 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         ),
         false => None,
     };
+    if let Some(r) = &resolved {
+        over_triangles(r, layout)?;
+    }
     let boxes = match (&resolved, args.backend) {
         (Some(r), _) => r.boxes,
         (None, BackendArg::MemInterp) => layout_boxes(&layout.replace('-', "_")),
@@ -632,6 +635,22 @@ pub(crate) fn significant(x: f64) -> String {
 
 pub(crate) fn secs(d: Duration) -> String {
     format!("{:.6} s", d.as_secs_f64())
+}
+
+/// A usage error unless the layout `name` resolved to holds triangles (the scenes of `scion
+/// trace`, `run`, `render` and `tune` are triangle meshes).
+pub(crate) fn over_triangles(
+    r: &scion_host::library::Resolved,
+    name: &str,
+) -> Result<(), CliError> {
+    if r.primitive == "Triangle" {
+        return Ok(());
+    }
+    Err(CliError::usage(format!(
+        "--layout {name}: its leaves hold `{}`s, and this command's scenes are triangle meshes",
+        r.primitive
+    ))
+    .note("`scion strands trace --scene FILE.hair --layout NAME` traces strand scenes"))
 }
 
 pub(crate) fn progress(what: &str) {

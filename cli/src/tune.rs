@@ -184,6 +184,7 @@ fn emit_choice(
     out: &std::path::Path,
 ) -> Result<(), CliError> {
     let r = resolve_kind(layout, None, kind).map_err(CliError::new)?;
+    crate::trace::over_triangles(&r, layout)?;
     let fail = |e: String| CliError::new(format!("cannot compile for `{layout}`: {e}"));
     let write = |bytes: &[u8]| {
         crate::io::write_whole(out, bytes)

@@ -110,6 +110,21 @@ fn strand_scenes_and_layouts_are_not_mixed_up() {
         "{}",
         text(&o.stderr)
     );
+    let o = scion(&[
+        "trace",
+        "--scene",
+        &obj,
+        "--backend",
+        "llvm",
+        "--layout",
+        "hair-bvh-strands",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        text(&o.stderr).contains("its leaves hold `Segment`s"),
+        "{}",
+        text(&o.stderr)
+    );
     let o = scion(&["layouts", "--names", "--primitive", "Segment"]);
     assert_eq!(text(&o.stdout).trim(), "hair-bvh-strands");
 }

@@ -20,6 +20,7 @@ use scion_compiler::abi::{EntrySig, EntryTarget};
 use scion_ir::backend::JitCode;
 use scion_ir::types::Type;
 use scion_runtime::batch::BatchDriver;
+use scion_runtime::bvh::oriented::OrientedOptions;
 use scion_runtime::bvh::schema::LogicalBytes;
 use scion_runtime::bvh::LogicalTree;
 use scion_runtime::primitive::Primitive;
@@ -219,7 +220,17 @@ impl Entries {
     /// Packs `tree` (its logical nodes filled in the entry's schema) with the generated
     /// `sizes` and `build`.
     pub fn pack<P: Primitive>(&self, tree: &LogicalTree<P>) -> Result<PackedEntries, String> {
-        let bytes = LogicalBytes::fill(tree, &self.lo.entry.logical)?;
+        self.pack_oriented(tree, &OrientedOptions::default())
+    }
+
+    /// [`Entries::pack`] with the rule for orienting nodes of a tree type with an oriented
+    /// interior variant (the hair BVH's `OBBNode`; `scion_runtime::bvh::oriented::fit`).
+    pub fn pack_oriented<P: Primitive>(
+        &self,
+        tree: &LogicalTree<P>,
+        oriented: &OrientedOptions,
+    ) -> Result<PackedEntries, String> {
+        let bytes = LogicalBytes::fill_oriented(tree, &self.lo.entry.logical, oriented)?;
         pack(&self.lo, self.code.as_ref(), tree, &bytes)
     }
 
