@@ -294,9 +294,10 @@ fn match_patterns_and_exhaustiveness() {
 #[test]
 fn pattern_bindings_have_field_types() {
     let t = ok("func f(b: BVH) -> u16 = match b { | Leaf(x, n, d) -> n | Interior(x, l, r) -> 0 }");
-    let n = t.bindings.iter().find(|b| b.name == "n").unwrap();
+    // The function's own bindings come after the prelude's.
+    let n = t.bindings.iter().rev().find(|b| b.name == "n").unwrap();
     assert_eq!(n.ty, Ty::Prim(Prim::U16));
-    let d = t.bindings.iter().find(|b| b.name == "d").unwrap();
+    let d = t.bindings.iter().rev().find(|b| b.name == "d").unwrap();
     assert!(matches!(d.ty, Ty::Slice(_)));
 }
 
