@@ -112,7 +112,7 @@ pub(crate) fn find_adt(
                     .filter(|f| {
                         declared
                             .iter()
-                            .any(|(n, e)| *n == f.name.name && e.agrees(&f.ty))
+                            .any(|(n, e)| *n == f.name.name && e.agrees(&f.ty, &declared))
                     })
                     .count();
                 ((found * 1000) / fields.len().max(1), agree)
@@ -238,16 +238,27 @@ fn mentions_type(ty: &TypeExpr, name: &str) -> bool {
 enum Evidence<'a> {
     Stored(&'a TypeExpr),
     Derived(Option<&'a str>),
+    /// A slice of the member named here (`data = primitives[a : b]`).
+    SliceOf(&'a str),
 }
 
 impl Evidence<'_> {
-    fn agrees(&self, ty: &TypeExpr) -> bool {
+    /// Whether the logical type `ty` agrees with this member; `declared` resolves the array a
+    /// slice is of (its element type is the logical array's: `Triangle` or `Segment`).
+    fn agrees(&self, ty: &TypeExpr, declared: &[(&str, Evidence<'_>)]) -> bool {
         match self {
             Evidence::Stored(t) => crate::layout::types::same_type(t, ty),
             Evidence::Derived(Some(ctor)) => {
                 matches!(&ty.kind, TypeExprKind::Named(n) if n.name == *ctor)
             }
             Evidence::Derived(None) => false,
+            Evidence::SliceOf(base) => declared.iter().any(|(n, e)| match (e, &ty.kind) {
+                (Evidence::Stored(t), TypeExprKind::Array { elem, .. }) if n == base => {
+                    matches!(&t.kind, TypeExprKind::Array { elem: stored, .. }
+                        if crate::layout::types::same_type(stored, elem))
+                }
+                _ => false,
+            }),
         }
     }
 }
@@ -264,11 +275,16 @@ fn collect_member_names<'a>(
         match &m.kind {
             MemberKind::Field { name, ty } => out.push((&name.name, Evidence::Stored(ty))),
             MemberKind::Derived { name, value } => {
-                let ctor = match &value.kind {
-                    crate::syntax::ast::ExprKind::Call { callee, .. } => Some(callee.name.as_str()),
-                    _ => None,
+                use crate::syntax::ast::ExprKind;
+                let evidence = match &value.kind {
+                    ExprKind::Call { callee, .. } => Evidence::Derived(Some(callee.name.as_str())),
+                    ExprKind::Slice { base, .. } => match &base.kind {
+                        ExprKind::Name(b) => Evidence::SliceOf(b.name.as_str()),
+                        _ => Evidence::Derived(None),
+                    },
+                    _ => Evidence::Derived(None),
                 };
-                out.push((&name.name, Evidence::Derived(ctor)))
+                out.push((&name.name, evidence))
             }
             MemberKind::Group(g) => collect_member_names(&g.members, out, depth + 1),
             MemberKind::Split { arms, .. } => {
