@@ -22,6 +22,7 @@
 use scion_bench::Contender;
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::geom::{Hit, Ray, Triangle};
+use scion_runtime::primitive::Segment;
 use std::ffi::{c_char, c_void};
 use std::mem::{align_of, offset_of, size_of};
 use std::sync::atomic::{AtomicIsize, Ordering};
@@ -31,10 +32,13 @@ use std::time::Instant;
 type Handle = *mut c_void;
 
 const RTC_GEOMETRY_TYPE_TRIANGLE: u32 = 0;
+const RTC_GEOMETRY_TYPE_FLAT_LINEAR_CURVE: u32 = 17;
 const RTC_BUFFER_TYPE_INDEX: u32 = 0;
 const RTC_BUFFER_TYPE_VERTEX: u32 = 1;
+const RTC_FORMAT_UINT: u32 = 0x5001;
 const RTC_FORMAT_UINT3: u32 = 0x5003;
 const RTC_FORMAT_FLOAT3: u32 = 0x9003;
+const RTC_FORMAT_FLOAT4: u32 = 0x9004;
 const RTC_INVALID_GEOMETRY_ID: u32 = u32::MAX;
 const RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT: u32 = 0;
 const RTC_ERROR_NONE: u32 = 0;
@@ -163,6 +167,86 @@ impl Scene {
     fn build(tris: &[Triangle]) -> Result<Scene, String> {
         let n = tris.len();
         let n32 = u32::try_from(n).map_err(|_| format!("embree: {n} triangles: too many"))?;
+        Scene::with_geometry(RTC_GEOMETRY_TYPE_TRIANGLE, |s, geometry| {
+            // SAFETY: `geometry` is a live geometry of `s`'s device; the buffers Embree returns
+            // hold `item_count` items of `byte_stride` bytes, 4-byte aligned, written in bounds.
+            unsafe {
+                let vb = rtcSetNewGeometryBuffer(
+                    geometry,
+                    RTC_BUFFER_TYPE_VERTEX,
+                    0,
+                    RTC_FORMAT_FLOAT3,
+                    3 * size_of::<f32>(),
+                    3 * n,
+                ) as *mut [f32; 3];
+                let ib = rtcSetNewGeometryBuffer(
+                    geometry,
+                    RTC_BUFFER_TYPE_INDEX,
+                    0,
+                    RTC_FORMAT_UINT3,
+                    3 * size_of::<u32>(),
+                    n,
+                ) as *mut [u32; 3];
+                s.check("rtcSetNewGeometryBuffer")?;
+                let verts = std::slice::from_raw_parts_mut(vb, 3 * n);
+                let index = std::slice::from_raw_parts_mut(ib, n);
+                for (i, t) in (0..n32).zip(tris) {
+                    let k = 3 * i as usize;
+                    verts[k] = t.p0.to_array();
+                    verts[k + 1] = t.p1.to_array();
+                    verts[k + 2] = t.p2.to_array();
+                    index[i as usize] = [3 * i, 3 * i + 1, 3 * i + 2];
+                }
+            }
+            Ok(())
+        })
+    }
+
+    /// Builds the scene over strand segments as Embree's flat linear curves (ribbons facing
+    /// the ray, radius linear along the segment: the geometry of the prelude's ribbon test),
+    /// one curve of two vertices per segment, in their order (primitive `i` is `segs[i]`).
+    fn build_curves(segs: &[Segment]) -> Result<Scene, String> {
+        let n = segs.len();
+        let n32 = u32::try_from(2 * n).map_err(|_| format!("embree: {n} segments: too many"))?;
+        Scene::with_geometry(RTC_GEOMETRY_TYPE_FLAT_LINEAR_CURVE, |s, geometry| {
+            // SAFETY: as in `build`: live geometry, buffers of the sizes asked, written in
+            // bounds.
+            unsafe {
+                let vb = rtcSetNewGeometryBuffer(
+                    geometry,
+                    RTC_BUFFER_TYPE_VERTEX,
+                    0,
+                    RTC_FORMAT_FLOAT4,
+                    4 * size_of::<f32>(),
+                    2 * n,
+                ) as *mut [f32; 4];
+                let ib = rtcSetNewGeometryBuffer(
+                    geometry,
+                    RTC_BUFFER_TYPE_INDEX,
+                    0,
+                    RTC_FORMAT_UINT,
+                    size_of::<u32>(),
+                    n,
+                ) as *mut u32;
+                s.check("rtcSetNewGeometryBuffer")?;
+                let verts = std::slice::from_raw_parts_mut(vb, 2 * n);
+                let index = std::slice::from_raw_parts_mut(ib, n);
+                for (i, g) in (0..n32).step_by(2).zip(segs) {
+                    let k = i as usize;
+                    verts[k] = [g.p0.x, g.p0.y, g.p0.z, g.r0];
+                    verts[k + 1] = [g.p1.x, g.p1.y, g.p1.z, g.r1];
+                    index[k / 2] = i;
+                }
+            }
+            Ok(())
+        })
+    }
+
+    /// A device and a scene of one geometry of `kind`, its buffers filled by `fill`, committed.
+    fn with_geometry(
+        kind: u32,
+        fill: impl FnOnce(&Scene, Handle) -> Result<(), String>,
+    ) -> Result<Scene, String> {
         // SAFETY: a null configuration string asks for the default device.
         let device = unsafe { rtcNewDevice(std::ptr::null()) };
         if device.is_null() {
@@ -185,36 +269,11 @@ impl Scene {
             rtcSetDeviceMemoryMonitorFunction(device, count_bytes, counter as *mut c_void);
             s.scene = rtcNewScene(device);
             s.check("rtcNewScene")?;
-            let geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+            let geometry = rtcNewGeometry(device, kind);
             s.check("rtcNewGeometry")?;
-            let vb = rtcSetNewGeometryBuffer(
-                geometry,
-                RTC_BUFFER_TYPE_VERTEX,
-                0,
-                RTC_FORMAT_FLOAT3,
-                3 * size_of::<f32>(),
-                3 * n,
-            ) as *mut [f32; 3];
-            let ib = rtcSetNewGeometryBuffer(
-                geometry,
-                RTC_BUFFER_TYPE_INDEX,
-                0,
-                RTC_FORMAT_UINT3,
-                3 * size_of::<u32>(),
-                n,
-            ) as *mut [u32; 3];
-            if let Err(e) = s.check("rtcSetNewGeometryBuffer") {
+            if let Err(e) = fill(&s, geometry) {
                 rtcReleaseGeometry(geometry);
                 return Err(e);
-            }
-            let verts = std::slice::from_raw_parts_mut(vb, 3 * n);
-            let index = std::slice::from_raw_parts_mut(ib, n);
-            for (i, t) in (0..n32).zip(tris) {
-                let k = 3 * i as usize;
-                verts[k] = t.p0.to_array();
-                verts[k + 1] = t.p1.to_array();
-                verts[k + 2] = t.p2.to_array();
-                index[i as usize] = [3 * i, 3 * i + 1, 3 * i + 2];
             }
             rtcCommitGeometry(geometry);
             rtcAttachGeometry(s.scene, geometry);
@@ -280,6 +339,7 @@ impl Drop for Scene {
 }
 
 /// The Embree contender over `tris` (the scene's build time is its setup).
+#[allow(dead_code)] // (the strands bench includes this module for `embree_curves`)
 pub fn embree<'a>(tris: &'a [Triangle], driver: &'a BatchDriver) -> Result<Contender<'a>, String> {
     let start = Instant::now();
     let scene = Scene::build(tris)?;
@@ -294,6 +354,33 @@ pub fn embree<'a>(tris: &'a [Triangle], driver: &'a BatchDriver) -> Result<Conte
                 Some((prim, t)) => Hit {
                     t,
                     prim: tris[prim as usize].id,
+                },
+                None => Hit::MISS,
+            }))
+        }),
+    })
+}
+
+/// The Embree contender over strand segments, as flat linear curves (the scene's build time is
+/// its setup; hits name the segments' ids).
+#[allow(dead_code)] // (the peers bench includes this module for `embree`)
+pub fn embree_curves<'a>(
+    segs: &'a [Segment],
+    driver: &'a BatchDriver,
+) -> Result<Contender<'a>, String> {
+    let start = Instant::now();
+    let scene = Scene::build_curves(segs)?;
+    let setup = start.elapsed();
+    Ok(Contender {
+        name: "embree flat curves".into(),
+        bytes: usize::try_from(scene.bytes.load(Ordering::Relaxed)).ok(),
+        setup,
+        subset: None,
+        trace: Box::new(move |rays: &[Ray]| {
+            Ok(driver.map(rays, |r| match scene.intersect(r) {
+                Some((prim, t)) => Hit {
+                    t,
+                    prim: segs[prim as usize].id,
                 },
                 None => Hit::MISS,
             }))
