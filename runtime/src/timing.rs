@@ -93,6 +93,27 @@ pub fn trimmed_mean(times: &[Duration], low: usize, high: usize) -> Duration {
     kept.iter().sum::<Duration>() / kept.len() as u32
 }
 
+
+/// The columns of a peers file: one peer library's measurement of a context (scene, query
+/// kind, query set, size, threads) together with a Scion contender's measured in the same run,
+/// its anchor (`BACKEND LAYOUT`, as `llvm-O3 pbrt`), so that the ratio between them, measured in
+/// one run, can place the peer among the layouts of another run (`scion explore --peers`).
+/// `bytes` is the peer's structure (empty when it does not say), `triangles` the scene's.
+/// Written by the peers benchmark (`--peer-csv`) and scripts/bench-closest-point.sh.
+pub const PEER_FIELDS: [&str; 11] = [
+    "scene",
+    "kind",
+    "queries",
+    "n",
+    "threads",
+    "peer",
+    "bytes",
+    "triangles",
+    "ns_per_query",
+    "anchor",
+    "anchor_ns_per_query",
+];
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -119,23 +140,3 @@ mod tests {
         assert!(t.ns_per_query(10) >= 0.0);
     }
 }
-
-/// The columns of a peers file: one peer library's measurement of a context (scene, query
-/// kind, query set, size, threads) together with a Scion contender's measured in the same run,
-/// its anchor (`BACKEND LAYOUT`, as `llvm-O3 pbrt`), so that the ratio between them, measured in
-/// one run, can place the peer among the layouts of another run (`scion explore --peers`).
-/// `bytes` is the peer's structure (empty when it does not say), `triangles` the scene's.
-/// Written by the peers benchmark (`--peer-csv`) and scripts/bench-closest-point.sh.
-pub const PEER_FIELDS: [&str; 11] = [
-    "scene",
-    "kind",
-    "queries",
-    "n",
-    "threads",
-    "peer",
-    "bytes",
-    "triangles",
-    "ns_per_query",
-    "anchor",
-    "anchor_ns_per_query",
-];

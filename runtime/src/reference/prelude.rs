@@ -179,6 +179,9 @@ pub fn hit_distance(ray: &Ray, tri: &Triangle) -> f32 {
 /// the distance of its projection, `t = (a + u b)·d / d·d`, when that is in `(tmin, tmax)`.
 /// A zero direction misses.
 #[inline]
+// `max(0).min(1)` is not `clamp`: a NaN `u` (a segment of infinite extent) becomes 0 here, as
+// the prelude's minNum/maxNum make it, where `clamp` would keep the NaN.
+#[allow(clippy::manual_clamp)]
 pub fn hit_distance_segment(ray: &Ray, s: &Segment) -> f32 {
     let d = ray.dir;
     let dd = d.dot(d);
