@@ -17,14 +17,14 @@
 #[path = "peers/embree_peer.rs"]
 mod embree_peer;
 
-use scion_bench::{race, Contender, Outcome, RayKind};
+use scion_bench::{outcome_rows, race, Contender, RayKind};
 use scion_host::entries::{Entries, PackedEntries};
 use scion_host::jit::Codegen;
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::oriented::OrientedOptions;
 use scion_runtime::bvh::wide::collapse;
 use scion_runtime::bvh::{build_sah_binned, LogicalTree, SahOptions};
-use scion_runtime::geom::{Hit, Ray};
+use scion_runtime::geom::Ray;
 use scion_runtime::primitive::Segment;
 use scion_runtime::query::{primary_rays_n, secondary_rays};
 use scion_runtime::reference::closest_hit_wide;
@@ -94,27 +94,9 @@ fn scion<'a>(
         setup,
         subset: None,
         trace: Box::new(move |rays: &[Ray]| {
-            let queries = scion_runtime::query::io::rays_to_bytes(rays);
-            let mut results: Vec<u8> = rays
-                .iter()
-                .flat_map(|r| {
-                    let mut b = [0u8; 8];
-                    b[..4].copy_from_slice(&r.tmax.to_le_bytes());
-                    b[4..].copy_from_slice(&u32::MAX.to_le_bytes());
-                    b
-                })
-                .collect();
             entries
-                .run(&packed, &queries, &mut results, driver)
-                .map_err(|e| e.to_string())?;
-            Ok(results
-                .chunks_exact(8)
-                .map(|c| {
-                    let t = f32::from_le_bytes(c[..4].try_into().expect("4 bytes"));
-                    let p = u32::from_le_bytes(c[4..].try_into().expect("4 bytes"));
-                    Hit::from_best(t, p)
-                })
-                .collect())
+                .closest_hits(&packed, rays, driver)
+                .map_err(|e| e.to_string())
         }),
     })
 }
@@ -197,25 +179,7 @@ fn run(a: &Args) -> Result<(), String> {
         a.rays.name(),
         driver.threads()
     );
-    println!("| tracer | Mrays/s | / reference | setup s | MB | hits equal to reference | same segment |");
-    println!("|---|---:|---:|---:|---:|---:|---:|");
-    let base = outcomes.first().map_or(1.0, Outcome::mrays);
-    for o in &outcomes {
-        let mb = o
-            .bytes
-            .map_or_else(|| "-".to_string(), |b| format!("{:.2}", b as f64 / 1e6));
-        println!(
-            "| {} | {:.3} | {:.2} | {:.3} | {} | {} / {} | {} |",
-            o.name,
-            o.mrays(),
-            o.mrays() / base,
-            o.setup.as_secs_f64(),
-            mb,
-            o.agree,
-            o.rays,
-            o.same_prim
-        );
-    }
+    print!("{}", outcome_rows(&outcomes, "same segment"));
     Ok(())
 }
 

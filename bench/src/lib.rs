@@ -232,9 +232,18 @@ pub fn table(w: &Workload, threads: usize, outcomes: &[Outcome]) -> String {
         w.kind.name(),
         threads
     );
+    s.push_str(&outcome_rows(outcomes, "same primitive"));
+    s
+}
+
+/// The outcomes as markdown table rows under a header: one row per contender, with the ratio
+/// of its throughput to the first row's, and how many of its hits name the same primitive as
+/// the first row's (the column called `same`).
+pub fn outcome_rows(outcomes: &[Outcome], same: &str) -> String {
+    let mut s = String::new();
     let _ = writeln!(
         s,
-        "| tracer | Mrays/s | / {peer} | setup s | MB | hits equal to {peer} | same primitive |",
+        "| tracer | Mrays/s | / {peer} | setup s | MB | hits equal to {peer} | {same} |",
         peer = outcomes.first().map_or("peer", |o| o.name.as_str()),
     );
     let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|");

@@ -16,7 +16,7 @@ use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::oriented::OrientedOptions;
 use scion_runtime::bvh::wide::collapse;
 use scion_runtime::bvh::{build_sah_binned, SahOptions};
-use scion_runtime::geom::{Hit, Ray};
+use scion_runtime::geom::Ray;
 use scion_runtime::query::{primary_rays_n, secondary_rays};
 use scion_runtime::reference::{closest_hit_brute, closest_hit_wide};
 use scion_runtime::scene::strands::{generate_polylines, hair_bytes, load_hair, StrandOptions};
@@ -209,33 +209,11 @@ fn trace(args: &StrandTraceArgs) -> Result<(), CliError> {
     };
     let driver = BatchDriver::new(args.threads).map_err(CliError::new)?;
     progress(&format!("tracing {} rays", rays.len()));
-    // The entry's records as bytes: rays in the binary ray format, results `(t, id)` starting
-    // at `(tmax, u32::MAX)`; made once, outside the timed runs.
-    let queries = scion_runtime::query::io::rays_to_bytes(&rays);
-    let initial: Vec<u8> = rays
-        .iter()
-        .flat_map(|r| {
-            let mut b = [0u8; 8];
-            b[..4].copy_from_slice(&r.tmax.to_le_bytes());
-            b[4..].copy_from_slice(&u32::MAX.to_le_bytes());
-            b
-        })
-        .collect();
-    let (results, timing) = timed(args.runs, || {
-        let mut r = initial.clone();
+    let (hits, timing) = timed(args.runs, || {
         entries
-            .run(&packed, &queries, &mut r, &driver)
-            .map_err(|e| CliError::new(format!("layout `{}`: {e}", resolved.program.layout)))?;
-        Ok(r)
+            .closest_hits(&packed, &rays, &driver)
+            .map_err(|e| CliError::new(format!("layout `{}`: {e}", resolved.program.layout)))
     })?;
-    let hits: Vec<Hit> = results
-        .chunks_exact(8)
-        .map(|c| {
-            let t = f32::from_le_bytes(c[..4].try_into().expect("4 bytes"));
-            let p = u32::from_le_bytes(c[4..].try_into().expect("4 bytes"));
-            Hit::from_best(t, p)
-        })
-        .collect();
     // The check: the four-wide reference over the same collapse, bit for bit; where it
     // differs, the hit must be brute force's (the reference's rounding exception).
     let wide = collapse::<4>(&tree);

@@ -23,6 +23,7 @@ use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::oriented::OrientedOptions;
 use scion_runtime::bvh::schema::LogicalBytes;
 use scion_runtime::bvh::LogicalTree;
+use scion_runtime::geom::{Hit, Ray};
 use scion_runtime::primitive::Primitive;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
@@ -232,6 +233,35 @@ impl Entries {
     ) -> Result<PackedEntries, String> {
         let bytes = LogicalBytes::fill_oriented(tree, &self.lo.entry.logical, oriented)?;
         pack(&self.lo, self.code.as_ref(), tree, &bytes)
+    }
+
+    /// The closest hits of `rays` by a closest-hit entry (result records `(t, id)` starting
+    /// at `(ray.tmax, u32::MAX)`), on `driver`'s threads.
+    pub fn closest_hits(
+        &self,
+        packed: &PackedEntries,
+        rays: &[Ray],
+        driver: &BatchDriver,
+    ) -> Result<Vec<Hit>, RunError> {
+        let queries = scion_runtime::query::io::rays_to_bytes(rays);
+        let mut results: Vec<u8> = rays
+            .iter()
+            .flat_map(|r| {
+                let mut b = [0u8; 8];
+                b[..4].copy_from_slice(&r.tmax.to_le_bytes());
+                b[4..].copy_from_slice(&u32::MAX.to_le_bytes());
+                b
+            })
+            .collect();
+        self.run(packed, &queries, &mut results, driver)?;
+        Ok(results
+            .chunks_exact(8)
+            .map(|c| {
+                let t = f32::from_le_bytes([c[0], c[1], c[2], c[3]]);
+                let p = u32::from_le_bytes([c[4], c[5], c[6], c[7]]);
+                Hit::from_best(t, p)
+            })
+            .collect())
     }
 
     /// Runs the batch entry over `queries` into `results` on `driver`'s threads ([`run`]).

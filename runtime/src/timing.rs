@@ -93,7 +93,6 @@ pub fn trimmed_mean(times: &[Duration], low: usize, high: usize) -> Duration {
     kept.iter().sum::<Duration>() / kept.len() as u32
 }
 
-
 /// The columns of a peers file: one peer library's measurement of a context (scene, query
 /// kind, query set, size, threads) together with a Scion contender's measured in the same run,
 /// its anchor (`BACKEND LAYOUT`, as `llvm-O3 pbrt`), so that the ratio between them, measured in
