@@ -41,7 +41,7 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
 }
 
 /// The file's bytes, unpacked when they start with gzip's magic number.
-fn read_unpacked(path: &Path) -> Result<Vec<u8>, SceneError> {
+pub(crate) fn read_unpacked(path: &Path) -> Result<Vec<u8>, SceneError> {
     let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
         path: path.to_path_buf(),
         source,

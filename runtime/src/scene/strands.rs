@@ -12,7 +12,6 @@
 //! width there, so a segment's radii are half its ends' thicknesses) and ignores the rest;
 //! segment ids count the segments in file order. A file may be gzip-compressed.
 
-use std::io::Read;
 use std::path::Path;
 
 use super::SceneError;
@@ -229,22 +228,7 @@ pub fn hard_cases() -> Vec<StrandScene> {
 /// Reads a `.hair` file (see the module documentation), plain or gzip-compressed.
 pub fn load_hair(path: impl AsRef<Path>) -> Result<StrandScene, SceneError> {
     let path = path.as_ref();
-    let raw = std::fs::read(path).map_err(|source| SceneError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let bytes = if raw.starts_with(&[0x1f, 0x8b]) {
-        let mut v = Vec::new();
-        flate2::read::MultiGzDecoder::new(raw.as_slice())
-            .read_to_end(&mut v)
-            .map_err(|source| SceneError::Compressed {
-                path: path.to_path_buf(),
-                source,
-            })?;
-        v
-    } else {
-        raw
-    };
+    let bytes = super::load::read_unpacked(path)?;
     let name = path
         .file_name()
         .map(|s| s.to_string_lossy().into_owned())
