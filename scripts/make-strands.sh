@@ -2,7 +2,8 @@
 # Makes the strand scene of the hair BVH case study (paper §8.2; `scenes/` has only triangle
 # meshes, and no hair model of the paper's is at hand): a head of hair as a `.hair` file (Cem
 # Yuksel's format, docs/formats.md), by `scion strands generate`, seeded, so the same options
-# give the same bytes on every machine. The procedure (scion_runtime::scene::strands::generate):
+# give the same bytes (the angles go through the platform's sin and cos). The procedure
+# (scion_runtime::scene::strands::generate):
 # STRANDS roots uniform on the unit sphere above z = -0.3; each strand SEGMENTS straight pieces
 # of a length drawn in 0.6..1.2, grown from the surface normal, pulled down by a gravity that
 # grows along the strand and turned by a per-strand curl; radius RADIUS at the root tapering to

@@ -36,7 +36,8 @@ pub struct StrandsArgs {
 #[derive(Subcommand, Debug)]
 pub enum StrandsCommand {
     /// Write a seeded head of hair as a `.hair` file: strands rooted on a unit sphere, grown
-    /// outward, pulled down and curled; the same options write the same bytes on every machine.
+    /// outward, pulled down and curled; the same options write the same bytes (SplitMix64;
+    /// the angles through the platform's sin and cos).
     Generate(GenerateArgs),
     /// Trace closest-hit rays through a `.hair` scene with a layout over strand segments, timed
     /// and checked against the reference.

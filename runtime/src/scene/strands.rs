@@ -62,7 +62,7 @@ pub struct StrandOptions {
     pub segments: u32,
     /// Radius at a strand's root (it tapers to a fifth at the tip).
     pub radius: f32,
-    /// The random seed: the same options give the same scene, bit for bit, everywhere.
+    /// The random seed: the same options give the same scene, bit for bit (with the platform's `sin` and `cos`).
     pub seed: u64,
 }
 
