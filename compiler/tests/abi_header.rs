@@ -115,3 +115,17 @@ fn generated_headers_compile_as_c_and_cpp() {
         eprintln!("skip: neither gcc nor g++ is installed; only scionc --emit=header ran");
     }
 }
+
+/// The runtime's `scion_runtime.h` holds the contract's structs and role numbers exactly as
+/// every generated header does (one text, `scion_compiler::abi::header::CONTRACT_TYPES`), so
+/// whichever is included first defines what the other needs (a DOP-14 or hair header's schema
+/// names `SCION_ROLE_DOP14_BOUNDS` and `SCION_ROLE_CHILD_OBBS`).
+#[test]
+fn the_runtime_header_has_the_generated_contract_types() {
+    let runtime_h =
+        std::fs::read_to_string(repo().join("runtime/capi/include/scion_runtime.h")).unwrap();
+    assert!(
+        runtime_h.contains(scion_compiler::abi::header::CONTRACT_TYPES),
+        "runtime/capi/include/scion_runtime.h differs from CONTRACT_TYPES"
+    );
+}

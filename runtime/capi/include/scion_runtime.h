@@ -46,13 +46,22 @@ typedef struct ScionTriangle {
     float p2[3];
     uint32_t id;
 } ScionTriangle;
+/* A strand segment (36 bytes): the axis from p0 to p1, radius r0 at p0 and r1 at p1. */
+typedef struct ScionSegment {
+    float p0[3];
+    float r0;
+    float p1[3];
+    float r1;
+    uint32_t id;
+} ScionSegment;
 /* The logical tree as generated code reads it (32 bytes): node_count nodes of the layout's
  * tree type (its ScionLogical_<Type> struct in the layout's header), 8-byte aligned. */
 typedef struct ScionTreeView {
     const void *nodes;
     uint32_t node_count;
     uint32_t root; /* UINT32_MAX for the empty tree */
-    const ScionTriangle *prims;
+    const void *prims; /* prim_count records of the layout's primitive: ScionTriangle, or
+                          ScionSegment for a layout over strands (its schema's primitive) */
     uint32_t prim_count;
 } ScionTreeView;
 /* What the runtime writes into a field of a logical node (docs/c-abi.md). */
@@ -61,6 +70,8 @@ typedef struct ScionTreeView {
 #define SCION_ROLE_CHILDREN 3     /* child slots slot..slot+count: uint32_t node indices */
 #define SCION_ROLE_PRIM_COUNT 4   /* a leaf's primitive count: an unsigned int of width bytes */
 #define SCION_ROLE_PRIM_OFFSET 5  /* a leaf's first primitive: uint32_t */
+#define SCION_ROLE_DOP14_BOUNDS 6 /* the node's DOP-14: float[14], axis mins, maxes, diagonal mins, maxes */
+#define SCION_ROLE_CHILD_OBBS 7   /* oriented boxes of child slots: float[count][15], columns vx, vy, vz of M, then the box of M*x */
 #define SCION_SHARED 0xFFFFFFFFu  /* `variant` of a field every variant has */
 typedef struct ScionLogicalField {
     uint32_t role, variant, offset, slot, count, width;
@@ -71,6 +82,7 @@ typedef struct ScionLogicalSchema {
     const ScionLogicalField *fields;
 } ScionLogicalSchema;
 SCION_STATIC_ASSERT(sizeof(ScionTriangle) == 40, "ScionTriangle is 40 bytes");
+SCION_STATIC_ASSERT(sizeof(ScionSegment) == 36, "ScionSegment is 36 bytes");
 SCION_STATIC_ASSERT(sizeof(ScionTreeView) == 32, "ScionTreeView is 32 bytes");
 SCION_STATIC_ASSERT(offsetof(ScionTreeView, root) == 12, "ScionTreeView.root at 12");
 SCION_STATIC_ASSERT(offsetof(ScionTreeView, prims) == 16, "ScionTreeView.prims at 16");
