@@ -2,7 +2,8 @@
 //! functions (`hit_distance`, the slab test, `closest_point` on boxes and triangles, the
 //! triangle-triangle separating-axis test), `with_axis` (a lane index in and out of range), the
 //! directed-rounding builtins, the lane and bit builtins (`hmin`, `hsum`, `rsqrt`, `isnan`,
-//! `popcount`, `clz`, `ctz`, ...), `let mut` locals (cells passed to `mut` parameters) and `if`
+//! `popcount`, `clz`, `ctz`, ...), `let mut` locals (cells passed to `mut` parameters, components
+//! assigned) and `if`
 //! expressions give bit-identical results in the `tree` interpreter, the `lo` interpreter (after
 //! `mem-to-lo`) and the JIT-compiled code (Cranelift, and LLVM at -O0 and -O3), on random inputs
 //! rich in NaN (with payloads), signed zeros, infinities and subnormals.
@@ -63,6 +64,23 @@ func t_mut(a: f32x3, k: u32) -> ((f32, u32), f32, u32) = {
   best[1] = best[1] + n;
   return (best, acc, n);
 }
+// Components assigned: an array element at a computed index (out of range: no change), at a
+// literal one, a vector lane by name and by computed index, an element of a tuple in an
+// array, a lane of a record's field.
+func t_assign(a: f32x3, k: u32, x: f32) -> (f32x3, f32, f32, f32, f32x3, f32x3) = {
+  let mut d: f32[4] = [a.x, a.y, a.z, x];
+  d[k % 5] = x * 2.0;
+  d[1] = d[1] + 1.0;
+  let mut v: f32x3 = a;
+  v.y = x;
+  v[k % 3] = d[0];
+  let mut p: (f32, f32)[2] = [(a.x, a.y), (a.z, x)];
+  p[k % 2][1] = d[3];
+  let mut b: AABB = AABB(a, v);
+  b.high.z = p[1][1];
+  b.low = scale(v, 2.0);
+  return (v, d[0] + d[2], p[0][1], p[1][1], b.low, b.high);
+}
 func t_ifx(a: f32x3, k: u32) -> (f32, u32) = {
   let lo: f32 = if a.x <= a.y { a.x } elif isnan(a.y) { a.z } else { a.y };
   let which: u32 = if lo < a.z { if k > 500 { k - 500 } else { 0 } } else { 2 };
@@ -72,7 +90,7 @@ func t_ifx(a: f32x3, k: u32) -> (f32, u32) = {
 
 const FUNCS: &[&str] = &[
     "t_hit", "t_slab", "t_box", "t_tri", "t_cpb", "t_cpt", "t_cpc", "t_sat", "t_bb", "t_d2",
-    "t_axis", "t_dir", "t_lanes", "t_bits", "t_mut", "t_ifx", "t_clamp",
+    "t_axis", "t_dir", "t_lanes", "t_bits", "t_mut", "t_ifx", "t_clamp", "t_assign",
 ];
 
 /// The `tree` module of the prelude functions above.

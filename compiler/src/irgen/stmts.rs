@@ -9,7 +9,7 @@ use crate::syntax::ast::{Expr, ExprKind, MatchArm, PatternKind, Stmt, StmtKind};
 use scion_ir::attr::Attr;
 use scion_ir::diag::InternalError;
 use scion_ir::entity::{TypeId, ValueId};
-use scion_ir::tree::Op;
+use scion_ir::tree::{CmpPred, Op};
 use scion_ir::types::Type;
 use scion_ir::{Builder, OpSpec};
 
@@ -355,8 +355,11 @@ impl FuncCx<'_> {
             .ok_or_else(|| self.bug("a binding without a binder"))
     }
 
-    /// Stores `v` into an assignment target: a `mut` parameter, a `let mut` local, or a tuple
-    /// component of one.
+    /// Stores `v` into an assignment target: a `mut` parameter, a `let mut` local, or a
+    /// component of one (a tuple's, array's or vector's element, a vector's lane, a record's
+    /// field, nested): the enclosing value is read, rebuilt with the component replaced, and
+    /// assigned in turn. An array or vector element at an index that is not a literal is
+    /// replaced lane by lane (`k == i ? v : old[i]`); an index out of range changes nothing.
     pub(super) fn assign(
         &mut self,
         b: &mut Builder<'_>,
@@ -370,27 +373,119 @@ impl FuncCx<'_> {
                 Ok(())
             }
             ExprKind::Index { base, index } => {
-                let i = match index.kind {
-                    ExprKind::Int(i) => i as i128,
-                    _ => return Err(self.bug("component assignment with a non-literal index")),
+                let old = self.expr(b, base)?;
+                let at = match index.kind {
+                    ExprKind::Int(i) => Component::At(i as i128),
+                    _ => Component::Dynamic(self.expr(b, index)?),
                 };
-                let r = self.place_ref(base)?;
-                let ty = match b.m.types.get(b.value_type(r)) {
-                    Type::Ref(t) => *t,
-                    _ => return Err(self.bug("assignment through a non-reference")),
+                b.set_span(Some(target.span));
+                let new = self.replaced(b, old, at, v)?;
+                self.assign(b, base, new)
+            }
+            ExprKind::Field { base, name } => {
+                let old = self.expr(b, base)?;
+                b.set_span(Some(target.span));
+                let ty = b.value_type(old);
+                let at = match b.m.types.get(ty) {
+                    Type::Vector { .. } => match name.name.as_str() {
+                        "x" => Component::At(0),
+                        "y" => Component::At(1),
+                        "z" => Component::At(2),
+                        "w" => Component::At(3),
+                        other => return Err(self.bug(format!("vector component `{other}`"))),
+                    },
+                    _ => Component::Field(name.name.clone()),
                 };
-                let old = b.build1(Op::Load, &[r], ty);
+                let new = self.replaced(b, old, at, v)?;
+                self.assign(b, base, new)
+            }
+            _ => Err(self.bug("unsupported assignment target")),
+        }
+    }
+
+    /// `old` with the component `at` replaced by `v`.
+    fn replaced(
+        &mut self,
+        b: &mut Builder<'_>,
+        old: ValueId,
+        at: Component,
+        v: ValueId,
+    ) -> Result<ValueId, InternalError> {
+        let ty = b.value_type(old);
+        let u32t = b.m.types.u32();
+        match (b.m.types.get(ty).clone(), at) {
+            (Type::Tuple(_), Component::At(i)) => {
                 let op = b.insert(
                     OpSpec::new(Op::Insert)
                         .operands(&[old, v])
                         .attr("index", Attr::Int(i))
                         .results(&[ty]),
                 );
-                let new = b.result(op, 0);
-                b.build(Op::Store, &[r, new], &[]);
-                Ok(())
+                Ok(b.result(op, 0))
+            }
+            (Type::Array { len: Some(len), .. }, at) => {
+                let mut elems = Vec::with_capacity(len as usize);
+                for i in 0..i128::from(len) {
+                    let k = b.const_int(u32t, i);
+                    let e = b.build1(Op::Index, &[old, k], b.value_type(v));
+                    elems.push(self.pick(b, &at, i, v, e)?);
+                }
+                Ok(b.build1(Op::Array, &elems, ty))
+            }
+            (Type::Vector { lanes, .. }, at) => {
+                let mut elems = Vec::with_capacity(lanes as usize);
+                for i in 0..i128::from(lanes) {
+                    let op = b.insert(
+                        OpSpec::new(Op::Lane)
+                            .operands(&[old])
+                            .attr("index", Attr::Int(i))
+                            .results(&[b.value_type(v)]),
+                    );
+                    let e = b.result(op, 0);
+                    elems.push(self.pick(b, &at, i, v, e)?);
+                }
+                Ok(b.build1(Op::Vector, &elems, ty))
+            }
+            (Type::Adt(_), Component::Field(name)) => {
+                let names: Vec<String> = match b.m.adt_of_type(ty) {
+                    Some(adt) if adt.is_record() => {
+                        adt.shared.iter().map(|f| f.name.clone()).collect()
+                    }
+                    _ => return Err(self.bug("assignment to a field of a sum's value")),
+                };
+                let mut fields = Vec::with_capacity(names.len());
+                for f in &names {
+                    fields.push(if *f == name {
+                        v
+                    } else {
+                        b.field(old, f)
+                            .ok_or_else(|| self.bug(format!("no field `{f}` to read")))?
+                    });
+                }
+                Ok(b.ctor(ty, None, &fields))
             }
             _ => Err(self.bug("unsupported assignment target")),
+        }
+    }
+
+    /// Element `i` of a rebuilt array or vector: `v` where `at` names it, else `old`.
+    fn pick(
+        &mut self,
+        b: &mut Builder<'_>,
+        at: &Component,
+        i: i128,
+        v: ValueId,
+        old: ValueId,
+    ) -> Result<ValueId, InternalError> {
+        match at {
+            Component::At(j) => Ok(if *j == i { v } else { old }),
+            Component::Dynamic(k) => {
+                let kt = b.value_type(*k);
+                let c = b.const_int(kt, i);
+                let hit = b.cmp(CmpPred::Eq, *k, c);
+                Ok(b.select(hit, v, old))
+            }
+            Component::Field(_) => Err(self.bug("a field of an array or vector")),
         }
     }
 
@@ -418,4 +513,14 @@ impl FuncCx<'_> {
             .get(binding.0 as usize)
             .is_some_and(|b| b.mutable)
     }
+}
+
+/// Which component of a value an assignment replaces.
+enum Component {
+    /// Element or lane `i`, a literal.
+    At(i128),
+    /// The element at a computed index.
+    Dynamic(ValueId),
+    /// A record's field.
+    Field(String),
 }

@@ -120,6 +120,8 @@ pub enum SemaError {
     AssignImmutable { name: String, span: Span },
     /// E0222
     BadAssignTarget { span: Span },
+    /// E0222: a shared field of a sum's value (which variant to rebuild is not known).
+    SumFieldAssign { field: String, ty: String, span: Span },
     /// E0223
     MutArgNotPlace { param: String, span: Span },
     /// E0224
@@ -290,7 +292,7 @@ impl SemaError {
             BadBitCast { .. } => "E0219",
             MissingValue { .. } => "E0220",
             AssignImmutable { .. } => "E0221",
-            BadAssignTarget { .. } => "E0222",
+            BadAssignTarget { .. } | SumFieldAssign { .. } => "E0222",
             MutArgNotPlace { .. } => "E0223",
             TupleIndexNotLiteral { .. } => "E0224",
             TupleIndexRange { .. } => "E0225",
@@ -399,6 +401,9 @@ impl SemaError {
             BadAssignTarget { span } => e("invalid assignment target".to_string())
                 .with_primary(*span, "cannot assign to this expression")
                 .with_note("assign to a `mut` parameter, a component of one, or (in a build) `this[a:b]`"),
+            SumFieldAssign { field, ty, span } => e(format!("cannot assign to shared field `{field}` of a `{ty}` value"))
+                .with_primary(*span, "a field of a sum's value")
+                .with_note("a sum's value is one of its variants: build the new value with the variant's constructor (`match` on it) and assign that"),
             MutArgNotPlace { param, span } => e(format!("argument for `mut` parameter `{param}` must be a `mut` parameter or a `let mut` local"))
                 .with_primary(*span, "not passable by reference"),
             TupleIndexNotLiteral { span } => e("a tuple index must be an integer literal".to_string())

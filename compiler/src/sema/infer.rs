@@ -501,7 +501,21 @@ impl<'a> Checker<'a> {
                 _ => self.error(SemaError::BadAssignTarget { span: target.span }),
             }
         }
-        self.infer_expr(target)
+        let ty = self.infer_expr(target);
+        if let ExprKind::Field { base, name } = &target.kind {
+            let base_ty = self.out.expr_types.get(&base.id).cloned();
+            if let Some(Ty::Adt(a)) = base_ty.map(|t| self.shallow(&t)) {
+                if self.adts.get(a).is_some_and(|d| d.is_sum()) {
+                    let shown = self.show(&Ty::Adt(a));
+                    self.error(SemaError::SumFieldAssign {
+                        field: name.name.clone(),
+                        ty: shown,
+                        span: target.span,
+                    });
+                }
+            }
+        }
+        ty
     }
 
     fn is_assignable(&self, e: &Expr) -> bool {
