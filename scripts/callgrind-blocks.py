@@ -9,6 +9,7 @@ jumps) and prints the twelve blocks with the largest cost per query: start addre
 instructions, how often the block ran per query, and its cost per query. Used by
 scripts/count-instructions.sh (BLOCKS=1).
 """
+import os
 import re
 import subprocess
 import sys
@@ -66,7 +67,7 @@ def main():
         blocks[-1][2] += c
     print(f"{function}: {sum(r[1] for r in rows):.1f} instructions per query")
     print("block     instrs  runs/query  instrs/query  first instruction")
-    for a, n, cost, runs, first in sorted(blocks, key=lambda b: -b[2])[:12]:
+    for a, n, cost, runs, first in sorted(blocks, key=lambda b: -b[2])[:int(os.environ.get("TOP", "12"))]:
         print(f"{a:8x}  {n:6d}  {runs:10.2f}  {cost:12.1f}  {first[:48]}")
 
 

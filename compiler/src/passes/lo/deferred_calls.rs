@@ -11,14 +11,22 @@
 //! take no pointers, and make more recursive calls. Whatever else follows a call is E0971,
 //! naming what.
 //!
+//! **Visits with known calls.** Where every path of a visit to one of its ends makes the same
+//! calls (an arm that ends with `hit(a); hit(b);`, or one that makes none), that end needs no
+//! reversal: it pushes the calls' arguments last first and jumps straight back into the body
+//! with the first call's (the tail-call scheme of [`super::recursion_to_stack`]), and those
+//! calls push nothing where they stand. An end reached by paths with different calls (calls
+//! under conditions) keeps the pushes and the reversal. [`known_ends`] finds the ends.
+//!
 //! The stack pointer lives in a frame cell (promoted to a register by LLVM); a full stack
 //! returns status 1 as in the tail-call scheme of [`super::recursion_to_stack`].
 
 use super::recursion_to_stack::{
-    body_of, changed_args, check_stack_bytes, entry_addr, exits, not_tail, split_at_call,
-    split_entry,
+    body_of, changed_args, check_stack_bytes, drop_unreachable, entry_addr, exits, not_tail,
+    split_at_call, split_entry,
 };
-use rustc_hash::FxHashSet;
+use super::recursion_to_stack::exits_quietly;
+use rustc_hash::{FxHashMap, FxHashSet};
 use scion_ir::attr::Attr;
 use scion_ir::diag::Diagnostic;
 use scion_ir::entity::{BlockId, FuncId, OpId, ValueId};
@@ -154,6 +162,109 @@ fn check(m: &Module, f: FuncId, calls: &[OpId], params: &[ValueId]) -> Result<()
     Ok(())
 }
 
+/// The calls made since the visit started, when every path to a point made the same ones.
+#[derive(Clone, PartialEq, Eq)]
+enum Made {
+    Same(Vec<OpId>),
+    Differs,
+}
+
+/// The ends of a visit of `f` (blocks that return, or branch to a block that exits quietly)
+/// at which every path through the body made the same recursive calls, with those calls in
+/// order; and the calls that only such ends follow (they become the ends' pushes and jump
+/// instead of pushing where they stand). An end is kept only when each of its calls is one
+/// of those, so a call never has to push on one path and not on another.
+fn known_ends(
+    m: &Module,
+    f: FuncId,
+    calls: &[OpId],
+) -> (Vec<(BlockId, Vec<OpId>)>, FxHashSet<OpId>) {
+    let region = m.funcs[f].body;
+    let blocks: Vec<BlockId> = m.regions[region].blocks.clone();
+    let is_call: FxHashSet<OpId> = calls.iter().copied().collect();
+    let term = |b: BlockId| m.blocks[b].ops.last().copied();
+    let is_end = |b: BlockId| {
+        term(b).is_some_and(|t| {
+            let o = &m.ops[t];
+            match o.kind {
+                OpKind::Lo(L::Return) => o.operands.is_empty(),
+                OpKind::Lo(L::Br) => exits_quietly(m, o.successors[0].block),
+                _ => false,
+            }
+        })
+    };
+    // Forward: the calls made before each block (joins of different lists differ).
+    let mut before: FxHashMap<BlockId, Made> = FxHashMap::default();
+    before.insert(blocks[0], Made::Same(Vec::new()));
+    let mut work = vec![blocks[0]];
+    let mut out: FxHashMap<BlockId, Made> = FxHashMap::default();
+    while let Some(b) = work.pop() {
+        let mut made = before[&b].clone();
+        if let Made::Same(list) = &mut made {
+            list.extend(m.blocks[b].ops.iter().filter(|o| is_call.contains(o)));
+        }
+        out.insert(b, made.clone());
+        if is_end(b) {
+            continue;
+        }
+        let Some(t) = term(b) else { continue };
+        for s in m.ops[t].successors.iter().map(|s| s.block) {
+            let next = match before.get(&s) {
+                None => made.clone(),
+                Some(old) if *old == made => continue,
+                Some(_) => Made::Differs,
+            };
+            if before.get(&s) != Some(&next) {
+                before.insert(s, next);
+                work.push(s);
+            }
+        }
+    }
+    let mut ends: FxHashMap<BlockId, Vec<OpId>> = blocks
+        .iter()
+        .filter(|&&b| is_end(b))
+        .filter_map(|&b| match out.get(&b) {
+            Some(Made::Same(list)) => Some((b, list.clone())),
+            _ => None,
+        })
+        .collect();
+    // The ends each call reaches (a call in an end's own block reaches that end).
+    let reach = |c: OpId| -> Vec<BlockId> {
+        let start = m.ops[c].parent.expect("placed");
+        let mut seen: FxHashSet<BlockId> = FxHashSet::default();
+        let mut found = Vec::new();
+        let mut work = vec![start];
+        while let Some(b) = work.pop() {
+            if !seen.insert(b) {
+                continue;
+            }
+            if is_end(b) {
+                found.push(b);
+                continue;
+            }
+            if let Some(t) = term(b) {
+                work.extend(m.ops[t].successors.iter().map(|s| s.block));
+            }
+        }
+        found
+    };
+    let reached: Vec<(OpId, Vec<BlockId>)> = calls.iter().map(|&c| (c, reach(c))).collect();
+    loop {
+        let grouped: FxHashSet<OpId> = reached
+            .iter()
+            .filter(|(_, es)| es.iter().all(|e| ends.contains_key(e)))
+            .map(|&(c, _)| c)
+            .collect();
+        let before = ends.len();
+        ends.retain(|_, list| list.iter().all(|c| grouped.contains(c)));
+        if ends.len() == before {
+            let mut list: Vec<(BlockId, Vec<OpId>)> = ends.into_iter().collect();
+            list.sort_by_key(|(b, _)| blocks.iter().position(|x| x == b));
+            return (list, grouped);
+        }
+    }
+}
+
 /// Rewrites `f`, whose recursive calls are `calls`, into a loop over a stack of `size`
 /// entries with deferred calls (see the module docs).
 pub(super) fn rewrite(
@@ -183,6 +294,7 @@ pub(super) fn rewrite(
     let u32t = m.types.u32();
     let param_tys = m.funcs[f].params.clone();
     let body_blocks: Vec<BlockId> = m.regions[region].blocks.clone();
+    let (known, grouped) = known_ends(m, f, calls);
 
     // New entry: the stack and its pointer cell, then the old body on the arguments.
     let (new_entry, new_params) = split_entry(m, f, &params, &changed);
@@ -250,6 +362,48 @@ pub(super) fn rewrite(
         }
         b.lo_br(rev, &[i1, j1]);
     }
+    // A push of `args` at the end of `bb`: to the overflow exit when the stack is full, else
+    // on; returns the block that goes on.
+    let push = |m: &mut Module, bb: BlockId, args: &[ValueId]| -> BlockId {
+        let next = m.add_block(region, &[]);
+        let mut b = Builder::at_end(m, bb);
+        let sp = b.lo_load(spc, 0, u32t);
+        let cap = b.lo_int(u32t, i128::from(size));
+        let full = b.lo_cmp(CmpPred::Ge, sp, cap);
+        b.lo_cond_br(full, (overflow, &[]), (next, &[]));
+        b.set_insertion_point_to_end(next);
+        let at = entry_addr(&mut b, stack, sp, entry_bytes);
+        for (k, &i) in changed.iter().enumerate() {
+            b.lo_store(at, 8 * k as i64, args[i]);
+        }
+        let one = b.lo_int(u32t, 1);
+        let sp1 = b.lo1(L::Add, &[sp, one], u32t);
+        b.lo_store(spc, 0, sp1);
+        next
+    };
+    // Ends whose calls are known: push all but the first, last first, and go on with the
+    // first (or pop the next entry when the visit made none).
+    let args_of: FxHashMap<OpId, Vec<ValueId>> =
+        grouped.iter().map(|&c| (c, m.ops[c].operands.to_vec())).collect();
+    for &c in &grouped {
+        scion_ir::rewrite::erase_op(m, c);
+    }
+    for (bb, list) in &known {
+        let term = *m.blocks[*bb].ops.last().expect("an end has a terminator");
+        scion_ir::rewrite::erase_op(m, term);
+        let mut cur = *bb;
+        for c in list.iter().skip(1).rev() {
+            cur = push(m, cur, &args_of[c]);
+        }
+        let mut b = Builder::at_end(m, cur);
+        match list.first() {
+            None => b.lo_br(head, &[]),
+            Some(c) => {
+                let args: Vec<ValueId> = changed.iter().map(|&i| args_of[c][i]).collect();
+                b.lo_br(entry, &args)
+            }
+        };
+    }
     // Returns of the body end the visit.
     for &bb in &body_blocks {
         let Some(&term) = m.blocks[bb].ops.last() else {
@@ -262,28 +416,16 @@ pub(super) fn rewrite(
             b.lo_br(rev, &[sp0, sp]);
         }
     }
-    // Each recursive call pushes its arguments and the body goes on.
-    for &c in calls {
+    // Every other recursive call pushes its arguments and the body goes on.
+    for &c in calls.iter().filter(|c| !grouped.contains(c)) {
         let (bb, cont, args) = split_at_call(m, c);
-        let push = m.add_block(region, &[]);
-        let mut b = Builder::at_end(m, bb);
-        let sp = b.lo_load(spc, 0, u32t);
-        let cap = b.lo_int(u32t, i128::from(size));
-        let full = b.lo_cmp(CmpPred::Ge, sp, cap);
-        b.lo_cond_br(full, (overflow, &[]), (push, &[]));
-        b.set_insertion_point_to_end(push);
-        let at = slot(&mut b, sp);
-        for (k, &i) in changed.iter().enumerate() {
-            b.lo_store(at, 8 * k as i64, args[i]);
-        }
-        let one = b.lo_int(u32t, 1);
-        let sp1 = b.lo1(L::Add, &[sp, one], u32t);
-        b.lo_store(spc, 0, sp1);
-        b.lo_br(cont, &[]);
+        let next = push(m, bb, &args);
+        Builder::at_end(m, next).lo_br(cont, &[]);
     }
     m.funcs[f].results = vec![i32t];
     m.funcs[f].attrs.set("status", Attr::Unit);
     // A visit pushes all of its calls: the stack a tree needs is not its depth.
     m.funcs[f].attrs.set("deferred_calls", Attr::Unit);
+    drop_unreachable(m, f);
     Ok(())
 }

@@ -160,7 +160,7 @@ pub(super) fn not_tail(m: &Module, op: OpId, why: &str) -> Diagnostic {
 }
 
 /// True when `b` reaches a result-less `lo.return` through blocks of pure ops only.
-fn exits_quietly(m: &Module, mut b: BlockId) -> bool {
+pub(super) fn exits_quietly(m: &Module, mut b: BlockId) -> bool {
     for _ in 0..64 {
         let ops = &m.blocks[b].ops;
         let Some((&term, body)) = ops.split_last() else {
@@ -493,7 +493,7 @@ pub(super) fn entry_addr(
 }
 
 /// Removes blocks no path from the entry reaches (the quiet exits after rewritten calls).
-fn drop_unreachable(m: &mut Module, f: FuncId) {
+pub(super) fn drop_unreachable(m: &mut Module, f: FuncId) {
     let region = m.funcs[f].body;
     let blocks = m.regions[region].blocks.clone();
     let mut seen: FxHashSet<BlockId> = FxHashSet::default();
