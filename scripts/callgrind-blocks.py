@@ -5,9 +5,11 @@ Usage: callgrind-blocks.py BINARY FUNCTION QUERIES [CALLGRIND_OUT]   (default cg
 
 Reads a `valgrind --tool=callgrind --dump-instr=yes` profile, keeps the instruction counts of
 FUNCTION, splits its `objdump -d` disassembly into basic blocks (at jump targets and after
-jumps) and prints the twelve blocks with the largest cost per query: start address, number of
+jumps) and prints the twelve (TOP) blocks with the largest cost per query: start address, number of
 instructions, how often the block ran per query, and its cost per query. Used by
-scripts/count-instructions.sh (BLOCKS=1).
+scripts/count-instructions.sh (BLOCKS=1). EVENT=Bcm ranks the blocks by mispredicted
+conditional branches instead (a profile made with --branch-sim=yes; count-instructions.sh
+BRANCHES=1).
 """
 import os
 import re
@@ -15,11 +17,18 @@ import subprocess
 import sys
 
 
-def counts(path, function):
-    """Instruction address -> executions, for the instructions of `function`."""
-    costs, names, inside, addr = {}, {}, False, 0
+def counts(path, function, event="Ir"):
+    """Instruction address -> count of `event` (executions for `Ir`; `Bcm`, mispredicted
+    conditional branches, in a profile made with --branch-sim=yes), for `function`."""
+    costs, names, inside, addr, column = {}, {}, False, 0, 0
     for line in open(path):
         line = line.rstrip("\n")
+        if line.startswith("events:"):
+            events = line.split()[1:]
+            if event not in events:
+                sys.exit(f"callgrind-blocks: the profile has no event {event} ({' '.join(events)})")
+            column = events.index(event)
+            continue
         m = re.match(r"(c?fn)=\((\d+)\)(?: (.*))?", line)
         if m:
             if m.group(3):
@@ -37,15 +46,17 @@ def counts(path, function):
             addr += int(a[1:])
         elif a.startswith("-"):
             addr -= int(a[1:])
-        # `positions: instr line`: address, line, then the cost.
+        # `positions: instr line`: address, line, then the costs (trailing zeros left out).
         if inside and len(parts) >= 3:
-            costs[addr] = costs.get(addr, 0) + int(parts[-1])
+            value = int(parts[2 + column]) if len(parts) > 2 + column else 0
+            costs[addr] = costs.get(addr, 0) + value
     return costs
 
 
 def main():
     binary, function, queries = sys.argv[1], sys.argv[2], int(sys.argv[3])
-    costs = counts(sys.argv[4] if len(sys.argv) > 4 else "cg.out", function)
+    event = os.environ.get("EVENT", "Ir")
+    costs = counts(sys.argv[4] if len(sys.argv) > 4 else "cg.out", function, event)
     dis = subprocess.run(
         ["objdump", "-d", "--no-show-raw-insn", binary, "--disassemble=" + function],
         capture_output=True, text=True, check=True).stdout
@@ -65,8 +76,9 @@ def main():
             blocks.append([a, 0, 0.0, c, ins])
         blocks[-1][1] += 1
         blocks[-1][2] += c
-    print(f"{function}: {sum(r[1] for r in rows):.1f} instructions per query")
-    print("block     instrs  runs/query  instrs/query  first instruction")
+    what = "instructions" if event == "Ir" else event
+    print(f"{function}: {sum(r[1] for r in rows):.1f} {what} per query")
+    print(f"block     instrs  {'runs/query' if event == 'Ir' else event + '@first':>10}  {what[:6]}/query  first instruction")
     for a, n, cost, runs, first in sorted(blocks, key=lambda b: -b[2])[:int(os.environ.get("TOP", "12"))]:
         print(f"{a:8x}  {n:6d}  {runs:10.2f}  {cost:12.1f}  {first[:48]}")
 

@@ -11,6 +11,8 @@
 #   default: pbrt LinearBVH closest_hit BVH bunny 65536 (primary rays, one thread).
 #   e.g.   scripts/count-instructions.sh bvh8 Bvh8 closest_hit8 BVH8 fzk_haus
 #   Environment: CPU (scionc --cpu, default x86-64-v3: valgrind runs no AVX-512), BLOCKS=1,
+#   BRANCHES=1 (also the blocks with the most mispredicted conditional branches per ray, as
+#   valgrind's branch simulation predicts them),
 #   ALGORITHM (a .scion file instead of library/algorithms/ENTRY.scion), RAYS (primary, or
 #   secondary: `scion trace --rays secondary`'s).
 set -euo pipefail
@@ -39,7 +41,9 @@ ${CXX:-g++} -std=c++17 -O2 -I"$work" -Iruntime/capi/include -DSCION_LAYOUT="$lay
   examples/cpp/main.cpp "$work/entry.o" -Ltarget/release -lscion_runtime -lpthread -ldl -lm \
   -o "$work/trace"
 scene_path=$(scene_file "$scene" 2>/dev/null || echo "$scene")
-valgrind --tool=callgrind --dump-instr=yes --toggle-collect="scion_${entry}_$layout" \
+branch_sim=no
+[ "${BRANCHES:-0}" = 1 ] && branch_sim=yes
+valgrind --tool=callgrind --dump-instr=yes --branch-sim=$branch_sim --toggle-collect="scion_${entry}_$layout" \
   --callgrind-out-file="$work/cg.out" "$work/trace" "$scene_path" "$n" 1 1 "${RAYS:-primary}" > "$work/run.out" \
   2> "$work/run.err" || { cat "$work/run.err" "$work/run.out" >&2; exit 1; }
 grep -q "mismatches: 0" "$work/run.out" || { cat "$work/run.out" >&2; echo "count-instructions: hits differ from the reference" >&2; exit 1; }
@@ -48,4 +52,7 @@ awk -v t="$total" -v n="$n" -v what="$layout_file $entry $scene ($n ${RAYS:-prim
   'BEGIN { printf "%s: %.1f instructions per ray\n", what, t / n }'
 if [ "${BLOCKS:-0}" = 1 ]; then
   (cd "$work" && python3 "$OLDPWD/scripts/callgrind-blocks.py" ./trace "scion_${entry}_$layout" "$n")
+fi
+if [ "${BRANCHES:-0}" = 1 ]; then
+  (cd "$work" && EVENT=Bcm python3 "$OLDPWD/scripts/callgrind-blocks.py" ./trace "scion_${entry}_$layout" "$n")
 fi

@@ -163,7 +163,18 @@ fn check_all(
     engines: &[(String, Box<dyn JitCode>)],
     floats: &[f32],
 ) -> Result<(), String> {
-    for &name in FUNCS {
+    check_funcs(tree, lo, engines, floats, FUNCS)
+}
+
+/// [`check_all`] for the functions `names`.
+fn check_funcs(
+    tree: &Module,
+    lo: &Module,
+    engines: &[(String, Box<dyn JitCode>)],
+    floats: &[f32],
+    names: &[&str],
+) -> Result<(), String> {
+    for &name in names {
         let f = tree.func_by_name(name).ok_or("missing function")?;
         let mut src = floats.iter().copied().cycle();
         let args: Vec<Val> = tree.funcs[f]
@@ -410,4 +421,51 @@ fn nan_canonicalization_only_where_observable_keeps_every_bit() {
         nan_results > 1000,
         "too few NaN results compared: {nan_results}"
     );
+}
+
+/// A wide traversal never enters an empty slot: the prelude's `slot_distmin` (used by
+/// closest_hit8.scion and the hair BVH's traversals) returns +inf for an inverted box
+/// (`Aabb::EMPTY`, or the finite inverted box a quantized layout decodes from the codes 255
+/// and 0), which the slab test alone would take for the whole of space, and the entry distance
+/// for a box the ray meets; the same in every engine.
+#[test]
+fn an_empty_slot_is_never_entered() {
+    let uses = "func t_enter(o: f32x3, d: f32x3, lo: f32x3, hi: f32x3) -> f32 =\n  \
+                slot_distmin(slab_ray(Ray(o, d, 0.0, inf)), AABB(lo, hi), inf)\n";
+    let tree =
+        common::tree_module_of(&[("uses.scion", uses)], true).unwrap_or_else(|e| panic!("{e}"));
+    let (lo, _) = lower_module(&tree, false).expect("lowers");
+    let engines = compiled(&lo);
+    let inf = f32::INFINITY;
+    let dirs = [
+        [1.0, 0.5, -0.25],
+        [-1.0, 0.0, 0.0],
+        [0.0, -0.0, 1.0],
+        [-0.3, -0.7, 0.2],
+    ];
+    let boxes = [
+        ([inf, inf, inf], [-inf, -inf, -inf], None),
+        ([4.0, -1.0, -1.0], [-4.0, 1.0, 1.0], None),
+        ([9.0, -9.0, -9.0], [-9.0, 9.0, 9.0], None),
+        ([-1.0, -1.0, -1.0], [1.0, 1.0, 1.0], Some(0.0f32)),
+    ];
+    for d in dirs {
+        for (lo_c, hi_c, want) in boxes {
+            let floats: Vec<f32> = [[0.0, 0.0, 0.0], d, lo_c, hi_c].concat();
+            let f = tree.func_by_name("t_enter").unwrap();
+            let mut src = floats.iter().copied();
+            let args: Vec<Val> = tree.funcs[f]
+                .params
+                .iter()
+                .map(|&p| make(&tree, p, &mut src))
+                .collect();
+            let got = Interp::new(&tree).call("t_enter", args).expect("tree");
+            let want = want.unwrap_or(inf);
+            assert!(
+                matches!(got[0], Val::F32(t) if t == want),
+                "{d:?} {lo_c:?} {hi_c:?}: {got:?}"
+            );
+            check_funcs(&tree, &lo, &engines, &floats, &["t_enter"]).unwrap();
+        }
+    }
 }

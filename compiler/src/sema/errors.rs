@@ -121,7 +121,11 @@ pub enum SemaError {
     /// E0222
     BadAssignTarget { span: Span },
     /// E0222: a shared field of a sum's value (which variant to rebuild is not known).
-    SumFieldAssign { field: String, ty: String, span: Span },
+    SumFieldAssign {
+        field: String,
+        ty: String,
+        span: Span,
+    },
     /// E0223
     MutArgNotPlace { param: String, span: Span },
     /// E0224

@@ -21,11 +21,11 @@
 //! The stack pointer lives in a frame cell (promoted to a register by LLVM); a full stack
 //! returns status 1 as in the tail-call scheme of [`super::recursion_to_stack`].
 
+use super::recursion_to_stack::exits_quietly;
 use super::recursion_to_stack::{
     body_of, changed_args, check_stack_bytes, drop_unreachable, entry_addr, exits, not_tail,
     split_at_call, split_entry,
 };
-use super::recursion_to_stack::exits_quietly;
 use rustc_hash::{FxHashMap, FxHashSet};
 use scion_ir::attr::Attr;
 use scion_ir::diag::Diagnostic;
@@ -383,8 +383,10 @@ pub(super) fn rewrite(
     };
     // Ends whose calls are known: push all but the first, last first, and go on with the
     // first (or pop the next entry when the visit made none).
-    let args_of: FxHashMap<OpId, Vec<ValueId>> =
-        grouped.iter().map(|&c| (c, m.ops[c].operands.to_vec())).collect();
+    let args_of: FxHashMap<OpId, Vec<ValueId>> = grouped
+        .iter()
+        .map(|&c| (c, m.ops[c].operands.to_vec()))
+        .collect();
     for &c in &grouped {
         scion_ir::rewrite::erase_op(m, c);
     }
