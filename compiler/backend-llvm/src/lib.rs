@@ -32,6 +32,7 @@
 
 mod clamps;
 pub mod jit;
+mod mask_counts;
 pub mod target;
 pub mod translate;
 

@@ -298,6 +298,9 @@ pub(crate) fn optimize(
     };
     lm.run_passes(&pipeline, tm, opts)
         .map_err(|e| LlvmError(format!("optimization pipeline: {e}")))?;
+    if !gpu && level > 0 {
+        crate::mask_counts::mask_counts_as_ctpop(lm);
+    }
     if tm
         .get_triple()
         .as_str()
