@@ -24,7 +24,7 @@
 use super::recursion_to_stack::exits_quietly;
 use super::recursion_to_stack::{
     body_of, changed_args, check_stack_bytes, drop_unreachable, entry_addr, exits, not_tail,
-    split_at_call, split_entry,
+    split_at_call, split_entry, Stack,
 };
 use rustc_hash::{FxHashMap, FxHashSet};
 use scion_ir::attr::Attr;
@@ -364,21 +364,16 @@ pub(super) fn rewrite(
     }
     // A push of `args` at the end of `bb`: to the overflow exit when the stack is full, else
     // on; returns the block that goes on.
+    let shape = Stack {
+        slot: stack,
+        entry_bytes,
+        size,
+        overflow,
+    };
     let push = |m: &mut Module, bb: BlockId, args: &[ValueId]| -> BlockId {
-        let next = m.add_block(region, &[]);
-        let mut b = Builder::at_end(m, bb);
-        let sp = b.lo_load(spc, 0, u32t);
-        let cap = b.lo_int(u32t, i128::from(size));
-        let full = b.lo_cmp(CmpPred::Ge, sp, cap);
-        b.lo_cond_br(full, (overflow, &[]), (next, &[]));
-        b.set_insertion_point_to_end(next);
-        let at = entry_addr(&mut b, stack, sp, entry_bytes);
-        for (k, &i) in changed.iter().enumerate() {
-            b.lo_store(at, 8 * k as i64, args[i]);
-        }
-        let one = b.lo_int(u32t, 1);
-        let sp1 = b.lo1(L::Add, &[sp, one], u32t);
-        b.lo_store(spc, 0, sp1);
+        let sp = Builder::at_end(m, bb).lo_load(spc, 0, u32t);
+        let (next, sp1) = shape.push(m, bb, sp, &changed, args);
+        Builder::at_end(m, next).lo_store(spc, 0, sp1);
         next
     };
     // Ends whose calls are known: push all but the first, last first, and go on with the

@@ -347,20 +347,14 @@ fn rewrite(m: &mut Module, f: FuncId, calls: &[OpId], size: u32) -> Result<(), D
         scion_ir::rewrite::erase_op(m, term);
         let mut cur = bb;
         let mut sp = sp_entry;
+        let shape = Stack {
+            slot: stack,
+            entry_bytes,
+            size,
+            overflow,
+        };
         for args in arg_lists.iter().skip(1).rev() {
-            let next = m.add_block(region, &[]);
-            let mut b = Builder::at_end(m, cur);
-            let cap = b.lo_int(u32t, i128::from(size));
-            let full = b.lo_cmp(CmpPred::Ge, sp, cap);
-            b.lo_cond_br(full, (overflow, &[]), (next, &[]));
-            b.set_insertion_point_to_end(next);
-            let at = entry_addr(&mut b, stack, sp, entry_bytes);
-            for (k, &i) in changed.iter().enumerate() {
-                b.lo_store(at, 8 * k as i64, args[i]);
-            }
-            let one = b.lo_int(u32t, 1);
-            sp = b.lo1(L::Add, &[sp, one], u32t);
-            cur = next;
+            (cur, sp) = shape.push(m, cur, sp, &changed, args);
         }
         let mut args: Vec<ValueId> = changed.iter().map(|&i| arg_lists[0][i]).collect();
         args.push(sp);
@@ -475,6 +469,45 @@ pub(super) fn exits(m: &mut Module, done: BlockId, overflow: BlockId) {
     b.set_insertion_point_to_end(overflow);
     let one = b.lo_int(i32t, 1);
     b.lo_ret(&[one]);
+}
+
+/// An explicit stack: its frame slot, the bytes of an entry (8 per kept argument), its
+/// capacity in entries and the block that reports an overflow.
+pub(super) struct Stack {
+    pub slot: ValueId,
+    pub entry_bytes: u64,
+    pub size: u32,
+    pub overflow: BlockId,
+}
+
+impl Stack {
+    /// Pushes the `changed` positions of `args` at entry `sp` (a `u32`) at the end of `bb`: to
+    /// the overflow block when `sp` is at the capacity, else on. Returns the block that goes on
+    /// (open at its end) and `sp + 1`.
+    pub(super) fn push(
+        &self,
+        m: &mut Module,
+        bb: BlockId,
+        sp: ValueId,
+        changed: &[usize],
+        args: &[ValueId],
+    ) -> (BlockId, ValueId) {
+        let region = m.blocks[bb].parent.expect("placed");
+        let next = m.add_block(region, &[]);
+        let u32t = m.types.u32();
+        let mut b = Builder::at_end(m, bb);
+        let cap = b.lo_int(u32t, i128::from(self.size));
+        let full = b.lo_cmp(CmpPred::Ge, sp, cap);
+        b.lo_cond_br(full, (self.overflow, &[]), (next, &[]));
+        b.set_insertion_point_to_end(next);
+        let at = entry_addr(&mut b, self.slot, sp, self.entry_bytes);
+        for (k, &i) in changed.iter().enumerate() {
+            b.lo_store(at, 8 * k as i64, args[i]);
+        }
+        let one = b.lo_int(u32t, 1);
+        let sp1 = b.lo1(L::Add, &[sp, one], u32t);
+        (next, sp1)
+    }
 }
 
 /// The address of stack entry `sp` (a `u32`) of `entry_bytes` bytes.
