@@ -8,6 +8,9 @@
 //! eight shifts and moves out of the mask register and an add chain (about 40 instructions
 //! where 3 do). Once the vectorizers are done, such a sum, every lane of one `<N x i1>` counted
 //! once and nothing else, is replaced by `zext(ctpop(bitcast mask to iN))`: the same number.
+//! Likewise each remaining `extractelement` of a constant lane of such a mask becomes a test
+//! of that bit of the mask's bits ([`mask_lanes_as_bits`]). Both run on x86-64 only, where
+//! the mask's bits are one `vmovmskps` or `kmovb` (NEON has no such move).
 
 use inkwell::intrinsics::Intrinsic;
 use inkwell::module::Module as LModule;
@@ -123,6 +126,86 @@ pub(crate) fn mask_counts_as_ctpop(lm: &LModule) {
                     continue;
                 };
                 let Some(new) = count.as_instruction_value() else {
+                    continue;
+                };
+                inst.replace_all_uses_with(&new);
+                inst.erase_from_basic_block();
+            }
+        }
+    }
+}
+
+/// Rewrites every `extractelement <N x i1> %mask, i` (a constant lane, `N` of 4, 8 or 16) into
+/// a test of bit `i` of the mask's bits (`bitcast %mask to iN`, one per mask): for AVX-512 the
+/// code generator otherwise moves each lane out of the mask register on its own (`kshiftrb`
+/// and `kmovd` per lane, for the conditional visits of an eight-wide node), where one `kmovb`
+/// and bit tests do.
+pub(crate) fn mask_lanes_as_bits(lm: &LModule) {
+    let ctx = lm.get_context();
+    let b = ctx.create_builder();
+    for f in lm.get_functions() {
+        let mut bits_of: Vec<(VectorValue, IntValue)> = Vec::new();
+        for bb in f.get_basic_blocks() {
+            let mut next = bb.get_first_instruction();
+            while let Some(inst) = next {
+                next = inst.get_next_instruction();
+                if inst.get_opcode() != InstructionOpcode::ExtractElement {
+                    continue;
+                }
+                let Some(BasicValueEnum::VectorValue(mask)) =
+                    inst.get_operand(0).and_then(|o| o.value())
+                else {
+                    continue;
+                };
+                let n = mask.get_type().get_size();
+                let is_bool = matches!(mask.get_type().get_element_type(),
+                    inkwell::types::BasicTypeEnum::IntType(t) if t.get_bit_width() == 1);
+                if !is_bool || ![4, 8, 16].contains(&n) {
+                    continue;
+                }
+                let Some(lane) = (match inst.get_operand(1).and_then(|o| o.value()) {
+                    Some(BasicValueEnum::IntValue(i)) => i.get_zero_extended_constant(),
+                    _ => None,
+                }) else {
+                    continue;
+                };
+                let Some(def) = mask.as_instruction_value() else {
+                    continue;
+                };
+                if def.get_opcode() == InstructionOpcode::Phi || lane >= u64::from(n) {
+                    continue;
+                }
+                let bits = match bits_of.iter().find(|(m, _)| *m == mask) {
+                    Some(&(_, bits)) => bits,
+                    None => {
+                        let Some(after) = def.get_next_instruction() else {
+                            continue;
+                        };
+                        let Some(width) = std::num::NonZeroU32::new(n) else {
+                            continue;
+                        };
+                        let Ok(ty) = ctx.custom_width_int_type(width) else {
+                            continue;
+                        };
+                        b.position_before(&after);
+                        let Ok(BasicValueEnum::IntValue(bits)) = b.build_bit_cast(mask, ty, "")
+                        else {
+                            continue;
+                        };
+                        bits_of.push((mask, bits));
+                        bits
+                    }
+                };
+                b.position_before(&inst);
+                let one = bits.get_type().const_int(1 << lane, false);
+                let zero = bits.get_type().const_zero();
+                let Ok(set) = b.build_and(bits, one, "") else {
+                    continue;
+                };
+                let Ok(test) = b.build_int_compare(inkwell::IntPredicate::NE, set, zero, "") else {
+                    continue;
+                };
+                let Some(new) = test.as_instruction_value() else {
                     continue;
                 };
                 inst.replace_all_uses_with(&new);

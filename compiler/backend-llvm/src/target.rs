@@ -298,9 +298,6 @@ pub(crate) fn optimize(
     };
     lm.run_passes(&pipeline, tm, opts)
         .map_err(|e| LlvmError(format!("optimization pipeline: {e}")))?;
-    if !gpu && level > 0 {
-        crate::mask_counts::mask_counts_as_ctpop(lm);
-    }
     if tm
         .get_triple()
         .as_str()
@@ -308,6 +305,10 @@ pub(crate) fn optimize(
         .starts_with("x86_64")
     {
         crate::clamps::two_lane_clamps_as_selects(lm);
+        if level > 0 {
+            crate::mask_counts::mask_counts_as_ctpop(lm);
+            crate::mask_counts::mask_lanes_as_bits(lm);
+        }
     }
     Ok(())
 }
