@@ -66,8 +66,12 @@ func t_mut(a: f32x3, k: u32) -> ((f32, u32), f32, u32) = {
 }
 // Components assigned: an array element at a computed index (out of range: no change), at a
 // literal one, a vector lane by name and by computed index, an element of a tuple in an
-// array, a lane of a record's field.
-func t_assign(a: f32x3, k: u32, x: f32) -> (f32x3, f32, f32, f32, f32x3, f32x3) = {
+// array, a lane of a record's field, elements of a `mut` parameter.
+func bump(best: mut (f32, u32), v: f32x3, k: u32) = {
+  best[1] = best[1] + k;
+  best[0] = v[k % 3];
+}
+func t_assign(a: f32x3, k: u32, x: f32) -> (f32x3, f32, f32, f32, f32x3, f32x3, (f32, u32)) = {
   let mut d: f32[4] = [a.x, a.y, a.z, x];
   d[k % 5] = x * 2.0;
   d[1] = d[1] + 1.0;
@@ -79,7 +83,9 @@ func t_assign(a: f32x3, k: u32, x: f32) -> (f32x3, f32, f32, f32, f32x3, f32x3) 
   let mut b: AABB = AABB(a, v);
   b.high.z = p[1][1];
   b.low = scale(v, 2.0);
-  return (v, d[0] + d[2], p[0][1], p[1][1], b.low, b.high);
+  let mut best = (x, 7);
+  bump(best, a, k);
+  return (v, d[0] + d[2], p[0][1], p[1][1], b.low, b.high, best);
 }
 func t_ifx(a: f32x3, k: u32) -> (f32, u32) = {
   let lo: f32 = if a.x <= a.y { a.x } elif isnan(a.y) { a.z } else { a.y };

@@ -252,7 +252,7 @@ fn known_ends(
     loop {
         let grouped: FxHashSet<OpId> = reached
             .iter()
-            .filter(|(_, es)| es.iter().all(|e| ends.contains_key(e)))
+            .filter(|(_, es)| !es.is_empty() && es.iter().all(|e| ends.contains_key(e)))
             .map(|&(c, _)| c)
             .collect();
         let before = ends.len();
