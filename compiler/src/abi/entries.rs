@@ -249,11 +249,25 @@ fn root_fn(m: &mut Module, sig: &EntrySig, t: &Tys, kernel: bool) {
     b.lo_ret(&[null]);
     b.set_insertion_point_to_end(place);
     let i = b.lo_load(a[0], view::ROOT as i64, t.u32);
-    let cells: Vec<ValueId> = (0..3)
-        .map(|_| {
-            let c = b.lo_stack_slot(4, 4);
+    // The placement counters (one `u32`, or one per indirect group), the cursor, the status.
+    let counters =
+        b.m.func_by_name(&format!("{}.node", sig.layout))
+            .and_then(|f| {
+                b.m.funcs[f]
+                    .attrs
+                    .get(crate::passes::tree_to_mem::constructor::COUNTERS_ATTR)
+            })
+            .and_then(scion_ir::attr::Attr::as_int)
+            .unwrap_or(1)
+            .max(1) as usize;
+    let cells: Vec<ValueId> = [counters, 1, 1]
+        .into_iter()
+        .map(|words| {
+            let c = b.lo_stack_slot(4 * words as u64, 4);
             let z = b.lo_int(t.u32, 0);
-            b.lo_store(c, 0, z);
+            for k in 0..words {
+                b.lo_store(c, 4 * k as i64, z);
+            }
             c
         })
         .collect();

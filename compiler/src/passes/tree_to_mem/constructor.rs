@@ -169,12 +169,20 @@ fn generate(m: &mut Module, spec: &LayoutSpec, ours: &[FuncId]) -> Result<(), Di
     let i32t = m.types.i32();
     let ru32 = m.types.reference(u32t);
     let ri32 = m.types.reference(i32t);
-    let extra = [ptr, ptr, ru32, ru32, ri32];
+    let slots = counter_slots(spec);
+    let rcounter = match counter_type(m, &slots) {
+        Some(t) => m.types.reference(t),
+        None => ru32,
+    };
+    let extra = [ptr, ptr, rcounter, ru32, ri32];
     // Declare @L.node first so that build functions can call it.
     let node_name = format!("{lname}.node");
-    let node_params = [ptr, ptr, u32t, ru32, ru32, ri32];
+    let node_params = [ptr, ptr, u32t, rcounter, ru32, ri32];
     let (node_fn, node_entry) = m.add_func(&node_name, &node_params, &[ref_ty]);
     m.func_spans.insert(node_fn, spec.model.span);
+    m.funcs[node_fn]
+        .attrs
+        .set(COUNTERS_ATTR, Attr::Int(slots.count.max(1) as i128));
     // The variants whose builds place a node (take the next index of the shared counter):
     // every placement index stays below their count.
     let placing: Vec<String> = ours
@@ -192,6 +200,7 @@ fn generate(m: &mut Module, spec: &LayoutSpec, ours: &[FuncId]) -> Result<(), Di
             post,
             shared: &shared,
             stride,
+            slots: &slots,
         };
         rewrite_build(m, spec, f, &variant, &b)?;
     }
@@ -228,6 +237,9 @@ fn generate(m: &mut Module, spec: &LayoutSpec, ours: &[FuncId]) -> Result<(), Di
         };
         bd.ret(&[r]);
     }
+    // With a counter per indirect group a group's records are exactly its variants' nodes;
+    // with one counter for all, any placing variant's node takes an index.
+    let placing = if slots.count > 1 { Vec::new() } else { placing };
     super::entries::sizes_fn(m, spec, &lname, &logical, &placing)?;
     super::entries::build_fn(
         m, spec, &lname, &node_name, root_fn, ref_ty, &shared, stride,
@@ -271,6 +283,8 @@ struct BuildShape<'a> {
     shared: &'a [LogicalField],
     /// Bytes per logical node.
     stride: u64,
+    /// Which placement counter each variant takes its index from.
+    slots: &'a CounterSlots,
 }
 
 /// Rewrites one build function in place (see the module docs).
@@ -387,7 +401,14 @@ fn rewrite_build(
     let this = if is_root {
         None
     } else if places(m, spec, f, &variant) {
-        Some(take_this(m, spec, cx, at, ref_ty)?)
+        Some(take_this(
+            m,
+            spec,
+            cx,
+            at,
+            ref_ty,
+            shape.slots.slot_of(&variant),
+        )?)
     } else if m.types.as_int(ref_ty).is_some() {
         let mut bd = Builder::new(m);
         bd.set_insertion_point(at);
@@ -630,14 +651,41 @@ fn take_this(
     cx: Ctx,
     at: InsertPoint,
     ref_ty: TypeId,
+    slot: Option<usize>,
 ) -> Result<ValueId, Diagnostic> {
     let u32t = m.types.u32();
     let mut bd = Builder::new(m);
     bd.set_insertion_point(at);
-    let c = bd.load(cx.counter).expect("counter is a cell");
+    let cell = bd.load(cx.counter).expect("counter is a cell");
     let one = bd.const_int(u32t, 1);
-    let next = bd.binary(Op::Add, c, one);
-    bd.store(cx.counter, next);
+    let c = match slot {
+        None => {
+            let next = bd.binary(Op::Add, cell, one);
+            bd.store(cx.counter, next);
+            cell
+        }
+        // One counter per indirect group: component `k` of the counters' tuple.
+        Some(k) => {
+            let op = bd.insert(
+                OpSpec::new(Op::Extract)
+                    .operands(&[cell])
+                    .attr("index", Attr::Int(k as i128))
+                    .results(&[u32t]),
+            );
+            let c = bd.result(op, 0);
+            let next = bd.binary(Op::Add, c, one);
+            let tuple_ty = bd.value_type(cell);
+            let op = bd.insert(
+                OpSpec::new(Op::Insert)
+                    .operands(&[cell, next])
+                    .attr("index", Attr::Int(k as i128))
+                    .results(&[tuple_ty]),
+            );
+            let new = bd.result(op, 0);
+            bd.store(cx.counter, new);
+            c
+        }
+    };
     if ref_ty == u32t {
         return Ok(c);
     }
@@ -679,4 +727,91 @@ fn take_this(
         Some(spec.model.span),
         "a reference type other than an integer or `ptr` in a build",
     ))
+}
+
+/// The attribute of `@L.node` giving the number of placement counters its counter cell holds
+/// (1: one `u32`; more: a tuple of `u32`s, one per indirect group), which the entry that
+/// recomputes the root's reference allocates.
+pub const COUNTERS_ATTR: &str = "counters";
+
+/// Which placement counter each variant takes its record's index from. A layout with two or
+/// more indirect groups (the hair BVH's axis-aligned and oriented records) counts each group's
+/// records apart, so each group holds its own variants' records only and its indices are dense;
+/// otherwise one counter serves every placing variant (`count` 1, no slots).
+pub(super) struct CounterSlots {
+    /// Variant name and its counter.
+    slot: Vec<(String, usize)>,
+    /// Counters (0 or 1: the single shared counter).
+    count: usize,
+}
+
+impl CounterSlots {
+    fn slot_of(&self, variant: &str) -> Option<usize> {
+        if self.count <= 1 {
+            return None;
+        }
+        self.slot
+            .iter()
+            .find(|(v, _)| v == variant)
+            .map(|&(_, k)| k)
+    }
+}
+
+fn counter_slots(spec: &LayoutSpec) -> CounterSlots {
+    let mut groups: Vec<usize> = Vec::new();
+    let mut slot: Vec<(String, usize)> = Vec::new();
+    for b in &spec.plan.buffers {
+        if let (Count::VariantNodes { variants }, BufferKind::GroupArray { group, .. }) =
+            (&b.count, &b.kind)
+        {
+            let k = match groups.iter().position(|g| g == group) {
+                Some(k) => k,
+                None => {
+                    groups.push(*group);
+                    groups.len() - 1
+                }
+            };
+            for v in variants {
+                if !slot.iter().any(|(w, _)| w == v) {
+                    slot.push((v.clone(), k));
+                }
+            }
+        }
+    }
+    // Direct groups index every node: one counter for all then.
+    let direct = spec
+        .plan
+        .buffers
+        .iter()
+        .any(|b| matches!(b.count, Count::Nodes { .. }));
+    if groups.len() < 2 || direct {
+        return CounterSlots {
+            slot: Vec::new(),
+            count: 1,
+        };
+    }
+    CounterSlots {
+        slot,
+        count: groups.len(),
+    }
+}
+
+/// The type of the counters' tuple, `None` for a single `u32` counter.
+fn counter_type(m: &mut Module, slots: &CounterSlots) -> Option<TypeId> {
+    if slots.count <= 1 {
+        return None;
+    }
+    let u32t = m.types.u32();
+    Some(m.types.tuple(vec![u32t; slots.count]))
+}
+
+/// The initial counters (all zero) for a build entry: a `u32`, or the tuple of them.
+pub(super) fn zero_counters(bd: &mut Builder<'_>, count: usize) -> ValueId {
+    let u32t = bd.m.types.u32();
+    let zero = bd.const_int(u32t, 0);
+    if count <= 1 {
+        return zero;
+    }
+    let ty = bd.m.types.tuple(vec![u32t; count]);
+    bd.build1(Op::Tuple, &vec![zero; count], ty)
 }

@@ -9,6 +9,7 @@ use super::reader::Reader;
 use super::{unsupported, LayoutSpec};
 use crate::layout::logical::{LogicalAbi, LogicalField};
 use crate::layout::plan::Count;
+use scion_ir::attr::Attr;
 use scion_ir::diag::Diagnostic;
 use scion_ir::rewrite::erase_op;
 use scion_ir::tree::{CmpPred, Op};
@@ -149,7 +150,13 @@ pub(super) fn build_fn(
     let (tree, b) = (args[0], args[1]);
     let mut bd = Builder::at_end(m, entry);
     let zero = bd.const_int(u32t, 0);
-    let counter = bd.var(zero);
+    let counters =
+        bd.m.func_by_name(node_name)
+            .and_then(|f| bd.m.funcs[f].attrs.get(super::constructor::COUNTERS_ATTR))
+            .and_then(Attr::as_int)
+            .unwrap_or(1) as usize;
+    let first_counts = super::constructor::zero_counters(&mut bd, counters);
+    let counter = bd.var(first_counts);
     let cursor = bd.var(zero);
     let szero = bd.const_int(i32t, 0);
     let status = bd.var(szero);
