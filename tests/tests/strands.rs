@@ -127,11 +127,24 @@ fn hair_bvh_over_strands_is_packed_and_traced_like_the_wide_reference() {
                 for (p, (name, policy)) in policies.iter().enumerate() {
                     let bytes =
                         LogicalBytes::fill_oriented(&tree, &lo.entry.logical, policy).unwrap();
-                    oriented_nodes[p] += bytes
-                        .nodes()
-                        .chunks(bytes.node_size)
-                        .filter(|n| u32::from_le_bytes(n[..4].try_into().unwrap()) == 1)
-                        .count();
+                    let count = |kind: u32| {
+                        bytes
+                            .nodes()
+                            .chunks(bytes.node_size)
+                            .filter(|n| u32::from_le_bytes(n[..4].try_into().unwrap()) == kind)
+                            .count()
+                    };
+                    oriented_nodes[p] += count(1);
+                    // Each record group holds its own kind's records (128-byte axis-aligned,
+                    // 96-byte oriented) besides the 36-byte segments and the globals.
+                    let records = 128 * count(0) + 96 * count(1) + 36 * tree.primitives.len();
+                    let packed = entries::pack(&lo, code.as_ref(), &tree, &bytes).unwrap();
+                    assert!(
+                        (records..records + 64).contains(&packed.bytes()),
+                        "{} {kind} {name}: {} bytes packed for {records} bytes of records",
+                        scene.name,
+                        packed.bytes()
+                    );
                     let got = c_entries::closest_hits_bytes(
                         &lo,
                         code.as_ref(),
