@@ -128,6 +128,17 @@ fn make(m: &Module, ty: TypeId, src: &mut impl Iterator<Item = f32>) -> Val {
     }
 }
 
+/// The arguments of function `name` of `tree` drawn from `floats` in order.
+fn args_of(tree: &Module, name: &str, floats: &[f32]) -> Vec<Val> {
+    let f = tree.func_by_name(name).expect("declared");
+    let mut src = floats.iter().copied();
+    tree.funcs[f]
+        .params
+        .iter()
+        .map(|&p| make(tree, p, &mut src))
+        .collect()
+}
+
 /// The scalar leaves of a value, in `mem-to-lo`'s order.
 fn flatten(v: &Val, out: &mut Vec<Val>) {
     match v {
@@ -271,13 +282,7 @@ fn a_real_hit_is_found_by_every_engine() {
         0.0,
         0.0, // triangle (id from 0.0's bits)
     ];
-    let f = tree.func_by_name("t_hit").unwrap();
-    let mut src = floats.iter().copied();
-    let args: Vec<Val> = tree.funcs[f]
-        .params
-        .iter()
-        .map(|&p| make(&tree, p, &mut src))
-        .collect();
+    let args = args_of(&tree, "t_hit", &floats);
     let mut flat = Vec::new();
     args.iter().for_each(|a| flatten(a, &mut flat));
     let out = jit.call("t_hit", &flat).unwrap();
@@ -458,13 +463,7 @@ fn an_empty_slot_is_never_entered() {
     for d in dirs {
         for (lo_c, hi_c, want) in boxes {
             let floats: Vec<f32> = [[0.0, 0.0, 0.0], d, lo_c, hi_c].concat();
-            let f = tree.func_by_name("t_enter").unwrap();
-            let mut src = floats.iter().copied();
-            let args: Vec<Val> = tree.funcs[f]
-                .params
-                .iter()
-                .map(|&p| make(&tree, p, &mut src))
-                .collect();
+            let args = args_of(&tree, "t_enter", &floats);
             let got = Interp::new(&tree).call("t_enter", args).expect("tree");
             let want = want.unwrap_or(inf);
             assert!(
