@@ -255,7 +255,7 @@ fn root_fn(m: &mut Module, sig: &EntrySig, t: &Tys, kernel: bool) {
             .and_then(|f| {
                 b.m.funcs[f]
                     .attrs
-                    .get(crate::passes::tree_to_mem::constructor::COUNTERS_ATTR)
+                    .get(crate::passes::tree_to_mem::counters::COUNTERS_ATTR)
             })
             .and_then(scion_ir::attr::Attr::as_int)
             .unwrap_or(1)

@@ -152,10 +152,10 @@ pub(super) fn build_fn(
     let zero = bd.const_int(u32t, 0);
     let counters =
         bd.m.func_by_name(node_name)
-            .and_then(|f| bd.m.funcs[f].attrs.get(super::constructor::COUNTERS_ATTR))
+            .and_then(|f| bd.m.funcs[f].attrs.get(super::counters::COUNTERS_ATTR))
             .and_then(Attr::as_int)
             .unwrap_or(1) as usize;
-    let first_counts = super::constructor::zero_counters(&mut bd, counters);
+    let first_counts = super::counters::zero_counters(&mut bd, counters);
     let counter = bd.var(first_counts);
     let cursor = bd.var(zero);
     let szero = bd.const_int(i32t, 0);

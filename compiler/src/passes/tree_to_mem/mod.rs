@@ -16,6 +16,7 @@
 //! destruction. This stands in for the per-layout accessor functions of the design note §1.
 
 pub mod constructor;
+pub mod counters;
 pub mod destructor;
 mod entries;
 mod logical_nodes;
