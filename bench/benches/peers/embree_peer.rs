@@ -168,35 +168,17 @@ impl Scene {
         let n = tris.len();
         let n32 = u32::try_from(n).map_err(|_| format!("embree: {n} triangles: too many"))?;
         Scene::with_geometry(RTC_GEOMETRY_TYPE_TRIANGLE, |s, geometry| {
-            // SAFETY: `geometry` is a live geometry of `s`'s device; the buffers Embree returns
-            // hold `item_count` items of `byte_stride` bytes, 4-byte aligned, written in bounds.
-            unsafe {
-                let vb = rtcSetNewGeometryBuffer(
-                    geometry,
-                    RTC_BUFFER_TYPE_VERTEX,
-                    0,
-                    RTC_FORMAT_FLOAT3,
-                    3 * size_of::<f32>(),
-                    3 * n,
-                ) as *mut [f32; 3];
-                let ib = rtcSetNewGeometryBuffer(
-                    geometry,
-                    RTC_BUFFER_TYPE_INDEX,
-                    0,
-                    RTC_FORMAT_UINT3,
-                    3 * size_of::<u32>(),
-                    n,
-                ) as *mut [u32; 3];
-                s.check("rtcSetNewGeometryBuffer")?;
-                let verts = std::slice::from_raw_parts_mut(vb, 3 * n);
-                let index = std::slice::from_raw_parts_mut(ib, n);
-                for (i, t) in (0..n32).zip(tris) {
-                    let k = 3 * i as usize;
-                    verts[k] = t.p0.to_array();
-                    verts[k + 1] = t.p1.to_array();
-                    verts[k + 2] = t.p2.to_array();
-                    index[i as usize] = [3 * i, 3 * i + 1, 3 * i + 2];
-                }
+            let (verts, index) = s.new_buffers::<[f32; 3], [u32; 3]>(
+                geometry,
+                (RTC_FORMAT_FLOAT3, 3 * n),
+                (RTC_FORMAT_UINT3, n),
+            )?;
+            for (i, t) in (0..n32).zip(tris) {
+                let k = 3 * i as usize;
+                verts[k] = t.p0.to_array();
+                verts[k + 1] = t.p1.to_array();
+                verts[k + 2] = t.p2.to_array();
+                index[i as usize] = [3 * i, 3 * i + 1, 3 * i + 2];
             }
             Ok(())
         })
@@ -209,37 +191,57 @@ impl Scene {
         let n = segs.len();
         let n32 = u32::try_from(2 * n).map_err(|_| format!("embree: {n} segments: too many"))?;
         Scene::with_geometry(RTC_GEOMETRY_TYPE_FLAT_LINEAR_CURVE, |s, geometry| {
-            // SAFETY: as in `build`: live geometry, buffers of the sizes asked, written in
-            // bounds.
-            unsafe {
-                let vb = rtcSetNewGeometryBuffer(
-                    geometry,
-                    RTC_BUFFER_TYPE_VERTEX,
-                    0,
-                    RTC_FORMAT_FLOAT4,
-                    4 * size_of::<f32>(),
-                    2 * n,
-                ) as *mut [f32; 4];
-                let ib = rtcSetNewGeometryBuffer(
-                    geometry,
-                    RTC_BUFFER_TYPE_INDEX,
-                    0,
-                    RTC_FORMAT_UINT,
-                    size_of::<u32>(),
-                    n,
-                ) as *mut u32;
-                s.check("rtcSetNewGeometryBuffer")?;
-                let verts = std::slice::from_raw_parts_mut(vb, 2 * n);
-                let index = std::slice::from_raw_parts_mut(ib, n);
-                for (i, g) in (0..n32).step_by(2).zip(segs) {
-                    let k = i as usize;
-                    verts[k] = [g.p0.x, g.p0.y, g.p0.z, g.r0];
-                    verts[k + 1] = [g.p1.x, g.p1.y, g.p1.z, g.r1];
-                    index[k / 2] = i;
-                }
+            let (verts, index) = s.new_buffers::<[f32; 4], u32>(
+                geometry,
+                (RTC_FORMAT_FLOAT4, 2 * n),
+                (RTC_FORMAT_UINT, n),
+            )?;
+            for (i, g) in (0..n32).step_by(2).zip(segs) {
+                let k = i as usize;
+                verts[k] = [g.p0.x, g.p0.y, g.p0.z, g.r0];
+                verts[k + 1] = [g.p1.x, g.p1.y, g.p1.z, g.r1];
+                index[k / 2] = i;
             }
             Ok(())
         })
+    }
+
+    /// The vertex and index buffers of `geometry` (a live geometry of this scene's device):
+    /// `vertices` and `indices` are each a format and an item count; the items are `V` and `I`
+    /// (their size the format's, 4-byte aligned), which the caller writes in full.
+    #[allow(clippy::mut_from_ref)]
+    fn new_buffers<V, I>(
+        &self,
+        geometry: Handle,
+        vertices: (u32, usize),
+        indices: (u32, usize),
+    ) -> Result<(&mut [V], &mut [I]), String> {
+        // SAFETY: `geometry` is a live geometry of this scene's device; the buffers Embree
+        // returns hold the asked number of items of `size_of` bytes each, 4-byte aligned, owned
+        // by the geometry (alive as long as the scene) and written by nobody else.
+        unsafe {
+            let vb = rtcSetNewGeometryBuffer(
+                geometry,
+                RTC_BUFFER_TYPE_VERTEX,
+                0,
+                vertices.0,
+                size_of::<V>(),
+                vertices.1,
+            ) as *mut V;
+            let ib = rtcSetNewGeometryBuffer(
+                geometry,
+                RTC_BUFFER_TYPE_INDEX,
+                0,
+                indices.0,
+                size_of::<I>(),
+                indices.1,
+            ) as *mut I;
+            self.check("rtcSetNewGeometryBuffer")?;
+            Ok((
+                std::slice::from_raw_parts_mut(vb, vertices.1),
+                std::slice::from_raw_parts_mut(ib, indices.1),
+            ))
+        }
     }
 
     /// A device and a scene of one geometry of `kind`, its buffers filled by `fill`, committed.
