@@ -52,18 +52,9 @@ fn parse() -> Result<Args, String> {
         threads: 1,
         leaf: 7,
     };
-    let mut it = std::env::args().skip(1);
-    while let Some(flag) = it.next() {
-        // `cargo bench` passes `--bench` to every harness-less benchmark.
-        if flag == "--bench" {
-            continue;
-        }
-        let mut value = || it.next().ok_or(format!("{flag} needs a value"));
-        let num = |s: String| {
-            s.parse::<u64>()
-                .map_err(|_| format!("{flag}: `{s}` is not a number"))
-        };
-        match flag.as_str() {
+    scion_bench::parse_flags(|flag, value| {
+        let num = |s: String| scion_bench::flag_number(flag, &s);
+        match flag {
             "--scene" => a.scene = Some(PathBuf::from(value()?)),
             "--rays" => a.rays = RayKind::parse(&value()?)?,
             "--n" => a.n = num(value()?)? as usize,
@@ -72,7 +63,8 @@ fn parse() -> Result<Args, String> {
             "--leaf" => a.leaf = (num(value()?)? as usize).clamp(1, 255),
             other => return Err(format!("unknown option `{other}`")),
         }
-    }
+        Ok(())
+    })?;
     Ok(a)
 }
 

@@ -338,6 +338,32 @@ pub fn tsv_rows(w: &Workload, threads: usize, outcomes: &[Outcome]) -> String {
 pub const TSV_HEADER: &str =
     "scene\ttriangles\trays\tn\tthreads\ttracer\tmrays\tratio\tsetup_s\tbytes\tagree\tsame_prim";
 
+/// Walks a harness-less benchmark's command line: `each` gets every flag in order (`cargo
+/// bench`'s own `--bench` left out) and a function that takes the flag's value.
+pub fn parse_flags(
+    mut each: impl FnMut(&str, &mut dyn FnMut() -> Result<String, String>) -> Result<(), String>,
+) -> Result<(), String> {
+    let mut it = std::env::args().skip(1);
+    while let Some(flag) = it.next() {
+        if flag == "--bench" {
+            continue;
+        }
+        let mut value = || {
+            it.next()
+                .filter(|v| v != "--bench")
+                .ok_or(format!("{flag} needs a value"))
+        };
+        each(&flag, &mut value)?;
+    }
+    Ok(())
+}
+
+/// Flag `flag`'s value `s` as a number.
+pub fn flag_number(flag: &str, s: &str) -> Result<u64, String> {
+    s.parse::<u64>()
+        .map_err(|_| format!("{flag}: `{s}` is not a number"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

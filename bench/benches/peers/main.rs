@@ -93,18 +93,9 @@ fn parse() -> Result<Args, String> {
         tree: "scion".into(),
         max_leaf: None,
     };
-    let mut it = std::env::args().skip(1);
-    while let Some(flag) = it.next() {
-        // `cargo bench` passes `--bench` to every harness-less benchmark.
-        if flag == "--bench" {
-            continue;
-        }
-        let mut value = || it.next().ok_or(format!("{flag} needs a value"));
-        let num = |s: String| {
-            s.parse::<u64>()
-                .map_err(|_| format!("{flag}: `{s}` is not a number"))
-        };
-        match flag.as_str() {
+    scion_bench::parse_flags(|flag, value| {
+        let num = |s: String| scion_bench::flag_number(flag, &s);
+        match flag {
             "--scene" => {
                 a.scene = scion_runtime::scene::manifest::resolve(&PathBuf::from(value()?))
                     .map_err(|e| format!("--scene: {e}"))?
@@ -153,7 +144,8 @@ fn parse() -> Result<Args, String> {
                 ))
             }
         }
-    }
+        Ok(())
+    })?;
     Ok(a)
 }
 
