@@ -87,6 +87,26 @@ func t_assign(a: f32x3, k: u32, x: f32) -> (f32x3, f32, f32, f32, f32x3, f32x3, 
   bump(best, a, k);
   return (v, d[0] + d[2], p[0][1], p[1][1], b.low, b.high, best);
 }
+// A value array at a computed index and the bits of several
+// conditions: the LLVM backend translates them as one variable `extractelement` and the bits
+// of one `<N x i1>` (docs/backends.md), the other engines as selects and an `or` of shifts.
+func t_pick(a: f32x3, b: f32x3, k: u32) -> (f32, u32, f32, f32) = {
+  let d: f32[8] = [a.x, a.y, a.z, b.x, b.y, b.z, a.x * b.y, -a.z];
+  let ks: u32[5] = [k, k + 1, k * 3, 7 - k, k >> 1];
+  return (d[k % 8], ks[k % 5], d[(k >> 3) % 8], d[7 - k % 8]);
+}
+func t_mask(a: f32x3, b: f32x3, x: f32) -> (u32, u32, u16, u64) = {
+  let d: f32[8] = [a.x, a.y, a.z, b.x, b.y, b.z, a.x * b.y, -a.z];
+  let m: u32 = ((d[0] < x) as u32) | (((d[1] < x) as u32) << 1) | (((d[2] < x) as u32) << 2)
+             | (((d[3] < x) as u32) << 3) | (((d[4] < x) as u32) << 4)
+             | (((d[5] < x) as u32) << 5) | (((d[6] < x) as u32) << 6) | (((d[7] < x) as u32) << 7);
+  let m4: u16 = (((a.y < b.y) as u16) << 1) | ((a.x < b.x) as u16) | (((a.z < b.z) as u16) << 2)
+              | ((isnan(x) as u16) << 3);
+  let w: u64 = (((d[0] <= x) as u64) << 5) | (((d[1] <= x) as u64) << 1)
+             | (((d[2] <= x) as u64) << 2) | ((d[3] <= x) as u64) | (((d[4] <= x) as u64) << 4)
+             | (((d[5] <= x) as u64) << 3);
+  return (m, popcount(m), m4, w);
+}
 func t_ifx(a: f32x3, k: u32) -> (f32, u32) = {
   let lo: f32 = if a.x <= a.y { a.x } elif isnan(a.y) { a.z } else { a.y };
   let which: u32 = if lo < a.z { if k > 500 { k - 500 } else { 0 } } else { 2 };
@@ -97,6 +117,7 @@ func t_ifx(a: f32x3, k: u32) -> (f32, u32) = {
 const FUNCS: &[&str] = &[
     "t_hit", "t_slab", "t_box", "t_tri", "t_cpb", "t_cpt", "t_cpc", "t_sat", "t_bb", "t_d2",
     "t_axis", "t_dir", "t_lanes", "t_bits", "t_mut", "t_ifx", "t_clamp", "t_assign",
+    "t_pick", "t_mask",
 ];
 
 /// The `tree` module of the prelude functions above.

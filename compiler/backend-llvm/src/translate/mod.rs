@@ -37,6 +37,7 @@
 //! is an `alloca` in the entry block; `lo.global_id` reads `%ctaid.x * %ntid.x + %tid.x` and
 //! exists only on NVPTX.
 
+mod lanes;
 mod scalar;
 
 use crate::target::Target;
@@ -229,6 +230,7 @@ pub fn translate<'c>(
             phis: HashMap::new(),
             entry: None,
             nan: NanFacts::of(m, &m.regions[m.funcs[f].body].blocks),
+            or_operands: lanes::or_operands(m, f),
         };
         t.body(f)
             .map_err(|e| format!("@{}: {e}", m.funcs[f].name))?;
@@ -254,6 +256,9 @@ struct Fn<'a, 'c> {
     entry: Option<BasicBlock<'c>>,
     /// Which NaNs to canonicalize, which values are never NaN ([`scion_ir::lo::nan`]).
     nan: NanFacts,
+    /// The values some `lo.or` of this function reads ([`lanes`]: an `or` among them is inside
+    /// a tree of lane bits, not its root).
+    or_operands: std::collections::HashSet<ValueId>,
 }
 
 impl<'c> Fn<'_, 'c> {
@@ -516,7 +521,10 @@ impl<'c> Fn<'_, 'c> {
             L::Mul => Some(b.build_int_mul(int(0), int(1), "").map_err(be)?.into()),
             L::Div | L::Rem => Some(self.int_div(kind == L::Div, signed, int(0), int(1))?.into()),
             L::And => Some(b.build_and(int(0), int(1), "").map_err(be)?.into()),
-            L::Or => Some(b.build_or(int(0), int(1), "").map_err(be)?.into()),
+            L::Or => Some(match self.lane_bits(op)? {
+                Some(bits) => bits,
+                None => b.build_or(int(0), int(1), "").map_err(be)?.into(),
+            }),
             L::Xor => Some(b.build_xor(int(0), int(1), "").map_err(be)?.into()),
             L::Shl | L::Shr => {
                 let x = int(0);
@@ -598,7 +606,10 @@ impl<'c> Fn<'_, 'c> {
                 let pred = o.pred().ok_or("bad predicate")?;
                 Some(self.compare(pred, args[0], args[1], signed)?.into())
             }
-            L::Select => Some(b.build_select(int(0), args[1], args[2], "").map_err(be)?),
+            L::Select => Some(match self.index_chain(op)? {
+                Some(lane) => lane,
+                None => b.build_select(int(0), args[1], args[2], "").map_err(be)?,
+            }),
             L::Cast => {
                 let from = m.values[o.operands[0]].ty;
                 let to = m.values[o.results[0]].ty;
