@@ -116,8 +116,8 @@ func t_ifx(a: f32x3, k: u32) -> (f32, u32) = {
 
 const FUNCS: &[&str] = &[
     "t_hit", "t_slab", "t_box", "t_tri", "t_cpb", "t_cpt", "t_cpc", "t_sat", "t_bb", "t_d2",
-    "t_axis", "t_dir", "t_lanes", "t_bits", "t_mut", "t_ifx", "t_clamp", "t_assign",
-    "t_pick", "t_mask",
+    "t_axis", "t_dir", "t_lanes", "t_bits", "t_mut", "t_ifx", "t_clamp", "t_assign", "t_pick",
+    "t_mask",
 ];
 
 /// The `tree` module of the prelude functions above.

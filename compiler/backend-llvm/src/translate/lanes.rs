@@ -75,8 +75,7 @@ impl<'c> Fn<'_, 'c> {
             match m.def_op(next) {
                 Some(d)
                     if m.ops[d].kind == OpKind::Lo(L::Select)
-                        && self.position_test(m.ops[d].operands[0]).map(|p| p.0)
-                            == Some(index) =>
+                        && self.position_test(m.ops[d].operands[0]).map(|p| p.0) == Some(index) =>
                 {
                     cur = d
                 }
@@ -91,8 +90,11 @@ impl<'c> Fn<'_, 'c> {
             return Ok(None);
         }
         lanes[0] = Some(base);
-        let values: Vec<BasicValueEnum<'c>> =
-            lanes.iter().flatten().map(|&v| self.v(v)).collect::<R<_>>()?;
+        let values: Vec<BasicValueEnum<'c>> = lanes
+            .iter()
+            .flatten()
+            .map(|&v| self.v(v))
+            .collect::<R<_>>()?;
         if values.iter().any(|v| v.get_type() != values[0].get_type()) {
             return Ok(None);
         }
@@ -117,7 +119,9 @@ impl<'c> Fn<'_, 'c> {
             .build_select(inside, i, it.const_zero(), "")
             .map_err(be)?
             .into_int_value();
-        let lane = b.build_int_cast_sign_flag(lane, i32t, false, "").map_err(be)?;
+        let lane = b
+            .build_int_cast_sign_flag(lane, i32t, false, "")
+            .map_err(be)?;
         Ok(Some(b.build_extract_element(vector, lane, "").map_err(be)?))
     }
 }
@@ -163,7 +167,8 @@ impl<'c> Fn<'_, 'c> {
             _ => return None,
         };
         let c = &m.ops[cast];
-        if c.kind != OpKind::Lo(L::Cast) || !matches!(m.types.get(m.values[c.operands[0]].ty), Type::Bool)
+        if c.kind != OpKind::Lo(L::Cast)
+            || !matches!(m.types.get(m.values[c.operands[0]].ty), Type::Bool)
         {
             return None;
         }
@@ -221,12 +226,21 @@ impl<'c> Fn<'_, 'c> {
                 .build_insert_element(vector, c, i32t.const_int(k as u64, false), "")
                 .map_err(be)?;
         }
-        let bits_ty = self.cx.custom_width_int_type(
-            std::num::NonZeroU32::new(n as u32).ok_or("lane bits of no lanes")?,
-        )
-        .map_err(|e| format!("lane bits: {e}"))?;
-        let bits = b.build_bit_cast(vector, bits_ty, "").map_err(be)?.into_int_value();
+        let bits_ty = self
+            .cx
+            .custom_width_int_type(
+                std::num::NonZeroU32::new(n as u32).ok_or("lane bits of no lanes")?,
+            )
+            .map_err(|e| format!("lane bits: {e}"))?;
+        let bits = b
+            .build_bit_cast(vector, bits_ty, "")
+            .map_err(be)?
+            .into_int_value();
         let rt = llvm_type(self.cx, m, m.values[root.results[0]].ty)?.into_int_type();
-        Ok(Some(b.build_int_z_extend_or_bit_cast(bits, rt, "").map_err(be)?.into()))
+        Ok(Some(
+            b.build_int_z_extend_or_bit_cast(bits, rt, "")
+                .map_err(be)?
+                .into(),
+        ))
     }
 }

@@ -405,40 +405,6 @@ impl<'c> Fn<'_, 'c> {
         self.byte_offset(p, self.cx.i64_type().const_int(off as i64 as u64, true))
     }
 
-    fn fconst(&self, ty: BasicTypeEnum<'c>, bits: u64) -> R<FloatValue<'c>> {
-        // Through the integer bits, so NaN payloads and signed zeros are exact.
-        let ity = int_type(self.cx, ty.into_float_type().get_bit_width());
-        let v = self
-            .b
-            .build_bit_cast(ity.const_int(bits, false), ty, "")
-            .map_err(be)?;
-        Ok(v.into_float_value())
-    }
-
-    /// The canonical quiet NaN in place of any NaN `v`.
-    fn canon(&self, v: FloatValue<'c>) -> R<BasicValueEnum<'c>> {
-        let ty = v.get_type().as_basic_type_enum();
-        let nan = if v.get_type().get_bit_width() == 32 {
-            self.fconst(ty, 0x7fc0_0000)?
-        } else {
-            self.fconst(ty, scion_ir::attr::CANONICAL_NAN_BITS)?
-        };
-        let uno = self
-            .b
-            .build_float_compare(FloatPredicate::UNO, v, v, "")
-            .map_err(be)?;
-        self.b.build_select(uno, nan, v, "").map_err(be)
-    }
-
-    /// `v` (the value of `lo` value `x`), canonicalized when [`NanFacts::canonicalize`] says so.
-    fn canon_if_needed(&self, x: ValueId, v: BasicValueEnum<'c>) -> R<BasicValueEnum<'c>> {
-        if self.nan.canonicalize(x) {
-            self.canon(v.into_float_value())
-        } else {
-            Ok(v)
-        }
-    }
-
     fn op(&mut self, op: scion_ir::OpId) -> R<()> {
         let m = self.m;
         let o = &m.ops[op];

@@ -1,5 +1,6 @@
-//! Scalar semantics of the `lo` ops that need more than one LLVM instruction: comparisons
-//! (ordered except `ne`), integer division and remainder by the operand types' signedness,
+//! Scalar semantics of the `lo` ops that need more than one LLVM instruction: float constants by
+//! their bits, the canonical NaN in place of an observable one, comparisons (ordered except
+//! `ne`), integer division and remainder by the operand types' signedness,
 //! `minNum`/`maxNum` with first-operand ties, `next_up`/`next_down` as integer steps on the bits,
 //! value casts (saturating float-to-int, NaN to 0) and the GPU thread index. Input: operands
 //! already translated; output: the result value. The same semantics as `scion-clif` and the
@@ -8,6 +9,44 @@
 use super::*;
 
 impl<'c> Fn<'_, 'c> {
+    pub(super) fn fconst(&self, ty: BasicTypeEnum<'c>, bits: u64) -> R<FloatValue<'c>> {
+        // Through the integer bits, so NaN payloads and signed zeros are exact.
+        let ity = int_type(self.cx, ty.into_float_type().get_bit_width());
+        let v = self
+            .b
+            .build_bit_cast(ity.const_int(bits, false), ty, "")
+            .map_err(be)?;
+        Ok(v.into_float_value())
+    }
+
+    /// The canonical quiet NaN in place of any NaN `v`.
+    pub(super) fn canon(&self, v: FloatValue<'c>) -> R<BasicValueEnum<'c>> {
+        let ty = v.get_type().as_basic_type_enum();
+        let nan = if v.get_type().get_bit_width() == 32 {
+            self.fconst(ty, 0x7fc0_0000)?
+        } else {
+            self.fconst(ty, scion_ir::attr::CANONICAL_NAN_BITS)?
+        };
+        let uno = self
+            .b
+            .build_float_compare(FloatPredicate::UNO, v, v, "")
+            .map_err(be)?;
+        self.b.build_select(uno, nan, v, "").map_err(be)
+    }
+
+    /// `v` (the value of `lo` value `x`), canonicalized when [`NanFacts::canonicalize`] says so.
+    pub(super) fn canon_if_needed(
+        &self,
+        x: ValueId,
+        v: BasicValueEnum<'c>,
+    ) -> R<BasicValueEnum<'c>> {
+        if self.nan.canonicalize(x) {
+            self.canon(v.into_float_value())
+        } else {
+            Ok(v)
+        }
+    }
+
     pub(super) fn compare(
         &self,
         pred: CmpPred,
