@@ -30,12 +30,18 @@ impl<'c> Fn<'_, 'c> {
         if o.kind != OpKind::Lo(L::Cmp) || o.pred() != Some(CmpPred::Eq) {
             return None;
         }
-        let k = m.def_op(o.operands[1])?;
-        if m.ops[k].kind != OpKind::Lo(L::Const) {
+        Some((o.operands[0], self.int_constant(o.operands[1])?))
+    }
+
+    /// The value of `v` when a `lo.const` integer defines it.
+    fn int_constant(&self, v: ValueId) -> Option<i128> {
+        let m = self.m;
+        let d = m.def_op(v)?;
+        if m.ops[d].kind != OpKind::Lo(L::Const) {
             return None;
         }
-        match m.ops[k].attr("value") {
-            Some(scion_ir::attr::Attr::Int(v)) => Some((o.operands[0], *v)),
+        match m.ops[d].attr("value") {
+            Some(scion_ir::attr::Attr::Int(k)) => Some(*k),
             _ => None,
         }
     }
@@ -151,17 +157,11 @@ impl<'c> Fn<'_, 'c> {
         let o = &m.ops[d];
         let (cast, k) = match o.kind {
             OpKind::Lo(L::Shl) => {
-                let c = m.def_op(o.operands[1])?;
-                if m.ops[c].kind != OpKind::Lo(L::Const) {
+                let k = self.int_constant(o.operands[1])?;
+                if !(0..MAX_LANES as i128).contains(&k) {
                     return None;
                 }
-                let k = match m.ops[c].attr("value") {
-                    Some(scion_ir::attr::Attr::Int(k)) if (0..MAX_LANES as i128).contains(k) => {
-                        *k as usize
-                    }
-                    _ => return None,
-                };
-                (m.def_op(o.operands[0])?, k)
+                (m.def_op(o.operands[0])?, k as usize)
             }
             OpKind::Lo(L::Cast) => (d, 0),
             _ => return None,
