@@ -80,10 +80,7 @@ pub fn slab_interval_of(r: &SlabRay, b: &Aabb, tmax: f32) -> (f32, f32) {
     let y = slab_axis(b.low.y, b.high.y, o.y, r.inv.y);
     let z = slab_axis(b.low.z, b.high.z, o.z, r.inv.z);
     let enter = max_num(max_num(x.0, y.0), max_num(z.0, r.tmin));
-    let exit = min_num(
-        min_num(x.1, y.1) * FAR_WIDENING,
-        min_num(z.1 * FAR_WIDENING, tmax),
-    );
+    let exit = min_num(min_num(x.1, min_num(y.1, z.1)) * FAR_WIDENING, tmax);
     (enter, exit)
 }
 
