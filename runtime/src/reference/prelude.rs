@@ -71,25 +71,33 @@ pub fn slab_axis(lo: f32, hi: f32, o: f32, inv: f32) -> (f32, f32) {
     (min_num(t0, t1), max_num(t0, t1))
 }
 
-/// The prelude's `slab_interval(r, box, tmax)`: `(enter, exit)` with `exit <= tmax`; the ray
-/// meets the box iff `enter <= exit` (false when either is NaN).
+/// The prelude's `slab_span(r, box)`: `(enter, far)`, the entry distance and the exit distance
+/// widened by [`FAR_WIDENING`], not clipped at any bound.
 #[inline]
-pub fn slab_interval_of(r: &SlabRay, b: &Aabb, tmax: f32) -> (f32, f32) {
+pub fn slab_span_of(r: &SlabRay, b: &Aabb) -> (f32, f32) {
     let o = r.origin;
     let x = slab_axis(b.low.x, b.high.x, o.x, r.inv.x);
     let y = slab_axis(b.low.y, b.high.y, o.y, r.inv.y);
     let z = slab_axis(b.low.z, b.high.z, o.z, r.inv.z);
     let enter = max_num(max_num(x.0, y.0), max_num(z.0, r.tmin));
-    let exit = min_num(min_num(x.1, min_num(y.1, z.1)) * FAR_WIDENING, tmax);
-    (enter, exit)
+    (enter, min_num(x.1, min_num(y.1, z.1)) * FAR_WIDENING)
+}
+
+/// The prelude's `slab_interval(r, box, tmax)`: `(enter, exit)` with `exit <= tmax`; the ray
+/// meets the box iff `enter <= exit` (false when either is NaN).
+#[inline]
+pub fn slab_interval_of(r: &SlabRay, b: &Aabb, tmax: f32) -> (f32, f32) {
+    let (enter, far) = slab_span_of(r, b);
+    (enter, min_num(far, tmax))
 }
 
 /// The prelude's `distmin(r, box, tmax)`: the entry distance when the ray meets the box before
-/// `tmax`, else `+inf`.
+/// `tmax`, else `+inf` (`enter <= min(far, tmax)` as two compares; a NaN `tmax` is ignored, as
+/// `min` ignores it).
 #[inline]
 pub fn distmin_of(r: &SlabRay, b: &Aabb, tmax: f32) -> f32 {
-    let (enter, exit) = slab_interval_of(r, b, tmax);
-    if enter <= exit {
+    let (enter, far) = slab_span_of(r, b);
+    if enter <= far && !(tmax < enter) {
         enter
     } else {
         f32::INFINITY
