@@ -11,7 +11,7 @@
 //! code: every ray misses.
 
 use crate::backend::Backend;
-use scion_runtime::batch::BatchDriver;
+use scion_runtime::batch::{BatchDriver, BLOCK};
 use scion_runtime::bvh::schema::{LogicalBytes, Schema};
 use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Hit, Ray, Triangle};
@@ -122,9 +122,6 @@ impl LogicalTreeView {
 
 /// The result record of closest hit: `best = (t, primitive id)`.
 pub type Best = (f32, u32);
-
-/// A block's first query index and its results.
-type Block = (usize, Vec<Best>);
 
 /// A traversal that failed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -249,38 +246,43 @@ impl Packed {
         }
         let buffers = self.buffers();
         let init = |r: &Ray| (r.tmax, u32::MAX);
-        let done: Mutex<Vec<Block>> = Mutex::new(Vec::new());
+        // Each block writes its own hits in place (a block is one chunk of `hits`, so its
+        // lock is never contended): no allocation per block, no results gathered under one
+        // lock and converted by the calling thread after the parallel part.
+        let mut hits = vec![Hit::MISS; rays.len()];
         let failed: Mutex<Option<TraceFailure>> = Mutex::new(None);
-        driver.run(rays.len(), |begin, end| {
-            let queries = &rays[begin..end];
-            let mut results: Vec<(f32, u32)> = queries.iter().map(init).collect();
-            let status = code.batch(&buffers, queries, &mut results);
-            if status != STATUS_OK {
-                let first = (begin..end)
-                    .find_map(|i| {
-                        let mut one = [init(&rays[i])];
-                        let s = code.batch(&buffers, &rays[i..i + 1], &mut one);
-                        (s != STATUS_OK).then_some(TraceFailure { ray: i, status: s })
-                    })
-                    .unwrap_or(TraceFailure { ray: begin, status });
-                let mut f = failed.lock().unwrap_or_else(|p| p.into_inner());
-                if f.is_none_or(|old| first.ray < old.ray) {
-                    *f = Some(first);
+        {
+            let out: Vec<Mutex<&mut [Hit]>> = hits.chunks_mut(BLOCK).map(Mutex::new).collect();
+            driver.run(rays.len(), |begin, end| {
+                let queries = &rays[begin..end];
+                let mut block = [(0.0f32, 0u32); BLOCK];
+                let results = &mut block[..queries.len()];
+                for (slot, r) in results.iter_mut().zip(queries) {
+                    *slot = init(r);
                 }
-                return;
-            }
-            done.lock()
-                .unwrap_or_else(|p| p.into_inner())
-                .push((begin, results));
-        });
+                let status = code.batch(&buffers, queries, results);
+                if status != STATUS_OK {
+                    let first = (begin..end)
+                        .find_map(|i| {
+                            let mut one = [init(&rays[i])];
+                            let s = code.batch(&buffers, &rays[i..i + 1], &mut one);
+                            (s != STATUS_OK).then_some(TraceFailure { ray: i, status: s })
+                        })
+                        .unwrap_or(TraceFailure { ray: begin, status });
+                    let mut f = failed.lock().unwrap_or_else(|p| p.into_inner());
+                    if f.is_none_or(|old| first.ray < old.ray) {
+                        *f = Some(first);
+                    }
+                    return;
+                }
+                let mut chunk = out[begin / BLOCK].lock().unwrap_or_else(|p| p.into_inner());
+                for (h, &(t, id)) in chunk.iter_mut().zip(results.iter()) {
+                    *h = Hit::from_best(t, id);
+                }
+            });
+        }
         if let Some(f) = failed.into_inner().unwrap_or_else(|p| p.into_inner()) {
             return Err(f);
-        }
-        let mut hits = vec![Hit::MISS; rays.len()];
-        for (begin, results) in done.into_inner().unwrap_or_else(|p| p.into_inner()) {
-            for (k, (t, id)) in results.into_iter().enumerate() {
-                hits[begin + k] = Hit::from_best(t, id);
-            }
         }
         Ok(hits)
     }

@@ -32,7 +32,7 @@ use scion_ir::Module;
 use scion_runtime::bvh::schema::Schema;
 use scion_runtime::geom::Ray;
 use std::collections::HashMap;
-use std::sync::Mutex;
+use std::sync::RwLock;
 use std::time::{Duration, Instant};
 
 /// The least alignment of every buffer: a cache line, so that timings do not depend on where
@@ -139,12 +139,12 @@ pub struct JitClosestHit {
     /// Time of the whole compilation (front end to machine code).
     pub compile_time: Duration,
     /// Root of each packed buffer set, keyed by the buffers' addresses.
-    roots: Mutex<HashMap<Vec<usize>, Root>>,
+    roots: RwLock<HashMap<Vec<usize>, Root>>,
 }
 
 // SAFETY: the function pointers are addresses of finalized machine code owned by `_code`.
 unsafe impl Send for JitClosestHit {}
-// SAFETY: as above; the only mutable state (`roots`) is behind a mutex.
+// SAFETY: as above; the only mutable state (`roots`) is behind a lock.
 unsafe impl Sync for JitClosestHit {}
 
 /// The `-O` level [`JitClosestHit::compile`] uses: 3, the full DSL pipeline (`mem-inline`,
@@ -327,7 +327,7 @@ impl JitClosestHit {
             stack_size: stack_size.unwrap_or(64),
             deferred,
             compile_time: start.elapsed(),
-            roots: Mutex::new(HashMap::new()),
+            roots: RwLock::new(HashMap::new()),
         })
     }
 }
@@ -461,18 +461,42 @@ impl LayoutCode for JitClosestHit {
         };
         let key = buffers.iter().map(|b| b.as_ptr() as usize).collect();
         self.roots
-            .lock()
+            .write()
             .unwrap_or_else(|p| p.into_inner())
             .insert(key, root);
         status
     }
     fn batch(&self, buffers: &[&[u8]], queries: &[Ray], results: &mut [(f32, u32)]) -> i32 {
-        let key: Vec<usize> = buffers.iter().map(|b| b.as_ptr() as usize).collect();
+        // Called once per block of 64 queries on every thread: the root is looked up under a
+        // shared read lock, and the key, the buffer table and the result records of a block
+        // live on the stack (a layout has a handful of buffers), so that threads neither
+        // allocate nor wait for each other here.
+        const MAX_BUFFERS: usize = 16;
+        let mut addresses = [0usize; MAX_BUFFERS];
+        let mut table_space = [std::ptr::null::<u8>(); MAX_BUFFERS];
+        let mut heap_table: Vec<*const u8> = Vec::new();
+        let key: Vec<usize>;
+        let key: &[usize] = if buffers.len() <= MAX_BUFFERS {
+            for (k, b) in buffers.iter().enumerate() {
+                addresses[k] = b.as_ptr() as usize;
+                table_space[k] = b.as_ptr();
+            }
+            &addresses[..buffers.len()]
+        } else {
+            key = buffers.iter().map(|b| b.as_ptr() as usize).collect();
+            heap_table = buffers.iter().map(|b| b.as_ptr()).collect();
+            &key
+        };
+        let table: &[*const u8] = if heap_table.is_empty() {
+            &table_space[..buffers.len()]
+        } else {
+            &heap_table
+        };
         let root = self
             .roots
-            .lock()
+            .read()
             .unwrap_or_else(|p| p.into_inner())
-            .get(&key)
+            .get(key)
             .copied();
         let Some(root) = root else {
             return -1;
@@ -480,8 +504,17 @@ impl LayoutCode for JitClosestHit {
         if queries.len() != results.len() {
             return -1;
         }
-        let table: Vec<*const u8> = buffers.iter().map(|b| b.as_ptr()).collect();
-        let mut records: Vec<[u32; 2]> = results.iter().map(|r| [r.0.to_bits(), r.1]).collect();
+        let mut record_space = [[0u32; 2]; scion_runtime::batch::BLOCK];
+        let mut heap_records: Vec<[u32; 2]>;
+        let records: &mut [[u32; 2]] = if results.len() <= record_space.len() {
+            &mut record_space[..results.len()]
+        } else {
+            heap_records = vec![[0u32; 2]; results.len()];
+            &mut heap_records
+        };
+        for (rec, r) in records.iter_mut().zip(results.iter()) {
+            *rec = [r.0.to_bits(), r.1];
+        }
         let (q, r, end) = (queries.as_ptr(), records.as_mut_ptr(), queries.len() as u64);
         // SAFETY: the batch entry has the checked type for the layout's reference kind;
         // `table` holds the addresses of the buffers `build` packed (alive for the call; the
@@ -502,7 +535,7 @@ impl LayoutCode for JitClosestHit {
                 _ => return -1,
             }
         };
-        for (res, rec) in results.iter_mut().zip(records) {
+        for (res, rec) in results.iter_mut().zip(records.iter()) {
             *res = (f32::from_bits(rec[0]), rec[1]);
         }
         status

@@ -3,11 +3,13 @@
 //! 64)`, architecture §5): the generated batch entry `scion_A_L(buffers, queries, results,
 //! begin, end)` holds the per-query loop, the runtime only hands out blocks.
 //!
-//! Threads take the next block from a shared atomic counter, so a slow block never holds up
-//! the others. One thread means the calling thread runs every block in order; `0` means one
-//! thread per core (rayon's default, which honors `RAYON_NUM_THREADS`).
-
-use std::sync::atomic::{AtomicUsize, Ordering};
+//! The blocks are rayon's items, one per task (`with_max_len(1)`), so an idle thread steals
+//! the next ones and a slow block never holds up the others. (A shared atomic counter read by
+//! every thread of `ThreadPool::broadcast` did the same in principle, but two threads ran only
+//! 1.64-1.71 times as fast as one on teapot's primary rays, against 1.89 now: docs/
+//! performance.md, "Thirteenth session".) One thread means the calling thread runs every
+//! block in order; `0` means one thread per core (rayon's default, which honors
+//! `RAYON_NUM_THREADS`).
 
 use rayon::prelude::*;
 
@@ -67,14 +69,7 @@ impl BatchDriver {
         match &self.pool {
             None => (0..blocks).for_each(block),
             Some(pool) => {
-                let next = AtomicUsize::new(0);
-                pool.broadcast(|_| loop {
-                    let b = next.fetch_add(1, Ordering::Relaxed);
-                    if b >= blocks {
-                        break;
-                    }
-                    block(b);
-                });
+                pool.install(|| (0..blocks).into_par_iter().with_max_len(1).for_each(block))
             }
         }
     }
