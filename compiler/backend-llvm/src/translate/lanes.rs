@@ -21,12 +21,16 @@ use super::*;
 /// The shortest chain worth a vector: four positions (three selects).
 const MIN_POSITIONS: usize = 4;
 
-impl<'c> Fn<'_, 'c> {
+impl<'a, 'c> Fn<'a, 'c> {
+    /// The op that defines `v`, when an op does (not a block argument).
+    fn defining(&self, v: ValueId) -> Option<(scion_ir::OpId, &'a scion_ir::Operation)> {
+        let d = self.m.def_op(v)?;
+        Some((d, &self.m.ops[d]))
+    }
+
     /// The position `k` that select condition `c` tests (`x == k`, `x` returned too).
     fn position_test(&self, c: ValueId) -> Option<(ValueId, i128)> {
-        let m = self.m;
-        let d = m.def_op(c)?;
-        let o = &m.ops[d];
+        let (_, o) = self.defining(c)?;
         if o.kind != OpKind::Lo(L::Cmp) || o.pred() != Some(CmpPred::Eq) {
             return None;
         }
@@ -35,12 +39,11 @@ impl<'c> Fn<'_, 'c> {
 
     /// The value of `v` when a `lo.const` integer defines it.
     fn int_constant(&self, v: ValueId) -> Option<i128> {
-        let m = self.m;
-        let d = m.def_op(v)?;
-        if m.ops[d].kind != OpKind::Lo(L::Const) {
+        let (_, o) = self.defining(v)?;
+        if o.kind != OpKind::Lo(L::Const) {
             return None;
         }
-        match m.ops[d].attr("value") {
+        match o.attr("value") {
             Some(scion_ir::attr::Attr::Int(k)) => Some(*k),
             _ => None,
         }
@@ -153,8 +156,7 @@ impl<'c> Fn<'_, 'c> {
     /// 0) or `(c as T) << k` for an `i1` value `c` and a constant `k`.
     fn lane_bit(&self, v: ValueId) -> Option<(ValueId, usize)> {
         let m = self.m;
-        let d = m.def_op(v)?;
-        let o = &m.ops[d];
+        let (d, o) = self.defining(v)?;
         let (cast, k) = match o.kind {
             OpKind::Lo(L::Shl) => {
                 let k = self.int_constant(o.operands[1])?;
