@@ -1,4 +1,4 @@
-//! Differential tests of the DSL optimizations (paper §7.3; `mem-inline`, `const-fold`,
+//! Differential tests of the DSL optimizations (paper §7.3; `mem-inline`, `const-fold`, `flatten-bool`,
 //! `mem-cse`, `dce`, the `-O3` tree/mem pipeline): the `tree` interpreter gives bit-identical
 //! results (NaN payloads and signed zeros included) and leaves `mut` arguments bit-identical
 //! before and after the pipeline, on the prelude's geometric functions and on functions built
@@ -69,10 +69,16 @@ func t_tri(ray: Ray, tri: Triangle) -> f32 = {
 func t_cpt(p: f32x3, tri: Triangle) -> f32x3 = closest_point(p, tri)
 func t_sat(a: Triangle, b: Triangle) -> bool = intersects(a, b)
 func t_d2(p: f32x3, box: AABB) -> f32 = distance_squared(p, box)
+func t_logic(a: f32, b: f32, acc: mut f32) -> f32 = {
+  if a < 0.0 || b > acc || (a == b && acc < 1.0) || !(a <= b) { return 1.0; }
+  if a > 0.0 && a / b > 2.0 && b - a < acc { return 2.0; }
+  return 3.0;
+}
 "#;
 
 const FUNCS: &[&str] = &[
     "t_pick", "t_area", "t_bump", "t_hit", "t_slab", "t_box", "t_tri", "t_cpt", "t_sat", "t_d2",
+    "t_logic",
 ];
 
 /// The `tree` module of the functions above, unoptimized.
@@ -89,6 +95,7 @@ fn optimized(m: &Module, max_ops: usize) -> Module {
         [
             "mem-inline",
             "const-fold",
+            "flatten-bool",
             "mem-cse",
             "dce",
             "mem-split-loads",
