@@ -375,7 +375,7 @@ pub struct TraceArgs {
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(0..=3))]
     pub opt_level: u8,
     /// `--backend jit|llvm`: leave out the tree/mem (DSL) optimizations of the -O level
-    /// (scionc --no-dsl-opt: mem-inline, const-fold, flatten-bool, mem-cse, dce, mem-split-loads, mem-sink), to measure what they gain.
+    /// (scionc --no-dsl-opt: mem-inline, const-fold, mem-cse, dce, mem-split-loads, mem-sink), to measure what they gain.
     #[arg(long)]
     pub no_dsl_opt: bool,
     /// Also report the traversal's work per ray: box tests, nodes visited, nodes skipped

@@ -1,4 +1,4 @@
-//! Differential tests of the DSL optimizations (paper §7.3; `mem-inline`, `const-fold`, `flatten-bool`,
+//! Differential tests of the DSL optimizations (paper §7.3; `mem-inline`, `const-fold`,
 //! `mem-cse`, `dce`, the `-O3` tree/mem pipeline): the `tree` interpreter gives bit-identical
 //! results (NaN payloads and signed zeros included) and leaves `mut` arguments bit-identical
 //! before and after the pipeline, on the prelude's geometric functions and on functions built
@@ -95,7 +95,6 @@ fn optimized(m: &Module, max_ops: usize) -> Module {
         [
             "mem-inline",
             "const-fold",
-            "flatten-bool",
             "mem-cse",
             "dce",
             "mem-split-loads",

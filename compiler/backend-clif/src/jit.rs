@@ -56,9 +56,10 @@ impl JitModule {
     /// Compiles `m`, binding each called declaration to a host function: `(name, address)`,
     /// the address of an `extern "C"` function whose signature matches the declaration.
     pub fn compile_with(m: &Module, symbols: &[(&str, *const u8)]) -> Result<JitModule, ClifError> {
-        // No per-instruction rounding modes: directed rounding becomes round-to-nearest ops.
-        let expanded = scion_ir::lo::directed::expanded(m);
-        let m = &*expanded;
+        // No per-instruction rounding modes (directed rounding becomes round-to-nearest ops), and
+        // no if-conversion in Cranelift (short-circuit conditions become `and`/`or`).
+        let prepared = crate::prepared(m);
+        let m = &prepared;
         for &f in &m.func_order {
             let name = &m.funcs[f].name;
             if m.is_declaration(f) && is_called(m, name) && !symbols.iter().any(|(s, _)| s == name)

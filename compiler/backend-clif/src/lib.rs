@@ -22,6 +22,7 @@
 //! assert!(scion_clif::print_clif(&m).unwrap().contains("fadd"));
 //! ```
 
+pub mod flatten;
 pub mod jit;
 pub mod translate;
 
@@ -51,11 +52,19 @@ pub fn host_isa() -> Result<std::sync::Arc<dyn cranelift_codegen::isa::TargetIsa
     Ok(isa)
 }
 
+/// `m` as the translation takes it: directed rounding expanded into round-to-nearest ops
+/// ([`scion_ir::lo::directed`]) and short-circuit conditions flattened ([`flatten`]).
+pub fn prepared(m: &scion_ir::Module) -> scion_ir::Module {
+    let mut owned = scion_ir::lo::directed::expanded(m).into_owned();
+    flatten::flatten(&mut owned);
+    owned
+}
+
 /// The Cranelift IR of every function of the `lo` module `m`, as text (one `function` each, in
 /// module order; declarations are left out).
 pub fn print_clif(m: &scion_ir::Module) -> Result<String, ClifError> {
-    let expanded = scion_ir::lo::directed::expanded(m);
-    let m = &*expanded;
+    let prepared = prepared(m);
+    let m = &prepared;
     let builder =
         cranelift_jit::JITBuilder::with_isa(host_isa()?, cranelift_module::default_libcall_names());
     let mut cl = cranelift_jit::JITModule::new(builder);

@@ -105,7 +105,7 @@ Examples:
   are passes too, so --print-after-all, --stop-after and --time-passes see them):
     scionc -O2 --print-pipeline library/algorithms/closest_hit.scion
     scionc -O3 --emit=asm --layout LinearBVH --entry closest_hit --print-pipeline
-  Compare -O3 with and without the DSL optimizations (mem-inline, const-fold, flatten-bool, mem-cse, dce, ...):
+  Compare -O3 with and without the DSL optimizations (mem-inline, const-fold, mem-cse, dce, ...):
     scionc -O3 --emit=mem --layout LinearBVH closest_hit.scion pbrt.scion
     scionc -O3 --no-dsl-opt --emit=mem --layout LinearBVH closest_hit.scion pbrt.scion
   Run one pass by name on tree IR and print every step:

@@ -2,9 +2,7 @@
 //!
 //! * `-O0`: nothing (the IR exactly as generated, for reading and for pass tests).
 //! * `-O1` and up: `const-fold` first, so that `dce` sees the operands it made dead.
-//! * `-O2` and up: `flatten-bool` after `const-fold` (a short-circuit condition whose right side
-//!   is a few ops that cannot trap becomes `and`/`or`: one branch where a backend without
-//!   if-conversion emitted one per condition), and `mem-cse` between them (after the specializations, which `select` puts
+//! * `-O2` and up: `mem-cse` between them (after the specializations, which `select` puts
 //!   first), so that `dce` drops the copies it made dead.
 //! * `-O3`: the full DSL pipeline of paper §7.3: `mem-inline` first, so that `mem-cse` sees the
 //!   inlined bodies side by side (the slab tests of `intersects` and `distmin` on one box).
@@ -31,7 +29,6 @@ use scion_ir::diag::Diagnostic;
 pub const DSL_PASSES: &[&str] = &[
     "mem-inline",
     "const-fold",
-    "flatten-bool",
     "mem-cse",
     "dce",
     "mem-split-loads",
@@ -45,7 +42,6 @@ pub fn for_level(level: u8) -> Vec<String> {
         1 => &["const-fold", "dce"],
         2 => &[
             "const-fold",
-            "flatten-bool",
             "mem-cse",
             "dce",
             "mem-split-loads",
@@ -54,7 +50,6 @@ pub fn for_level(level: u8) -> Vec<String> {
         _ => &[
             "mem-inline",
             "const-fold",
-            "flatten-bool",
             "mem-cse",
             "dce",
             "mem-split-loads",

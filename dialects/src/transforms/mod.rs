@@ -4,7 +4,6 @@
 
 pub mod const_fold;
 pub mod dce;
-pub mod flatten_bool;
 
 use crate::pass::{Level, PassInfo};
 
@@ -24,13 +23,6 @@ pub fn builtin_passes() -> Vec<PassInfo> {
             input: Level::Any,
             output: Level::Any,
             create: || Box::new(dce::Dce),
-        },
-        PassInfo {
-            name: "flatten-bool",
-            summary: "Turn `&&`/`||` whose right side is a few ops that cannot trap into `and`/`or` (one branch)",
-            input: Level::Any,
-            output: Level::Any,
-            create: || Box::new(flatten_bool::FlattenBool),
         },
     ]
 }
