@@ -25,6 +25,7 @@ pub mod reference;
 pub mod rng;
 pub mod scene;
 pub mod timing;
+pub mod triangle4;
 
 pub use geom::{Aabb, Hit, Ray, Triangle, Vec3};
-pub use primitive::{Primitive, Segment};
+pub use primitive::{Primitive, Segment, Triangle4};

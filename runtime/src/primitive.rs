@@ -1,6 +1,7 @@
-//! Primitives: what a BVH's leaves hold. Triangles ([`Triangle`], the prelude's `Triangle`) and
-//! strand segments ([`Segment`], the prelude's `Segment`: a piece of a hair or fur curve with a
-//! radius at each end, paper §8.2).
+//! Primitives: what a BVH's leaves hold. Triangles ([`Triangle`], the prelude's `Triangle`),
+//! blocks of four triangles stored lane by lane ([`Triangle4`], the prelude's `Triangle4`:
+//! Embree's `Triangle4`, tested four at a time) and strand segments ([`Segment`], the prelude's
+//! `Segment`: a piece of a hair or fur curve with a radius at each end, paper §8.2).
 //!
 //! The builders, the logical tree and the references are generic over [`Primitive`]: a
 //! primitive says its box, its id, the points and padding it lies within (for DOP-14 and
@@ -12,11 +13,12 @@ use crate::geom::{Aabb, Ray, Triangle, Vec3};
 use crate::reference::prelude;
 
 /// The geometry a primitive lies within: the convex hull of `points[..n]` grown by a ball of
-/// radius `pad` (`pad == 0` for a triangle: its corners; a segment's two ends and radius).
+/// radius `pad` (`pad == 0` for a triangle: its corners; a segment's two ends and radius; a
+/// block of four triangles: their twelve corners).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hull {
     /// The points (the first `n` are used).
-    pub points: [Vec3; 3],
+    pub points: [Vec3; Hull::MAX_POINTS],
     /// How many of `points` there are.
     pub n: usize,
     /// The radius the hull is grown by (`>= 0`).
@@ -24,6 +26,25 @@ pub struct Hull {
 }
 
 impl Hull {
+    /// The most points a hull has (a block of four triangles' corners).
+    pub const MAX_POINTS: usize = 12;
+
+    /// The hull of `points` (1 to [`Hull::MAX_POINTS`]) grown by `pad`.
+    pub fn new(points: &[Vec3], pad: f32) -> Hull {
+        assert!(
+            (1..=Hull::MAX_POINTS).contains(&points.len()),
+            "a hull of {} points",
+            points.len()
+        );
+        let mut all = [points[0]; Hull::MAX_POINTS];
+        all[..points.len()].copy_from_slice(points);
+        Hull {
+            points: all,
+            n: points.len(),
+            pad,
+        }
+    }
+
     /// The points in use.
     pub fn points(&self) -> &[Vec3] {
         &self.points[..self.n]
@@ -52,6 +73,13 @@ pub trait Primitive: Copy + Send + Sync + std::fmt::Debug + PartialEq + 'static 
     /// The prelude's `hit_distance(ray, primitive)`: the hit distance in `(tmin, tmax)`, or
     /// `+inf`, bit for bit as generated code computes it.
     fn hit_distance(&self, ray: &Ray) -> f32;
+
+    /// The hit distance and the id of what was hit: `(hit_distance, id)` for a primitive of
+    /// one id; a block of several ([`Triangle4`]) answers for the nearest of them by the tie
+    /// rule. The references compare hits with this.
+    fn hit(&self, ray: &Ray) -> (f32, u32) {
+        (self.hit_distance(ray), self.id())
+    }
 }
 
 impl Primitive for Triangle {
@@ -70,11 +98,7 @@ impl Primitive for Triangle {
     }
 
     fn hull(&self) -> Hull {
-        Hull {
-            points: [self.p0, self.p1, self.p2],
-            n: 3,
-            pad: 0.0,
-        }
+        Hull::new(&[self.p0, self.p1, self.p2], 0.0)
     }
 
     fn hit_distance(&self, ray: &Ray) -> f32 {
@@ -134,11 +158,7 @@ impl Primitive for Segment {
     }
 
     fn hull(&self) -> Hull {
-        Hull {
-            points: [self.p0, self.p1, self.p1],
-            n: 2,
-            pad: self.r0.max(self.r1),
-        }
+        Hull::new(&[self.p0, self.p1], self.r0.max(self.r1))
     }
 
     fn hit_distance(&self, ray: &Ray) -> f32 {
@@ -146,12 +166,18 @@ impl Primitive for Segment {
     }
 }
 
+pub use crate::triangle4::Triangle4;
+
 /// The primitive types the runtime builds trees over: each one's prelude type name and the
 /// byte size of its record (`#[repr(C)]`, 4-aligned). A layout's primitive array holds one
 /// of them.
-pub const PRIMITIVE_TYPES: [(&str, u64); 2] = [
+pub const PRIMITIVE_TYPES: [(&str, u64); 3] = [
     (Triangle::TYPE_NAME, std::mem::size_of::<Triangle>() as u64),
     (Segment::TYPE_NAME, std::mem::size_of::<Segment>() as u64),
+    (
+        Triangle4::TYPE_NAME,
+        std::mem::size_of::<Triangle4>() as u64,
+    ),
 ];
 
 /// The relative margin of a segment's box (2^-20).

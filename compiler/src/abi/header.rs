@@ -31,14 +31,23 @@ typedef struct ScionSegment {
     float r1;
     uint32_t id;
 } ScionSegment;
+/* Four triangles stored lane by lane (160 bytes): each coordinate of each corner an array over
+ * the lanes; a block of fewer than four repeats its last triangle. */
+typedef struct ScionTriangle4 {
+    float x0[4], y0[4], z0[4];
+    float x1[4], y1[4], z1[4];
+    float x2[4], y2[4], z2[4];
+    uint32_t id[4];
+} ScionTriangle4;
 /* The logical tree as generated code reads it (32 bytes): node_count nodes of the layout's
  * tree type (its ScionLogical_<Type> struct in the layout's header), 8-byte aligned. */
 typedef struct ScionTreeView {
     const void *nodes;
     uint32_t node_count;
     uint32_t root; /* UINT32_MAX for the empty tree */
-    const void *prims; /* prim_count records of the layout's primitive: ScionTriangle, or
-                          ScionSegment for a layout over strands (its schema's primitive) */
+    const void *prims; /* prim_count records of the layout's primitive: ScionTriangle,
+                          ScionSegment for a layout over strands, or ScionTriangle4 for one
+                          over blocks of four triangles (its schema's primitive) */
     uint32_t prim_count;
 } ScionTreeView;
 /* What the runtime writes into a field of a logical node (docs/c-abi.md). */
@@ -60,6 +69,7 @@ typedef struct ScionLogicalSchema {
 } ScionLogicalSchema;
 SCION_STATIC_ASSERT(sizeof(ScionTriangle) == 40, \"ScionTriangle is 40 bytes\");
 SCION_STATIC_ASSERT(sizeof(ScionSegment) == 36, \"ScionSegment is 36 bytes\");
+SCION_STATIC_ASSERT(sizeof(ScionTriangle4) == 160, \"ScionTriangle4 is 160 bytes\");
 SCION_STATIC_ASSERT(sizeof(ScionTreeView) == 32, \"ScionTreeView is 32 bytes\");
 SCION_STATIC_ASSERT(offsetof(ScionTreeView, root) == 12, \"ScionTreeView.root at 12\");
 SCION_STATIC_ASSERT(offsetof(ScionTreeView, prims) == 16, \"ScionTreeView.prims at 16\");

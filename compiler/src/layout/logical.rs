@@ -315,12 +315,13 @@ impl LogicalAbi {
                                     .iter()
                                     .map(|(n, _)| format!("`{n}`"))
                                     .collect();
+                                let (last, rest) = known.split_last().expect("primitives");
                                 return bad(
                                     &f.name,
                                     format!(
-                                        "an array of {} (the runtime's primitives are {})",
+                                        "an array of {} (the runtime's primitives are {} or {last})",
                                         source_type(m, *elem),
-                                        known.join(" or ")
+                                        rest.join(", ")
                                     ),
                                 );
                             };

@@ -102,12 +102,12 @@ impl NodeStack {
     }
 }
 
-/// The algorithm's update of `best` by one triangle.
+/// The algorithm's update of `best` by one primitive (a block of triangles by its nearest).
 #[inline]
 pub(crate) fn consider<P: Primitive>(ray: &Ray, prim: &P, best: &mut (f32, u32)) {
-    let d = prim.hit_distance(ray);
-    if d < f32::INFINITY && (d < best.0 || (d == best.0 && prim.id() < best.1)) {
-        *best = (d, prim.id());
+    let (d, id) = prim.hit(ray);
+    if d < f32::INFINITY && (d < best.0 || (d == best.0 && id < best.1)) {
+        *best = (d, id);
     }
 }
 

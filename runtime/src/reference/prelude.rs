@@ -18,7 +18,7 @@
 //! - The widening factor is the literal `1.0000004` rounded to `f32` (`1 + 3 * 2^-23`).
 
 use crate::geom::{Aabb, Ray, Triangle, Vec3};
-use crate::primitive::Segment;
+use crate::primitive::{Segment, Triangle4};
 use std::cmp::Ordering;
 
 /// `1.0000004` as the prelude writes it, rounded to `f32`.
@@ -177,6 +177,41 @@ pub fn hit_distance(ray: &Ray, tri: &Triangle) -> f32 {
         return t;
     }
     f32::INFINITY
+}
+
+/// The prelude's `hit_key(t, id)`: `(t, id)` as one integer ordered as the pair by the tie rule
+/// (`t`'s bits mapped to unsigned order after `-0 -> +0`; `t` is never NaN).
+#[inline]
+pub fn hit_key(t: f32, id: u32) -> u64 {
+    let b = (t + 0.0).to_bits();
+    let o = if b >= 0x8000_0000 {
+        !b
+    } else {
+        b | 0x8000_0000
+    };
+    (u64::from(o) << 32) | u64::from(id)
+}
+
+/// The prelude's `hit_of_key(k)`: the `(t, id)` of a [`hit_key`].
+#[inline]
+pub fn hit_of_key(k: u64) -> (f32, u32) {
+    let o = (k >> 32) as u32;
+    let b = if o >= 0x8000_0000 {
+        o & 0x7FFF_FFFF
+    } else {
+        !o
+    };
+    (f32::from_bits(b), k as u32)
+}
+
+/// The prelude's `hit_block(ray, block)`: the nearest of a [`Triangle4`]'s four triangles by the
+/// tie rule, `(t, id)`: the smallest [`hit_key`] of the lanes' `hit_distance`s (the prelude
+/// computes every lane without early exits: the same values). All four missing gives
+/// `(inf, smallest id)`.
+#[inline]
+pub fn hit_block(ray: &Ray, b: &Triangle4) -> (f32, u32) {
+    let key = |k: usize| hit_key(hit_distance(ray, &b.lane(k)), b.id[k]);
+    hit_of_key(key(0).min(key(1)).min(key(2).min(key(3))))
 }
 
 /// The prelude's `hit_distance(ray, segment)`: the ray against a strand segment as a flat
