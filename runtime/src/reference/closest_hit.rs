@@ -24,7 +24,7 @@
 use super::prelude::{distmin_of, slab_interval, slab_ray};
 use crate::batch::BatchDriver;
 use crate::bvh::LogicalTree;
-use crate::geom::{Hit, Ray};
+use crate::geom::{Hit, Ray, Triangle};
 use crate::primitive::Primitive;
 
 /// Counters of one traversal, for comparing layouts' and traversals' work (e.g. extra visits of
@@ -242,15 +242,27 @@ pub fn why_pruned_with(
     t: f32,
     bounds: impl Fn(u32) -> crate::geom::Aabb,
 ) -> Option<(u32, f32, f32)> {
+    why_pruned_in(tree, ray, |p: &Triangle| p.id == prim, t, bounds)
+}
+
+/// [`why_pruned_with`] over a tree of any primitive: `holds(p)` says which primitive holds the
+/// hit (a [`crate::primitive::Triangle4`] holds the triangles of its lanes).
+pub fn why_pruned_in<P: Primitive>(
+    tree: &LogicalTree<P>,
+    ray: &Ray,
+    holds: impl Fn(&P) -> bool,
+    t: f32,
+    bounds: impl Fn(u32) -> crate::geom::Aabb,
+) -> Option<(u32, f32, f32)> {
     if tree.is_empty() {
         return None;
     }
-    // Depth-first search for the path to the leaf holding `prim`.
+    // Depth-first search for the path to the leaf holding the hit.
     let mut path: Vec<(u32, usize)> = vec![(tree.root, 0)];
     while let Some(&(i, next)) = path.last() {
         let node = &tree.nodes[i as usize];
         if node.is_leaf() {
-            if tree.leaf_primitives(node).iter().any(|p| p.id == prim) {
+            if tree.leaf_primitives(node).iter().any(&holds) {
                 break;
             }
             path.pop();

@@ -17,6 +17,6 @@ pub mod v64;
 pub use closest_hit::{
     closest_hit_brute, closest_hit_dop14_stats, closest_hit_tree, closest_hit_tree_stats,
     closest_hit_with, closest_hits_brute, closest_hits_tree, closest_hits_tree_stats, why_pruned,
-    why_pruned_with, TraversalStats,
+    why_pruned_in, why_pruned_with, TraversalStats,
 };
 pub use closest_hit_wide::{closest_hit_wide, closest_hit_wide_stats, closest_hits_wide_stats};
