@@ -88,6 +88,13 @@ const CATALOG: &[Expect] = &[
         &[256],
         &[("child", 0, 0), ("lower_x", 0, 64), ("upper_z", 0, 224)],
     ),
+    // `bvh8` with Embree's Triangle4 leaves (not a Table 1 row): the same interior records.
+    (
+        "bvh8_tri4",
+        "Bvh8Tri4",
+        &[256],
+        &[("child", 0, 0), ("lower_x", 0, 64), ("upper_z", 0, 224)],
+    ),
     (
         "bvh8_align16",
         "Bvh8Align16",

@@ -22,7 +22,8 @@
 
 use crate::contract::{BufferSpec, LayoutCode, LogicalInput, LogicalTreeView, STATUS_OK};
 use crate::mem_interp::{compile_program, Program};
-use scion_compiler::abi::{EntrySig, EntryTarget};
+use scion_compiler::abi::EntrySig;
+pub use scion_compiler::abi::EntryTarget;
 use scion_compiler::driver::cli::Emit;
 use scion_compiler::driver::pipelines::for_level_with;
 use scion_compiler::frontend::PassOptions;

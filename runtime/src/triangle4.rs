@@ -9,7 +9,7 @@
 //! makes the copy harmless). [`blocks_of`] groups a mesh's triangles into blocks of nearby
 //! triangles: the leaves of a binned SAH tree of at most four triangles per leaf.
 
-use crate::bvh::{build_sah_binned, SahOptions};
+use crate::bvh::{build_sah_binned, LogicalTree, SahOptions};
 use crate::geom::{Aabb, Ray, Triangle, Vec3};
 use crate::primitive::{Hull, Primitive};
 use crate::reference::prelude;
@@ -127,33 +127,51 @@ impl Primitive for Triangle4 {
     }
 }
 
-/// `tris` grouped into blocks of up to four nearby triangles: one block per leaf of the binned
-/// SAH tree with leaves of at most four (the runtime's default builder otherwise), in the
-/// tree's leaf order. Every triangle is in exactly one block.
-pub fn blocks_of(tris: &[Triangle]) -> Vec<Triangle4> {
-    if tris.is_empty() {
-        return Vec::new();
+/// The tree over blocks that is `tree` (a tree over triangles whose leaves hold at most four)
+/// with each leaf's triangles one block: the same nodes and boxes (a block's box is the union
+/// of its triangles'), each leaf one primitive. So a traversal over blocks visits exactly the
+/// nodes a traversal of `tree` visits, and tests a leaf's triangles at once. An error names a
+/// leaf of more than four.
+pub fn block_tree(tree: &LogicalTree<Triangle>) -> Result<LogicalTree<Triangle4>, String> {
+    let mut nodes = tree.nodes.clone();
+    let mut primitives = Vec::new();
+    for (i, node) in nodes.iter_mut().enumerate() {
+        if !node.is_leaf() {
+            continue;
+        }
+        let tris = tree.leaf_primitives(node);
+        if !(1..=4).contains(&tris.len()) {
+            return Err(format!(
+                "leaf {i} holds {} triangles; a block holds one to four (build with leaves of \
+                 at most 4)",
+                tris.len()
+            ));
+        }
+        node.prim_offset = primitives.len() as u32;
+        node.prim_count = 1;
+        primitives.push(Triangle4::new(tris));
     }
+    Ok(LogicalTree {
+        nodes,
+        root: tree.root,
+        primitives,
+    })
+}
+
+/// The binned SAH tree over `tris` with leaves of at most four triangles (the runtime's default
+/// builder otherwise), as a tree over blocks: each leaf one block ([`block_tree`]).
+pub fn sah_block_tree(tris: &[Triangle]) -> LogicalTree<Triangle4> {
     let options = SahOptions {
         max_leaf: 4,
         ..SahOptions::default()
     };
-    let tree = build_sah_binned(tris, &options);
-    let mut blocks = Vec::with_capacity(tris.len().div_ceil(3));
-    let mut stack = vec![tree.root];
-    while let Some(i) = stack.pop() {
-        let node = &tree.nodes[i as usize];
-        if node.is_leaf() {
-            let prims = tree.leaf_primitives(node);
-            for chunk in prims.chunks(4) {
-                blocks.push(Triangle4::new(chunk));
-            }
-        } else {
-            stack.push(node.child[1]);
-            stack.push(node.child[0]);
-        }
-    }
-    blocks
+    block_tree(&build_sah_binned(tris, &options)).expect("leaves of at most four")
+}
+
+/// `tris` grouped into blocks of up to four nearby triangles: the leaves of
+/// [`sah_block_tree`], in the tree's order. Every triangle is in exactly one block.
+pub fn blocks_of(tris: &[Triangle]) -> Vec<Triangle4> {
+    sah_block_tree(tris).primitives
 }
 
 #[cfg(test)]
@@ -237,5 +255,42 @@ mod tests {
         // Mostly full blocks: a leaf of at most four triangles each.
         assert!(blocks.len() * 4 < 1001 * 2, "{} blocks", blocks.len());
         assert!(blocks_of(&[]).is_empty());
+    }
+
+    #[test]
+    fn a_block_tree_keeps_the_nodes_and_boxes_and_refuses_big_leaves() {
+        let mut rng = Rng::new(8);
+        let tris: Vec<Triangle> = (0..500).map(|i| tri(&mut rng, i)).collect();
+        let tree = build_sah_binned(
+            &tris,
+            &SahOptions {
+                max_leaf: 4,
+                ..SahOptions::default()
+            },
+        );
+        let blocks = block_tree(&tree).unwrap();
+        assert_eq!(blocks.nodes.len(), tree.nodes.len());
+        blocks.validate().unwrap();
+        for (a, b) in tree.nodes.iter().zip(&blocks.nodes) {
+            assert_eq!((a.kind, a.bounds, a.child), (b.kind, b.bounds, b.child));
+            if a.is_leaf() {
+                assert_eq!(
+                    blocks.leaf_primitives(b)[0].triangles(),
+                    tree.leaf_primitives(a)
+                );
+                assert_eq!(blocks.leaf_primitives(b)[0].bounds().to_array(), a.bounds);
+            }
+        }
+        let big = build_sah_binned(
+            &tris,
+            &SahOptions {
+                max_leaf: 15,
+                min_leaf: 8,
+                ..SahOptions::default()
+            },
+        );
+        assert!(block_tree(&big)
+            .unwrap_err()
+            .contains("a block holds one to four"));
     }
 }

@@ -1,6 +1,6 @@
 //! Leaves of blocks of four triangles stored lane by lane (the prelude's `Triangle4`, Embree's
-//! `Triangle4`) end to end: a mesh grouped into blocks (`scion_runtime::triangle4::blocks_of`),
-//! a binned SAH tree over the blocks collapsed to eight children, packed by the generated
+//! `Triangle4`) end to end: the binned SAH tree of a mesh with leaves of at most four, each leaf
+//! one block (`scion_runtime::triangle4::sah_block_tree`), collapsed to eight children, packed by the generated
 //! builder of `library/layouts/bvh8_tri4.scion` and traced by
 //! `library/algorithms/closest_hit8_tri4.scion` through the C entries, by Cranelift and LLVM
 //! -O3, on the hard cases, teapot and suzanne with every kind of ray: every hit equals the
@@ -14,10 +14,9 @@ mod c_entries;
 use scion_host::entries;
 use scion_host::jit::Codegen;
 use scion_runtime::bvh::wide::collapse;
-use scion_runtime::bvh::{build_sah_binned, SahOptions};
 use scion_runtime::geom::Hit;
 use scion_runtime::reference::{closest_hit_brute, closest_hit_wide, why_pruned_in};
-use scion_runtime::triangle4::blocks_of;
+use scion_runtime::triangle4::sah_block_tree;
 use scion_tests::cases::{hard_and_real, mixed_rays};
 
 #[test]
@@ -41,17 +40,10 @@ fn blocks_of_four_are_packed_and_traced_like_the_wide_reference_and_hit_the_tria
     for codegen in [Codegen::Cranelift, Codegen::Llvm(3)] {
         let code = codegen.backend().jit(&lo.module).unwrap();
         for (i, scene) in scenes.iter().enumerate() {
-            let blocks = blocks_of(&scene.triangles);
-            if blocks.is_empty() {
+            let tree = sah_block_tree(&scene.triangles);
+            if tree.is_empty() {
                 continue;
             }
-            let tree = build_sah_binned(
-                &blocks,
-                &SahOptions {
-                    max_leaf: 2,
-                    ..SahOptions::default()
-                },
-            );
             let wide = collapse::<8>(&tree);
             let rays = mixed_rays(scene, i as u64);
             let packed = entries::pack(&lo, code.as_ref(), &tree, &{
@@ -102,7 +94,7 @@ fn blocks_of_four_are_packed_and_traced_like_the_wide_reference_and_hit_the_tria
     assert!(compared > 10_000, "{compared} rays");
     assert!(hits * 5 > compared, "only {hits} of {compared} rays hit");
     // Both code generators count each difference (2026-12-04: 12 rays of the deep chain's huge
-    // coordinates, one of teapot's and one of suzanne's).
+    // coordinates, two of teapot's and one of suzanne's).
     assert!(
         differ * 500 <= compared,
         "{differ} of {compared} rays differ from brute force: {differ_in:?}"

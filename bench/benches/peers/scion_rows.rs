@@ -7,9 +7,12 @@
 use scion_bench::pbrt_kernel::PbrtKernel;
 use scion_bench::{Contender, Workload};
 use scion_host::contract::{LayoutCode, Packed};
-use scion_host::jit::{Codegen, JitClosestHit};
+use scion_host::entries::Entries;
+use scion_host::jit::{program_lo, Codegen, EntryTarget, JitClosestHit, LoOptions};
 use scion_host::mem_interp::{library_layouts, Program};
 use scion_runtime::batch::BatchDriver;
+use scion_runtime::primitive::Primitive;
+use scion_runtime::triangle4::{sah_block_tree, Triangle4};
 use std::time::Instant;
 
 fn progress(s: &str) {
@@ -70,6 +73,46 @@ fn layout_contender<'a>(
     })
 }
 
+/// The primitive the leaves of `program`'s layout hold (`Triangle`, `Triangle4`, ...).
+fn primitive_of(program: &Program) -> Result<String, String> {
+    let lo = program_lo(
+        program,
+        &LoOptions {
+            stack_size: None,
+            opt_level: 0,
+            dsl_opt: false,
+            target: EntryTarget::Host,
+        },
+    )?;
+    Ok(lo.entry.logical.primitive.clone())
+}
+
+/// A layout over blocks of four triangles (`Triangle4`, `bvh8-tri4`) as a contender: the
+/// binned SAH tree over the workload's triangles with leaves of at most four, each leaf one
+/// block (`sah_block_tree`), packed once by the generated builder (building and packing are
+/// its setup), traced through the batch entry.
+fn block_contender<'a>(
+    name: String,
+    entries: Entries,
+    w: &'a Workload,
+    driver: &'a BatchDriver,
+) -> Result<Contender<'a>, String> {
+    let start = Instant::now();
+    let tree = sah_block_tree(&w.triangles);
+    let packed = entries.pack(&tree)?;
+    Ok(Contender {
+        name,
+        bytes: Some(packed.bytes()),
+        setup: start.elapsed(),
+        subset: None,
+        trace: Box::new(move |rays| {
+            entries
+                .closest_hits(&packed, rays, driver)
+                .map_err(|f| f.to_string())
+        }),
+    })
+}
+
 /// `cranelift L` and `llvm-O3 L` for the library layout `layout`.
 pub fn generated<'a>(
     layout: &str,
@@ -77,6 +120,7 @@ pub fn generated<'a>(
     driver: &'a BatchDriver,
 ) -> Result<Vec<Contender<'a>>, String> {
     let program = program_of(layout)?;
+    let blocks = primitive_of(&program)? == Triangle4::TYPE_NAME;
     let mut out = Vec::new();
     for (codegen, label) in [
         (Codegen::Cranelift, "cranelift"),
@@ -84,14 +128,16 @@ pub fn generated<'a>(
     ] {
         progress(&format!("compiling and packing {layout} ({label})"));
         let t = Instant::now();
+        let name = format!("{label} {layout}");
+        if blocks {
+            let entries = Entries::compile(&program, codegen, None)?;
+            progress(&format!("  compiled in {:.3} s", t.elapsed().as_secs_f64()));
+            out.push(block_contender(name, entries, w, driver)?);
+            continue;
+        }
         let code = JitClosestHit::compile_program(&program, None, 3, true, codegen)?;
         progress(&format!("  compiled in {:.3} s", t.elapsed().as_secs_f64()));
-        out.push(layout_contender(
-            format!("{label} {layout}"),
-            Box::new(code),
-            w,
-            driver,
-        )?);
+        out.push(layout_contender(name, Box::new(code), w, driver)?);
     }
     Ok(out)
 }
