@@ -85,7 +85,7 @@ fn hit4_of_the_prelude_is_the_runtimes_bit_for_bit() {
     let m =
         common::tree_module_of(&[("probe.scion", PROBE)], true).unwrap_or_else(|e| panic!("{e}"));
     let mut rng = SplitMix64::new(2026);
-    let mut p = |rng: &mut SplitMix64| {
+    let p = |rng: &mut SplitMix64| {
         Vec3::new(
             rng.next_f32() * 2.0 - 1.0,
             rng.next_f32() * 2.0 - 1.0,

@@ -95,6 +95,8 @@ pub fn slab_interval_of(r: &SlabRay, b: &Aabb, tmax: f32) -> (f32, f32) {
 /// `tmax`, else `+inf` (`enter <= min(far, tmax)` as two compares; a NaN `tmax` is ignored, as
 /// `min` ignores it).
 #[inline]
+// `!(tmax < enter)` is not `tmax >= enter`: it is true for a NaN `tmax`, as the prelude's is.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub fn distmin_of(r: &SlabRay, b: &Aabb, tmax: f32) -> f32 {
     let (enter, far) = slab_span_of(r, b);
     if enter <= far && !(tmax < enter) {
