@@ -3,7 +3,7 @@
 //! one block (`scion_runtime::triangle4::sah_block_tree`), collapsed to eight children, packed by the generated
 //! builder of `library/layouts/bvh8_tri4.scion` and traced by
 //! `library/algorithms/closest_hit8_tri4.scion` through the C entries, by Cranelift and LLVM
-//! -O3, on the hard cases, teapot and suzanne with every kind of ray: every hit equals the
+//! -O3, on the hard cases, teapot, suzanne and fzk_haus with every kind of ray: every hit equals the
 //! runtime's wide reference over the same blocks bit for bit, and that reference's hits are the
 //! triangles' (brute force over the mesh) but where a box on the way to brute force's hit fails
 //! the slab test or is entered beyond it (the rounding exceptions of docs/runtime.md, proved
@@ -30,7 +30,7 @@ fn blocks_of_four_are_packed_and_traced_like_the_wide_reference_and_hit_the_tria
         "closest_hit8_tri4",
     ));
     assert_eq!(lo.entry.logical.primitive, "Triangle4");
-    let scenes = hard_and_real(&["teapot", "suzanne"]);
+    let scenes = hard_and_real(&["teapot", "suzanne", "fzk_haus"]);
     assert!(
         scenes.iter().any(|s| s.name == "teapot"),
         "scenes/teapot.obj.gz is missing"
@@ -94,7 +94,7 @@ fn blocks_of_four_are_packed_and_traced_like_the_wide_reference_and_hit_the_tria
     assert!(compared > 10_000, "{compared} rays");
     assert!(hits * 5 > compared, "only {hits} of {compared} rays hit");
     // Both code generators count each difference (2026-12-04: 12 rays of the deep chain's huge
-    // coordinates, two of teapot's and one of suzanne's).
+    // coordinates, two of teapot's and one of fzk_haus's).
     assert!(
         differ * 500 <= compared,
         "{differ} of {compared} rays differ from brute force: {differ_in:?}"
