@@ -19,17 +19,20 @@ from bench_peers_table import header, into, read_runs  # noqa: E402
 
 BEGIN = "<!-- bench-wide:begin -->"
 END = "<!-- bench-wide:end -->"
-WIDE = ["llvm-O3 bvh8", "llvm-O3 bvh8-q8-ci"]
+WIDE = ["llvm-O3 bvh8", "llvm-O3 bvh8-q8-ci",
+        "llvm-O3 library/algorithms/closest_hit8_tri4.scion+library/layouts/bvh8_tri4.scion"
+        ":Bvh8Tri4:closest_hit8_tri4"]
 
 
 def summary(rows_path, n):
     runs, order = read_runs(rows_path)
     out = [header(n).replace("`scripts/bench-peers.sh`", "`scripts/bench-wide.sh`"), ""]
     out.append(
-        "Throughput in Mrays/s of the eight-wide layouts (LLVM -O3, `closest_hit8`) and the "
-        "ratios measured in the same run (above 1: Scion is faster). Best = the faster of "
-        "`bvh8` and `bvh8-q8-ci`.\n")
-    cols = ["scene", "rays", "threads", "bvh8", "bvh8-q8-ci", "best / Embree",
+        "Throughput in Mrays/s of the eight-wide layouts (LLVM -O3, `closest_hit8`; "
+        "`bvh8-tri4`: `bvh8` over blocks of four triangles, `closest_hit8_tri4`) and the "
+        "ratios measured in the same run (above 1: Scion is faster). Best = the fastest of "
+        "`bvh8`, `bvh8-q8-ci` and `bvh8-tri4`.\n")
+    cols = ["scene", "rays", "threads", "bvh8", "bvh8-q8-ci", "bvh8-tri4", "best / Embree",
             "bvh8 / tinybvh bvh8_cpu", "pbrt / Embree"]
     out.append("| " + " | ".join(cols) + " |")
     out.append("|---|---|---:|" + "---:|" * (len(cols) - 3))
