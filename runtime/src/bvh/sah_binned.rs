@@ -210,6 +210,40 @@ mod tests {
     use crate::scene::gen;
 
     #[test]
+    fn blocks_of_four_make_fuller_leaves_and_block_one_changes_nothing() {
+        let scene = gen::random_soup(2000, 0.05, 7);
+        let tris = &scene.triangles;
+        let four = |block| SahOptions {
+            max_leaf: 4,
+            block,
+            ..SahOptions::default()
+        };
+        let (plain, blocks) = (
+            build_sah_binned(tris, &four(1)),
+            build_sah_binned(tris, &four(4)),
+        );
+        assert_eq!(
+            plain.nodes,
+            build_sah_binned(tris, &four(0)).nodes,
+            "block 0 counts as 1"
+        );
+        blocks.validate_with_cap(4).unwrap();
+        let (p, b) = (plain.stats(), blocks.stats());
+        // A leaf of four costs what a leaf of one does: fewer, fuller leaves.
+        assert!(
+            b.leaves * 10 < p.leaves * 8,
+            "{} leaves against {}",
+            b.leaves,
+            p.leaves
+        );
+        assert!(
+            tris.len() as f64 / b.leaves as f64 > 3.0,
+            "{} leaves",
+            b.leaves
+        );
+    }
+
+    #[test]
     fn hard_cases_validate_and_respect_the_cap() {
         for scene in gen::hard_cases() {
             for max_leaf in [1, 4, 15] {
