@@ -13,6 +13,7 @@ mod c_entries;
 
 use scion_host::entries;
 use scion_host::jit::Codegen;
+use scion_runtime::bvh::schema::LogicalBytes;
 use scion_runtime::bvh::wide::collapse;
 use scion_runtime::geom::Hit;
 use scion_runtime::reference::{closest_hit_brute, closest_hit_wide, why_pruned_in};
@@ -46,10 +47,8 @@ fn blocks_of_four_are_packed_and_traced_like_the_wide_reference_and_hit_the_tria
             }
             let wide = collapse::<8>(&tree);
             let rays = mixed_rays(scene, i as u64);
-            let packed = entries::pack(&lo, code.as_ref(), &tree, &{
-                scion_runtime::bvh::schema::LogicalBytes::fill(&tree, &lo.entry.logical).unwrap()
-            })
-            .unwrap();
+            let bytes = LogicalBytes::fill(&tree, &lo.entry.logical).unwrap();
+            let packed = entries::pack(&lo, code.as_ref(), &tree, &bytes).unwrap();
             // 256-byte interior records and 160-byte blocks, besides the globals.
             let records = 256 * wide.nodes.len() + 160 * tree.primitives.len();
             assert!(
@@ -58,8 +57,14 @@ fn blocks_of_four_are_packed_and_traced_like_the_wide_reference_and_hit_the_tria
                 scene.name,
                 packed.bytes()
             );
-            let got =
-                c_entries::closest_hits(&lo, code.as_ref(), &tree, "closest_hit8_tri4", &rays);
+            let got = c_entries::closest_hits_bytes(
+                &lo,
+                code.as_ref(),
+                &tree,
+                &bytes,
+                "closest_hit8_tri4",
+                &rays,
+            );
             for (k, (ray, got)) in rays.iter().zip(&got).enumerate() {
                 let want: Hit = closest_hit_wide(&wide, &tree.primitives, ray);
                 assert!(
