@@ -24,7 +24,10 @@
 //! reference, the hand-written kernel and Scion's rows traverse: Scion's binned SAH tree by
 //! default, or the one tinybvh's or obvhs's builder makes, read back as a logical tree; the
 //! peers always use their own), `--max-leaf N` (Scion's tree with leaves of at most N
-//! primitives, for layouts with narrower counts: the hair BVH's 3 bits hold 7). `tinybvh-bvh8` needs a build with the `avx2` target feature
+//! primitives, for layouts with narrower counts: the hair BVH's 3 bits hold 7),
+//! `--traversal-cost C` (Scion's tree built with the SAH's cost of an interior visit set to
+//! `C` triangle tests instead of 1: larger leaves and fewer nodes as `C` grows; for measuring
+//! the builder's constants). `tinybvh-bvh8` needs a build with the `avx2` target feature
 //! (`RUSTFLAGS="-C target-feature=+avx2,+fma"`, see `tinybvh_peer`); without it the row is left
 //! out with a note.
 
@@ -58,6 +61,7 @@ struct Args {
     builders: bool,
     tree: String,
     max_leaf: Option<usize>,
+    traversal_cost: Option<f64>,
 }
 
 /// The peers `--peers` can name, in the order their rows come: the hand-written kernel over
@@ -92,6 +96,7 @@ fn parse() -> Result<Args, String> {
         builders: false,
         tree: "scion".into(),
         max_leaf: None,
+        traversal_cost: None,
     };
     scion_bench::parse_flags(|flag, value| {
         let num = |s: String| scion_bench::flag_number(flag, &s);
@@ -123,6 +128,16 @@ fn parse() -> Result<Args, String> {
                     return Err("--max-leaf: at least 1 primitive per leaf".into());
                 }
                 a.max_leaf = Some(n);
+            }
+            "--traversal-cost" => {
+                let v = value()?;
+                let c: f64 = v
+                    .parse()
+                    .map_err(|_| format!("--traversal-cost: `{v}` is not a number"))?;
+                if !(c.is_finite() && c > 0.0) {
+                    return Err("--traversal-cost: a positive number".into());
+                }
+                a.traversal_cost = Some(c);
             }
             "--peers" => {
                 let list = value()?;
@@ -159,10 +174,12 @@ fn run(a: &Args) -> Result<(), String> {
     // The tree the reference, the hand-written kernel and Scion's rows traverse.
     match a.tree.as_str() {
         "scion" => {
-            if let Some(n) = a.max_leaf {
+            if a.max_leaf.is_some() || a.traversal_cost.is_some() {
+                let d = scion_runtime::bvh::SahOptions::default();
                 let o = scion_runtime::bvh::SahOptions {
-                    max_leaf: n,
-                    ..Default::default()
+                    max_leaf: a.max_leaf.unwrap_or(d.max_leaf),
+                    traversal_cost: a.traversal_cost.unwrap_or(d.traversal_cost),
+                    ..d
                 };
                 w.tree = scion_runtime::bvh::build_sah_binned(&w.triangles, &o);
             }
