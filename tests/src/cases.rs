@@ -131,6 +131,15 @@ pub fn feature_rays(scene: &Scene, n: usize) -> Vec<Ray> {
     rays
 }
 
+/// Checks that a packing of `packed` bytes is its `records` bytes of node and primitive records
+/// plus at most 64 bytes of globals (counts, roots, frames), naming `what` when it is not.
+pub fn assert_packed_records(what: &str, packed: usize, records: usize) {
+    assert!(
+        (records..records + 64).contains(&packed),
+        "{what}: {packed} bytes packed for {records} bytes of records"
+    );
+}
+
 /// What one comparison found.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Agreement {
