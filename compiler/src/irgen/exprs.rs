@@ -312,6 +312,14 @@ impl FuncCx<'_> {
             _ => return Err(self.bug(format!("operator `{}`", op.as_str()))),
         };
         let t = self.expr_ty(b, e)?;
+        // A vector shifted by one amount: every lane by it (the IR shifts lane by lane).
+        let lanes = b.m.types.lanes(b.value_type(l));
+        let r = match (lanes, b.m.types.lanes(b.value_type(r))) {
+            (Some(n), None) if matches!(kind, Op::Shl | Op::Shr) => b
+                .vector(&vec![r; n as usize])
+                .ok_or_else(|| self.bug("splat of a shift amount"))?,
+            _ => r,
+        };
         Ok(b.build1(kind, &[l, r], t))
     }
 
@@ -489,6 +497,28 @@ impl FuncCx<'_> {
                 };
                 let m = b.intrinsic(Intrinsic::Max, &[*x, *lo], t);
                 b.intrinsic(Intrinsic::Min, &[m, *hi], t)
+            }
+            Builtin::Select => {
+                let [c, x, y] = vals else {
+                    return Err(self.bug("select takes 3 arguments"));
+                };
+                b.build1(Op::Select, &[*c, *x, *y], t)
+            }
+            // any(m) / all(m): the lanes of `m` or-ed / and-ed, first lane first.
+            Builtin::Any | Builtin::All => {
+                let [m] = vals else {
+                    return Err(self.bug("any/all take 1 argument"));
+                };
+                let mt = b.value_type(*m);
+                let n = b.m.types.lanes(mt).unwrap_or(0);
+                let fold = if bi == Builtin::Any { Op::Or } else { Op::And };
+                let lane = |b: &mut Builder<'_>, k: u32| b.lane(*m, k);
+                let mut acc = lane(b, 0).ok_or_else(|| self.bug("any/all of a non-vector"))?;
+                for k in 1..n {
+                    let x = lane(b, k).ok_or_else(|| self.bug("any/all of a non-vector"))?;
+                    acc = b.build1(fold, &[acc, x], t);
+                }
+                acc
             }
             Builtin::Append => return Err(self.bug("`append` outside a build")),
             Builtin::Insert => return Err(self.bug("`insert` as a value")),

@@ -115,6 +115,9 @@ impl Checker<'_> {
     ) -> Progress {
         use Intrinsic::*;
         let name = kind.name();
+        if matches!(kind, Builtin::Select | Builtin::Any | Builtin::All) {
+            return self.solve_lane_builtin(kind, args, result, span, force);
+        }
         let intrinsic = match kind {
             Builtin::Intrinsic(i) => Some(i),
             _ => None,
@@ -124,6 +127,7 @@ impl Checker<'_> {
         let all = args.len();
         let (want, shared, ints): (Want, usize, &[usize]) = match kind {
             Builtin::Clamp => (Want::Numeric, all, &[]),
+            Builtin::Select | Builtin::Any | Builtin::All => (Want::Vector, 0, &[]),
             Builtin::Append => (Want::Collection, 1, &[]),
             Builtin::Insert => (Want::Set, 1, &[]),
             Builtin::Intrinsic(i) => match i {
@@ -238,6 +242,78 @@ impl Checker<'_> {
             _ => first,
         };
         self.unify(result, &out).ok();
+        Progress::Done
+    }
+
+    /// `select(c, a, b)` (`c` a `bool`, or a `bool` vector as wide as `a`; `a` and `b` of one
+    /// type, the result's), `any(m)` and `all(m)` (`m` a `bool` vector; the result `bool`).
+    fn solve_lane_builtin(
+        &mut self,
+        kind: Builtin,
+        args: &[(Ty, Span)],
+        result: &Ty,
+        span: Span,
+        force: bool,
+    ) -> Progress {
+        let name = kind.name();
+        let Some((c, cs)) = args.first().cloned() else {
+            return Progress::Done;
+        };
+        let c = self.shallow(&c);
+        if self.class(&c) == Class::Unknown && !force {
+            return Progress::Wait;
+        }
+        let lanes = match c {
+            Ty::Vector(Prim::Bool, n) => Some(n),
+            Ty::Error => return Progress::Done,
+            _ if kind == Builtin::Select && c == Ty::bool() => None,
+            _ => {
+                let ty = self.show(&c);
+                self.error(SemaError::BuiltinArg {
+                    name: name.to_string(),
+                    ty,
+                    expected: if kind == Builtin::Select {
+                        "a `bool` or a `bool` vector (a lane-wise comparison of vectors)"
+                    } else {
+                        "a `bool` vector (a lane-wise comparison of vectors)"
+                    },
+                    span: cs,
+                });
+                self.unify(result, &Ty::Error).ok();
+                return Progress::Done;
+            }
+        };
+        if kind != Builtin::Select {
+            self.unify(result, &Ty::bool()).ok();
+            return Progress::Done;
+        }
+        let [_, (a, a_span), (b, b_span)] = args else {
+            return Progress::Done;
+        };
+        self.expect(b, a, *b_span, "`select`'s first value");
+        if let Some(n) = lanes {
+            let a = self.shallow(a);
+            match a {
+                Ty::Vector(_, m) if m == n => {}
+                Ty::Error => {}
+                _ if self.class(&a) == Class::Unknown && !force => {
+                    return Progress::Wait;
+                }
+                _ => {
+                    let ty = self.show(&a);
+                    self.error(SemaError::BuiltinArg {
+                        name: name.to_string(),
+                        ty,
+                        expected: "a vector with as many lanes as the condition",
+                        span: *a_span,
+                    });
+                    self.unify(result, &Ty::Error).ok();
+                    return Progress::Done;
+                }
+            }
+        }
+        let _ = span;
+        self.unify(result, a).ok();
         Progress::Done
     }
 }

@@ -364,7 +364,11 @@ impl Checker<'_> {
                             && (matches!(class, Class::Int | Class::Float)
                                 || matches!(t, Ty::Vector(p, _) if p.is_numeric()))
                     }
-                    UnaryOp::Not => t == Ty::bool() || t == Ty::Error,
+                    UnaryOp::Not => {
+                        t == Ty::bool()
+                            || t == Ty::Error
+                            || matches!(t, Ty::Vector(super::types::Prim::Bool, _))
+                    }
                     UnaryOp::BitNot => {
                         class == Class::Int || matches!(t, Ty::Vector(p, _) if p.is_int())
                     }
@@ -611,17 +615,24 @@ impl Checker<'_> {
                     self.unify(result, &Ty::Error).ok();
                     return Progress::Done;
                 }
+                // Comparisons of vectors are lane by lane: a `bool` vector (`any`, `all` and
+                // `select` take it).
+                let lanes_of = |t: &Ty| match t {
+                    Ty::Vector(_, n) => Ty::Vector(super::types::Prim::Bool, *n),
+                    _ => Ty::bool(),
+                };
                 let (ok, expected, out) = match op {
                     Eq | Ne => (
                         matches!(class, Class::Int | Class::Float)
                             || matches!(t, Ty::Prim(_) | Ty::Ptr | Ty::Vector(..)),
                         "a scalar, vector or `ptr`",
-                        Ty::bool(),
+                        lanes_of(&t),
                     ),
                     Lt | Le | Gt | Ge => (
-                        matches!(class, Class::Int | Class::Float),
-                        "a number",
-                        Ty::bool(),
+                        matches!(class, Class::Int | Class::Float)
+                            || matches!(t, Ty::Vector(p, _) if p.is_numeric()),
+                        "a number or a numeric vector",
+                        lanes_of(&t),
                     ),
                     Add | Sub | Mul | Div | Rem => (
                         matches!(class, Class::Int | Class::Float)
@@ -632,7 +643,7 @@ impl Checker<'_> {
                     BitAnd | BitOr | BitXor => (
                         class == Class::Int
                             || t == Ty::bool()
-                            || matches!(t, Ty::Vector(p, _) if p.is_int()),
+                            || matches!(t, Ty::Vector(p, _) if p.is_int() || p == super::types::Prim::Bool),
                         "integers",
                         t.clone(),
                     ),

@@ -62,6 +62,12 @@ pub enum Builtin {
     Intrinsic(Intrinsic),
     /// `clamp(x, lo, hi)` = `min(max(x, lo), hi)`.
     Clamp,
+    /// `select(c, a, b)`: `a` where `c` holds, else `b`; lane by lane for a `bool` vector `c`.
+    Select,
+    /// `any(m)`: whether some lane of a `bool` vector holds.
+    Any,
+    /// `all(m)`: whether every lane of a `bool` vector holds.
+    All,
     /// `insert(s, x)`: adds `x` to the set `s`, a `mut` parameter (passed by reference).
     Insert,
     /// Build language: `append(x, n)` appends `n` elements of logical array `x` to the array the
@@ -76,7 +82,13 @@ impl Builtin {
             .iter()
             .filter(|&&i| i != Intrinsic::SetInsert)
             .map(|&i| Builtin::Intrinsic(i))
-            .chain([Builtin::Clamp, Builtin::Insert])
+            .chain([
+                Builtin::Clamp,
+                Builtin::Select,
+                Builtin::Any,
+                Builtin::All,
+                Builtin::Insert,
+            ])
     }
 
     /// The name as written.
@@ -84,6 +96,9 @@ impl Builtin {
         match self {
             Builtin::Intrinsic(i) => i.name(),
             Builtin::Clamp => "clamp",
+            Builtin::Select => "select",
+            Builtin::Any => "any",
+            Builtin::All => "all",
             Builtin::Insert => "insert",
             Builtin::Append => "append",
         }
@@ -98,7 +113,8 @@ impl Builtin {
     pub fn arity(self) -> usize {
         match self {
             Builtin::Intrinsic(i) => i.arity(),
-            Builtin::Clamp => 3,
+            Builtin::Clamp | Builtin::Select => 3,
+            Builtin::Any | Builtin::All => 1,
             Builtin::Insert | Builtin::Append => 2,
         }
     }
