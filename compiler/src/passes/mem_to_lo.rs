@@ -183,6 +183,8 @@ struct FnLower<'a> {
     dst: &'a mut Module,
     vals: FxHashMap<ValueId, Vec<ValueId>>,
     span: Option<Span>,
+    /// Vector operations marked so far ([`FnLower::tag_lanes`]).
+    lane_groups: u64,
 }
 
 fn lower_func(src: &Module, dst: &mut Module, f: FuncId, g: FuncId) -> R<()> {
@@ -194,6 +196,7 @@ fn lower_func(src: &Module, dst: &mut Module, f: FuncId, g: FuncId) -> R<()> {
         dst,
         vals: FxHashMap::default(),
         span: src.func_spans.get(f).copied(),
+        lane_groups: 0,
     };
     let mut flat_args = cx.dst.blocks[lentry].args.iter().copied();
     let mut args = Vec::new();
@@ -526,7 +529,69 @@ impl FnLower<'_> {
             T::Match => return self.lower_match(op, &ins[0], cur),
             T::Foreach => return self.lower_foreach(op, &ins[0], cur),
         };
+        if matches!(
+            kind,
+            T::Add
+                | T::Sub
+                | T::Mul
+                | T::Div
+                | T::Rem
+                | T::And
+                | T::Or
+                | T::Xor
+                | T::Shl
+                | T::Shr
+                | T::Neg
+                | T::BitNot
+                | T::Not
+                | T::Cmp
+                | T::Select
+                | T::Cast
+                | T::Bitcast
+        ) {
+            self.tag_lanes(cur, res_ty, &out);
+        }
         self.bind_results(op, out, cur)
+    }
+
+    /// Marks the ops that compute the lanes of one four- or eight-lane vector operation (the last
+    /// `out.len()` ops of `cur`, one per lane, in lane order) with `lane = [group, k, n]`, so that
+    /// a backend with vector registers can emit them as one vector operation
+    /// (`scion-llvm`'s `translate::groups`); the ops stay scalar `lo`, which every other pass and
+    /// backend reads as before. Nothing is marked when a lane reuses an operand (a cast to the
+    /// same type) or the ops are not the block's last ones.
+    fn tag_lanes(&mut self, cur: BlockId, res_ty: Option<TypeId>, out: &[ValueId]) {
+        let n = out.len();
+        let vector = res_ty.is_some_and(
+            |t| matches!(self.src.types.get(t), Type::Vector { lanes, .. } if *lanes as usize == n),
+        );
+        if !vector || !(n == 4 || n == 8) {
+            return;
+        }
+        let ops = &self.dst.blocks[cur].ops;
+        if ops.len() < n {
+            return;
+        }
+        let last = ops[ops.len() - n..].to_vec();
+        let defines = last
+            .iter()
+            .zip(out)
+            .all(|(&o, &v)| self.dst.ops[o].results.as_slice() == [v]);
+        if !defines {
+            return;
+        }
+        let group = self.lane_groups;
+        self.lane_groups += 1;
+        for (k, &o) in last.iter().enumerate() {
+            self.dst.ops[o].attrs.set(
+                "lane",
+                Attr::List(vec![
+                    Attr::Int(group as i128),
+                    Attr::Int(k as i128),
+                    Attr::Int(n as i128),
+                ]),
+            );
+        }
     }
 
     /// Splits the flat leaves `flat` over `op`'s results.

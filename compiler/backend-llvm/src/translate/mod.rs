@@ -37,6 +37,7 @@
 //! is an `alloca` in the entry block; `lo.global_id` reads `%ctaid.x * %ntid.x + %tid.x` and
 //! exists only on NVPTX.
 
+mod groups;
 mod lanes;
 mod scalar;
 
@@ -231,7 +232,19 @@ pub fn translate<'c>(
             entry: None,
             nan: NanFacts::of(m, &m.regions[m.funcs[f].body].blocks),
             or_operands: lanes::or_operands(m, f),
+            groups: if target == Target::Nvptx64 {
+                HashMap::new()
+            } else {
+                groups::groups(m, &m.regions[m.funcs[f].body].blocks)
+            },
+            grouped: Default::default(),
+            lane_vecs: HashMap::new(),
         };
+        t.grouped = t
+            .groups
+            .values()
+            .flat_map(|g| g[1..].iter().copied())
+            .collect();
         t.body(f)
             .map_err(|e| format!("@{}: {e}", m.funcs[f].name))?;
     }
@@ -259,6 +272,13 @@ struct Fn<'a, 'c> {
     /// The values some `lo.or` of this function reads ([`lanes`]: an `or` among them is inside
     /// a tree of lane bits, not its root).
     or_operands: std::collections::HashSet<ValueId>,
+    /// The source's vector operations, each one LLVM vector instruction ([`groups`]): the ops
+    /// of each, keyed by the first.
+    groups: HashMap<scion_ir::OpId, Vec<scion_ir::OpId>>,
+    /// The ops of a group after its first (translated with it).
+    grouped: std::collections::HashSet<scion_ir::OpId>,
+    /// The lane of a vector instruction each grouped value is.
+    lane_vecs: HashMap<ValueId, (inkwell::values::VectorValue<'c>, u32)>,
 }
 
 impl<'c> Fn<'_, 'c> {
@@ -406,6 +426,12 @@ impl<'c> Fn<'_, 'c> {
     }
 
     fn op(&mut self, op: scion_ir::OpId) -> R<()> {
+        if self.grouped.contains(&op) {
+            return Ok(());
+        }
+        if let Some(ops) = self.groups.get(&op).cloned() {
+            return self.group(&ops);
+        }
         let m = self.m;
         let o = &m.ops[op];
         let OpKind::Lo(kind) = o.kind else {
