@@ -116,7 +116,7 @@ impl Checker<'_> {
         use Intrinsic::*;
         let name = kind.name();
         if matches!(kind, Builtin::Select | Builtin::Any | Builtin::All) {
-            return self.solve_lane_builtin(kind, args, result, span, force);
+            return self.solve_lane_builtin(kind, args, result, force);
         }
         let intrinsic = match kind {
             Builtin::Intrinsic(i) => Some(i),
@@ -127,6 +127,7 @@ impl Checker<'_> {
         let all = args.len();
         let (want, shared, ints): (Want, usize, &[usize]) = match kind {
             Builtin::Clamp => (Want::Numeric, all, &[]),
+            // Typed by `solve_lane_builtin` above.
             Builtin::Select | Builtin::Any | Builtin::All => (Want::Vector, 0, &[]),
             Builtin::Append => (Want::Collection, 1, &[]),
             Builtin::Insert => (Want::Set, 1, &[]),
@@ -252,7 +253,6 @@ impl Checker<'_> {
         kind: Builtin,
         args: &[(Ty, Span)],
         result: &Ty,
-        span: Span,
         force: bool,
     ) -> Progress {
         let name = kind.name();
@@ -290,7 +290,6 @@ impl Checker<'_> {
         let [_, (a, a_span), (b, b_span)] = args else {
             return Progress::Done;
         };
-        self.expect(b, a, *b_span, "`select`'s first value");
         if let Some(n) = lanes {
             let a = self.shallow(a);
             match a {
@@ -312,7 +311,7 @@ impl Checker<'_> {
                 }
             }
         }
-        let _ = span;
+        self.expect(b, a, *b_span, "`select`'s first value");
         self.unify(result, a).ok();
         Progress::Done
     }
