@@ -548,7 +548,9 @@ impl FnLower<'_> {
                 | T::Select
                 | T::Cast
                 | T::Bitcast
-        ) {
+        ) || (kind == T::Intrinsic
+            && matches!(Intrinsic::of(o), Ok(Intrinsic::Min | Intrinsic::Max)))
+        {
             self.tag_lanes(cur, res_ty, &out);
         }
         self.bind_results(op, out, cur)

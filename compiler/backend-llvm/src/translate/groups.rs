@@ -14,8 +14,8 @@
 //!
 //! Every lane computes exactly what its scalar op computes (the same LLVM operation lane by
 //! lane; a NaN result is made canonical where any lane's must be, which changes nothing for the
-//! lanes whose NaN cannot be seen). Kinds with more than one scalar form (`min`/`max`, division
-//! of integers, float casts) stay scalar, as does every op on NVPTX, whose registers are scalar.
+//! lanes whose NaN cannot be seen; `min`/`max` in the cheapest form every lane allows). Integer
+//! division and float casts stay scalar, as does every op on NVPTX, whose registers are scalar.
 
 use super::*;
 use inkwell::types::VectorType;
@@ -44,7 +44,7 @@ fn vector_kind(m: &Module, kind: L, o: &scion_ir::Operation) -> bool {
         L::Div => float,
         L::And | L::Or | L::Xor | L::Not | L::BitNot => !float,
         L::Shl | L::Shr => int,
-        L::Neg | L::Cmp | L::Select | L::Bitcast => true,
+        L::Neg | L::Cmp | L::Select | L::Bitcast | L::Min | L::Max => true,
         L::Cast => {
             let from = m.values[o.operands[0]].ty;
             int && matches!(m.types.get(from), Type::Int(_) | Type::Bool)
@@ -134,6 +134,67 @@ impl<'c> Fn<'_, 'c> {
             acc = self.b.build_insert_element(acc, s, at, "").map_err(be)?;
         }
         Ok(acc)
+    }
+
+    /// `min`/`max` lane by lane: the scalar translation's compare-and-select in the form every
+    /// lane allows (the general one, which is right for every lane, when their forms differ).
+    fn min_max_lanes(
+        &self,
+        max: bool,
+        ops: &[OpId],
+        args: &[VectorValue<'c>],
+        signed: bool,
+    ) -> R<VectorValue<'c>> {
+        let b = self.b;
+        let (p, q) = (args[0], args[1]);
+        if !p.get_type().get_element_type().is_float_type() {
+            let name = match (max, signed) {
+                (false, true) => "llvm.smin",
+                (false, false) => "llvm.umin",
+                (true, true) => "llvm.smax",
+                (true, false) => "llvm.umax",
+            };
+            let t = p.get_type().as_basic_type_enum();
+            return Ok(self
+                .call_intr(name, &[t], &[p.into(), q.into()])?
+                .into_vector_value());
+        }
+        let m = self.m;
+        let forms: Vec<MinMaxForm> = ops
+            .iter()
+            .map(|&o| {
+                self.nan
+                    .min_max_form(m.ops[o].operands[0], m.ops[o].operands[1])
+            })
+            .collect();
+        let form = if forms.iter().all(|&f| f == forms[0]) {
+            forms[0]
+        } else {
+            MinMaxForm::General
+        };
+        let pred = if max {
+            FloatPredicate::OGT
+        } else {
+            FloatPredicate::OLT
+        };
+        if form == MinMaxForm::SelectSwapped {
+            let better = b.build_float_compare(pred, p, q, "").map_err(be)?;
+            return Ok(b
+                .build_select(better, p, q, "")
+                .map_err(be)?
+                .into_vector_value());
+        }
+        let better = b.build_float_compare(pred, q, p, "").map_err(be)?;
+        let r = b.build_select(better, q, p, "").map_err(be)?;
+        if form == MinMaxForm::Select {
+            return Ok(r.into_vector_value());
+        }
+        let p_nan = b
+            .build_float_compare(FloatPredicate::UNO, p, p, "")
+            .map_err(be)?;
+        Ok(b.build_select(p_nan, q, r.into_vector_value(), "")
+            .map_err(be)?
+            .into_vector_value())
     }
 
     /// Translates the group `ops` (see the module documentation) and binds its lanes.
@@ -229,6 +290,7 @@ impl<'c> Fn<'_, 'c> {
                 .build_bit_cast(args[0], vt, "")
                 .map_err(be)?
                 .into_vector_value(),
+            L::Min | L::Max => self.min_max_lanes(kind == L::Max, ops, &args, signed)?,
             _ => return Err(format!("lane group of `lo.{}`", kind.mnemonic())),
         };
         // A NaN made canonical where some lane's can be seen (`canon` works lane by lane).
