@@ -148,7 +148,7 @@ pub struct Options {
     #[arg(long, value_enum, default_value = "tree", value_name = "KIND")]
     pub emit: Emit,
 
-    /// Write the output here instead of standard output.
+    /// Write the output here instead of standard output (`-o -` is standard output).
     #[arg(short = 'o', long, value_name = "PATH")]
     pub output: Option<PathBuf>,
 
@@ -245,6 +245,11 @@ pub struct NotImplemented {
 }
 
 impl Options {
+    /// The output file, or `None` for standard output (no `-o`, or `-o -` as in cc and clang).
+    pub fn output_path(&self) -> Option<&std::path::Path> {
+        self.output.as_deref().filter(|p| p.as_os_str() != "-")
+    }
+
     /// Rejects flags whose stage is not built yet, naming them.
     pub fn check_implemented(&self) -> Result<(), NotImplemented> {
         let emit_plan = match self.emit {

@@ -51,7 +51,7 @@ pub fn run(opts: &Options) -> i32 {
         let _ = write!(err, "{}", d.render(&SourceMap::new()));
         return EXIT_USAGE;
     }
-    if opts.emit == Emit::Obj && opts.output.is_none() && std::io::stdout().is_terminal() {
+    if opts.emit == Emit::Obj && opts.output_path().is_none() && std::io::stdout().is_terminal() {
         let d = Diagnostic::error("E0920", "`--emit=obj` writes a binary object file")
             .with_note("give the output file with -o PATH, or redirect standard output");
         let _ = write!(err, "{}", d.render(&SourceMap::new()));
@@ -77,7 +77,7 @@ pub fn run(opts: &Options) -> i32 {
         let _ = write!(err, "{}", d.render(&SourceMap::new()));
         return EXIT_USAGE;
     }
-    if let Some(out) = &opts.output {
+    if let Some(out) = opts.output_path() {
         let same =
             |p: &std::path::Path| match (std::fs::canonicalize(p), std::fs::canonicalize(out)) {
                 (Ok(a), Ok(b)) => a == b,
@@ -166,7 +166,7 @@ pub fn run(opts: &Options) -> i32 {
         (None, text) => text.map(String::into_bytes),
     };
     if let Some(bytes) = bytes {
-        let status = write_output(&mut err, opts.output.as_deref(), &bytes);
+        let status = write_output(&mut err, opts.output_path(), &bytes);
         if status != 0 {
             return status;
         }
