@@ -127,11 +127,11 @@ impl Primitive for Triangle4 {
     }
 }
 
-/// The tree over blocks that is `tree` (a tree over triangles whose leaves hold at most four)
-/// with each leaf's triangles one block: the same nodes and boxes (a block's box is the union
-/// of its triangles'), each leaf one primitive. So a traversal over blocks visits exactly the
-/// nodes a traversal of `tree` visits, and tests a leaf's triangles at once. An error names a
-/// leaf of more than four.
+/// The tree over blocks that is `tree` (a tree over triangles) with each leaf's triangles cut,
+/// in order, into blocks of four (the last of one to four): the same nodes and boxes (a leaf's
+/// box is the union of its blocks'), a leaf of `n` triangles holding `ceil(n / 4)` blocks. So a
+/// traversal over blocks visits exactly the nodes a traversal of `tree` visits, and tests a
+/// leaf's triangles four at a time. An error names an empty leaf.
 pub fn block_tree(tree: &LogicalTree<Triangle>) -> Result<LogicalTree<Triangle4>, String> {
     let mut nodes = tree.nodes.clone();
     let mut primitives = Vec::new();
@@ -140,16 +140,12 @@ pub fn block_tree(tree: &LogicalTree<Triangle>) -> Result<LogicalTree<Triangle4>
             continue;
         }
         let tris = tree.leaf_primitives(node);
-        if !(1..=4).contains(&tris.len()) {
-            return Err(format!(
-                "leaf {i} holds {} triangles; a block holds one to four (build with leaves of \
-                 at most 4)",
-                tris.len()
-            ));
+        if tris.is_empty() {
+            return Err(format!("leaf {i} holds no triangles"));
         }
         node.prim_offset = primitives.len() as u32;
-        node.prim_count = 1;
-        primitives.push(Triangle4::new(tris));
+        node.prim_count = tris.len().div_ceil(4) as u32;
+        primitives.extend(tris.chunks(4).map(Triangle4::new));
     }
     Ok(LogicalTree {
         nodes,
@@ -158,21 +154,27 @@ pub fn block_tree(tree: &LogicalTree<Triangle>) -> Result<LogicalTree<Triangle4>
     })
 }
 
-/// The binned SAH tree over `tris` with leaves of at most four triangles, the SAH counting a
-/// leaf as one test whatever its size (`SahOptions::block`, as Embree's SAH for `Triangle4`
-/// leaves: fuller leaves, fewer nodes), as a tree over blocks: each leaf one block
-/// ([`block_tree`]).
+/// Largest leaf of [`sah_block_tree`], in triangles: two blocks. Embree's leaves hold up to
+/// seven blocks; against leaves of one block, two raised `bvh8-tri4` by 13 to 17 % on
+/// fzk_haus and 8 to 16 % on dragon, a few per cent on most other library scenes, and lost
+/// 1 to 3 % on bunny, suzanne and sponza (peers bench, one thread, 65,536 rays, same runs);
+/// four blocks were slower than two (docs/performance.md, "Sixteenth session").
+pub const BLOCK_TREE_MAX_LEAF: usize = 8;
+
+/// The binned SAH tree over `tris` with leaves of at most [`BLOCK_TREE_MAX_LEAF`] triangles,
+/// the SAH counting a leaf of `n` as `ceil(n / 4)` tests (`SahOptions::block`, as Embree's SAH
+/// for `Triangle4` leaves: fuller leaves, fewer nodes), as a tree over blocks ([`block_tree`]).
 pub fn sah_block_tree(tris: &[Triangle]) -> LogicalTree<Triangle4> {
     let options = SahOptions {
-        max_leaf: 4,
+        max_leaf: BLOCK_TREE_MAX_LEAF,
         block: 4,
         ..SahOptions::default()
     };
-    block_tree(&build_sah_binned(tris, &options)).expect("leaves of at most four")
+    block_tree(&build_sah_binned(tris, &options)).expect("a binned SAH tree has no empty leaf")
 }
 
-/// `tris` grouped into blocks of up to four nearby triangles: the leaves of
-/// [`sah_block_tree`], in the tree's order. Every triangle is in exactly one block.
+/// `tris` grouped into blocks of up to four nearby triangles: the blocks of
+/// [`sah_block_tree`]'s leaves, in the tree's order. Every triangle is in exactly one block.
 pub fn blocks_of(tris: &[Triangle]) -> Vec<Triangle4> {
     sah_block_tree(tris).primitives
 }
@@ -255,13 +257,13 @@ mod tests {
             .collect();
         seen.sort_unstable();
         assert_eq!(seen, (0..1001).collect::<Vec<u32>>());
-        // Mostly full blocks: a leaf of at most four triangles each.
+        // Mostly full blocks: a leaf's triangles cut into fours.
         assert!(blocks.len() * 4 < 1001 * 2, "{} blocks", blocks.len());
         assert!(blocks_of(&[]).is_empty());
     }
 
     #[test]
-    fn a_block_tree_keeps_the_nodes_and_boxes_and_refuses_big_leaves() {
+    fn a_block_tree_keeps_the_nodes_and_boxes_and_cuts_big_leaves_into_blocks() {
         let mut rng = Rng::new(8);
         let tris: Vec<Triangle> = (0..500).map(|i| tri(&mut rng, i)).collect();
         let tree = build_sah_binned(
@@ -284,6 +286,7 @@ mod tests {
                 assert_eq!(blocks.leaf_primitives(b)[0].bounds().to_array(), a.bounds);
             }
         }
+        // Leaves of more than four become several blocks, in order; the nodes stay.
         let big = build_sah_binned(
             &tris,
             &SahOptions {
@@ -292,8 +295,21 @@ mod tests {
                 ..SahOptions::default()
             },
         );
-        assert!(block_tree(&big)
-            .unwrap_err()
-            .contains("a block holds one to four"));
+        let blocks = block_tree(&big).unwrap();
+        blocks.validate().unwrap();
+        assert_eq!(blocks.nodes.len(), big.nodes.len());
+        let mut several = 0;
+        for (a, b) in big.nodes.iter().zip(&blocks.nodes) {
+            assert_eq!((a.kind, a.bounds, a.child), (b.kind, b.bounds, b.child));
+            if a.is_leaf() {
+                let tris = big.leaf_primitives(a);
+                let held = blocks.leaf_primitives(b);
+                assert_eq!(held.len(), tris.len().div_ceil(4));
+                let flat: Vec<Triangle> = held.iter().flat_map(|k| k.triangles()).collect();
+                assert_eq!(flat, tris);
+                several += usize::from(held.len() > 1);
+            }
+        }
+        assert!(several > 0, "no leaf of more than four triangles");
     }
 }

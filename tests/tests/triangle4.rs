@@ -1,7 +1,7 @@
 //! Leaves of blocks of four triangles stored lane by lane (the prelude's `Triangle4`, Embree's
-//! `Triangle4`) end to end: the binned SAH tree of a mesh with leaves of at most four, each leaf
-//! one block (`scion_runtime::triangle4::sah_block_tree`), collapsed to eight children, packed by the generated
-//! builder of `library/layouts/bvh8_tri4.scion` and traced by
+//! `Triangle4`) end to end: the binned SAH tree of a mesh with leaves of at most two blocks
+//! (`scion_runtime::triangle4::sah_block_tree`), collapsed to eight children, packed by the
+//! generated builder of `library/layouts/bvh8_tri4.scion` and traced by
 //! `library/algorithms/closest_hit8_tri4.scion` through the C entries, by Cranelift and LLVM
 //! -O3, on the hard cases, teapot, suzanne and fzk_haus with every kind of ray: every hit equals the
 //! runtime's wide reference over the same blocks bit for bit, and that reference's hits are the

@@ -88,8 +88,8 @@ fn primitive_of(program: &Program) -> Result<String, String> {
 }
 
 /// A layout over blocks of four triangles (`Triangle4`, `bvh8-tri4`) as a contender: the
-/// binned SAH tree over the workload's triangles with leaves of at most four, each leaf one
-/// block (`sah_block_tree`), packed once by the generated builder (building and packing are
+/// binned SAH tree over the workload's triangles with leaves of at most two blocks
+/// (`sah_block_tree`), packed once by the generated builder (building and packing are
 /// its setup), traced through the batch entry.
 fn block_contender<'a>(
     name: String,
