@@ -35,9 +35,6 @@ export RUSTFLAGS="-C target-cpu=native"
 echo "bench-wide: building the benchmark (target-cpu=native)" >&2
 bench=$(peers_bench)
 
-# bvh8 over blocks of four triangles (docs/performance.md, "Fourteenth session"): not in the
-# library's registry (`scion trace` traces triangle meshes), so named by its files.
-TRI4=library/algorithms/closest_hit8_tri4.scion+library/layouts/bvh8_tri4.scion:Bvh8Tri4:closest_hit8_tri4
 total=$(( ${#names[@]} * 2 ))
 k=0
 for s in "${names[@]}"; do
@@ -45,7 +42,7 @@ for s in "${names[@]}"; do
     k=$((k + 1))
     echo "bench-wide: [$k/$total] $s, $rays rays, $threads thread(s)" >&2
     "$bench" --scene "$(scene_file "$s")" --rays "$rays" --n "$n" --threads "$threads" \
-      --layouts "pbrt,bvh8,bvh8-q8-ci,$TRI4" --interp-rays 0 --peers embree,tinybvh-bvh8 \
+      --layouts "pbrt,bvh8,bvh8-q8-ci,bvh8-tri4" --interp-rays 0 --peers embree,tinybvh-bvh8 \
       --tsv "$rows" > "$out/$s-$rays.md" 2> "$out/$s-$rays.log"
   done
 done

@@ -19,9 +19,7 @@ from bench_peers_table import header, into, read_runs  # noqa: E402
 
 BEGIN = "<!-- bench-wide:begin -->"
 END = "<!-- bench-wide:end -->"
-WIDE = ["llvm-O3 bvh8", "llvm-O3 bvh8-q8-ci",
-        "llvm-O3 library/algorithms/closest_hit8_tri4.scion+library/layouts/bvh8_tri4.scion"
-        ":Bvh8Tri4:closest_hit8_tri4"]
+WIDE = ["llvm-O3 bvh8", "llvm-O3 bvh8-q8-ci", "llvm-O3 bvh8-tri4"]
 
 
 def summary(rows_path, n):

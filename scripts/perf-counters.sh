@@ -40,10 +40,6 @@ bench=$(peers_bench)
 out=target/perf-counters
 mkdir -p "$out"
 
-# `bvh8-tri4`, not in the library's registry, named by its files (as scripts/bench-wide.sh does);
-# its row is `llvm-O3_bvh8-tri4` in PERF_ROWS.
-tri4=library/algorithms/closest_hit8_tri4.scion+library/layouts/bvh8_tri4.scion:Bvh8Tri4:closest_hit8_tri4
-
 # row name | --peers | --layouts; PERF_ROWS (a space-separated list of row names with `_` for
 # spaces, e.g. "llvm-O3_bvh8 embree") picks some of them.
 rows=(
@@ -57,14 +53,13 @@ rows=(
   "llvm-O3 bvh8||bvh8"
   "llvm-O3 bvh8-q8-ci||bvh8-q8-ci"
   "tinybvh bvh8_cpu|tinybvh-bvh8|"
-  "llvm-O3 $tri4||$tri4"
+  "llvm-O3 bvh8-tri4||bvh8-tri4"
 )
 if [ -n "${PERF_ROWS:-}" ]; then
   picked=()
   for row in "${rows[@]}"; do
     name=${row%%|*}
-    short=${name/$tri4/bvh8-tri4}
-    for want in $PERF_ROWS; do [ "$want" = "${short// /_}" ] && picked+=("$row"); done
+    for want in $PERF_ROWS; do [ "$want" = "${name// /_}" ] && picked+=("$row"); done
   done
   [ ${#picked[@]} -gt 0 ] || { echo "perf-counters: no row named in PERF_ROWS=$PERF_ROWS" >&2; exit 2; }
   rows=("${picked[@]}")
@@ -86,8 +81,7 @@ echo "|---|---|---:|---:|---:|---:|---:|"
 for kind in $kinds; do
   for row in "${rows[@]}"; do
     IFS='|' read -r name peers layouts <<<"$row"
-    short=${name/$tri4/bvh8-tri4}
-    tag=$(echo "$short" | tr ' ' '_')-$kind
+    tag=$(echo "$name" | tr ' ' '_')-$kind
     for n in "$n1" "$n2"; do
       valgrind --tool=cachegrind --cache-sim=yes --branch-sim=yes --cachegrind-out-file=/dev/null \
         "$bench" --scene "$(scene_file "$scene")" --rays "$kind" --n "$n" --threads 1 \
@@ -96,7 +90,7 @@ for kind in $kinds; do
     done
     read -r i1 d1 l1 b1 m1 <<<"$(counts "$out/$tag-$n1.err")"
     read -r i2 d2 l2 b2 m2 <<<"$(counts "$out/$tag-$n2.err")"
-    awk -v k="$kind" -v name="$short" -v n="$((n2 - n1))" \
+    awk -v k="$kind" -v name="$name" -v n="$((n2 - n1))" \
       -v i="$((i2 - i1))" -v d="$((d2 - d1))" -v l="$((l2 - l1))" -v b="$((b2 - b1))" -v m="$((m2 - m1))" \
       'BEGIN { printf "| %s | %s | %.0f | %.1f | %.2f | %.1f | %.2f |\n", k, name, i / n, b / n, m / n, d / n, l / n }'
   done

@@ -26,6 +26,7 @@ mod run;
 mod run_gpu;
 mod strands;
 mod trace;
+mod trace_blocks;
 mod tune;
 
 pub use args_study::{ExploreArgs, RenderArgs, ShadingArg, TuneArgs, TuneEmit, TuneRays};
@@ -304,8 +305,11 @@ pub struct TraceArgs {
     /// library/layouts with `-` for `_`, e.g. pbrt, pbrt-q16, sg-eq, bvh8, bvh8-q8-ci,
     /// dop14-split, hair-bvh; `scion layouts` lists them all; default pbrt), or any layout file,
     /// `PATH.scion` (`PATH.scion:NAME` when it declares several). `--backend jit|llvm` take
-    /// either; mem-interp and the GPU the library's closest-hit layouts. Layout-free backends
-    /// trace the logical tree and ignore it.
+    /// either; mem-interp and the GPU the library's closest-hit layouts. A layout whose
+    /// leaves hold blocks of four triangles (`Triangle4`: bvh8-tri4) traces a tree over blocks:
+    /// the binned SAH counting a block as one test, leaves of at most 8 triangles (two blocks;
+    /// `--leaf-size`), each leaf's triangles cut into fours. Layout-free backends trace the
+    /// logical tree and ignore it.
     #[arg(long, value_name = "NAME|PATH.scion")]
     pub layout: Option<String>,
     /// The closest hit to compile for the layout (`--backend jit|llvm`): a library algorithm

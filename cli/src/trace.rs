@@ -15,6 +15,7 @@ use crate::io::outln;
 use crate::{BackendArg, BuilderArg, CliError, DeviceArg, RaysArg, TraceArgs};
 use scion_host::backend::{Backend, BackendKind};
 use scion_host::contract::{LayoutCode, Packed};
+use scion_host::entries::Entries;
 use scion_host::jit::{Codegen, JitClosestHit};
 use scion_host::mem_interp::{layout_boxes, library_layouts, MemInterpBackend};
 use scion_host::quantized::{Boxes, DecodedTree};
@@ -83,7 +84,12 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         ),
         false => None,
     };
-    if let Some(r) = &resolved {
+    // A layout over blocks of four triangles (`bvh8-tri4`) packs a tree over blocks
+    // (crate::trace_blocks); every other compiled layout holds triangles.
+    let blocks = resolved
+        .as_ref()
+        .is_some_and(|r| r.primitive == crate::trace_blocks::PRIMITIVE);
+    if let Some(r) = resolved.as_ref().filter(|_| !blocks) {
         over_triangles(r, layout)?;
     }
     let boxes = match (&resolved, args.backend) {
@@ -96,6 +102,19 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         BackendArg::Brute => Engine::Free(instantiate(BackendKind::Brute, args)?),
         BackendArg::Interp => Engine::Free(instantiate(BackendKind::Interp(1), args)?),
         BackendArg::MemInterp => Engine::Mem(Box::new(mem_backend(layout, args.threads)?)),
+        BackendArg::Jit | BackendArg::Llvm if blocks => {
+            let (codegen, engine) = match args.backend {
+                BackendArg::Jit => (Codegen::Cranelift, "jit"),
+                _ => (Codegen::Llvm(3), "llvm -O3"),
+            };
+            let r = resolved.as_ref().expect("resolved for jit and llvm");
+            Engine::Blocks {
+                entries: crate::trace_blocks::compile(r, args, codegen)?,
+                layout: r.program.layout.clone(),
+                driver: BatchDriver::new(args.threads).map_err(CliError::new)?,
+                engine,
+            }
+        }
         BackendArg::Jit => Engine::Layout {
             code: jit_code(
                 resolved.as_ref().expect("resolved for jit"),
@@ -137,7 +156,10 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     peaks.mark("load");
 
     let t = Instant::now();
-    let tree = build(&scene, args);
+    let tree = match blocks {
+        true => crate::trace_blocks::build(&scene, args),
+        false => build(&scene, args),
+    };
     let build_time = t.elapsed();
     peaks.mark("build");
     // FCPW's builder makes a larger leaf at its depth limit only.
@@ -145,6 +167,7 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         BuilderArg::Fcpw if tree.stats().depth > FcpwOptions::default().max_depth => {
             u16::MAX as usize
         }
+        BuilderArg::Sah if blocks => crate::trace_blocks::leaf_size(args),
         b => b.leaf_size(args.leaf_size),
     };
     tree.validate_with_cap(cap)
@@ -166,6 +189,8 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     // The interpreters get a progress bar over every trace (the checked one and the timed runs).
     let traces = 1 + if args.runs > 1 { args.runs as u64 } else { 0 };
     let bar = || crate::bar::Bar::new("rays", rays.len() as u64 * traces);
+    // The tree over blocks a `Triangle4` layout traced (for the check and --stats).
+    let mut block_tree = None;
     let (hits, timing, packed) = match &engine {
         Engine::Free(b) => {
             tracing();
@@ -229,6 +254,29 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
             };
             (hits, timing, Some(info))
         }
+        Engine::Blocks {
+            entries,
+            layout,
+            driver,
+            ..
+        } => {
+            progress(&format!(
+                "packing the tree into layout `{layout}` (blocks of four triangles)"
+            ));
+            let (blocks, packed) = crate::trace_blocks::pack(entries, &tree, layout)?;
+            peaks.mark("pack");
+            tracing();
+            let (hits, timing) = timed(args.runs, || {
+                crate::trace_blocks::trace(entries, &packed, &rays, driver, layout)
+            })?;
+            let info = PackInfo {
+                time: packed.pack_time,
+                buffers: vec![("buffers".into(), packed.bytes(), Some(64))],
+                note: "",
+            };
+            block_tree = Some(blocks);
+            (hits, timing, Some(info))
+        }
     };
 
     peaks.mark("trace");
@@ -261,7 +309,13 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         }
     };
     let hit_count = hits.iter().filter(|h| h.is_hit()).count();
-    let builder = args.builder.describe(args.leaf_size);
+    let builder = match blocks && args.builder == BuilderArg::Sah {
+        true => format!(
+            "binned SAH counting blocks of four + reinsertion, leaves <= {}",
+            crate::trace_blocks::leaf_size(args)
+        ),
+        false => args.builder.describe(args.leaf_size),
+    };
     let source = match &args.rays_file {
         Some(p) => format!("from {}", p.display()),
         None => format!("{:?} (seed {})", args.rays, args.seed).to_lowercase(),
@@ -302,10 +356,26 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     );
     outln!("hits         {hit_count} of {} rays", rays.len());
     if compiled && !args.no_check {
-        let wide = resolved.as_ref().is_some_and(|r| r.tree_type == "BVH8");
-        check_hits(&hits, boxes, wide, &tree, &rays, threads)?;
+        let (want, which) = match &block_tree {
+            Some(b) => {
+                progress("checking every hit against the reference");
+                (
+                    crate::trace_blocks::reference(b, &rays),
+                    "eight-wide reference over the same blocks",
+                )
+            }
+            None => {
+                let wide = resolved.as_ref().is_some_and(|r| r.tree_type == "BVH8");
+                reference_hits(boxes, wide, &tree, &rays, threads)?
+            }
+        };
+        check_hits(&hits, &want, which, rays.len())?;
     }
     if args.stats {
+        if let Some(b) = &block_tree {
+            let driver = BatchDriver::new(threads).map_err(CliError::new)?;
+            crate::trace_blocks::stats(b, &rays, &driver);
+        }
         let traversed = boxes.decoded_tree(&tree);
         // Quantized boxes of the binary tree (not per wide node, reported below).
         let binary_quantized = !matches!(boxes, Boxes::Exact) && boxes.node_codes().is_none();
@@ -365,52 +435,54 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-/// Compares generated code's hits with the reference traversal of the tree the layout
-/// traverses (its decoded boxes; for an eight-wide layout the wide reference over the tree
-/// collapsed to eight children, whose hits can differ from the binary one's on rays grazing
-/// axis-aligned geometry, docs/runtime.md), bit for bit; prints the verdict or fails naming the
-/// first ray that differs.
-fn check_hits(
-    hits: &[Hit],
+/// The hits of the reference traversal of the tree the layout traverses (its decoded boxes;
+/// for an eight-wide layout the wide reference over the tree collapsed to eight children, whose
+/// hits can differ from the binary one's on rays grazing axis-aligned geometry,
+/// docs/runtime.md), and what to call it.
+fn reference_hits(
     boxes: Boxes,
     wide: bool,
     tree: &LogicalTree,
     rays: &[Ray],
     threads: usize,
-) -> Result<(), CliError> {
+) -> Result<(Vec<Hit>, &'static str), CliError> {
     progress("checking every hit against the reference");
     let driver = BatchDriver::new(threads).map_err(CliError::new)?;
-    let want: Vec<Hit> = if wide {
+    Ok(if wide {
         let exact = collapse::<8>(tree);
         let w8 = scion_host::quantized::decoded_wide(boxes, &exact);
-        rays.iter()
+        let want = rays
+            .iter()
             .map(|r| closest_hit_wide(&w8, &tree.primitives, r))
-            .collect()
+            .collect();
+        (want, "eight-wide reference")
     } else {
-        closest_hits_tree(&boxes.decoded_tree(tree), rays, &driver)
-    };
+        (
+            closest_hits_tree(&boxes.decoded_tree(tree), rays, &driver),
+            "reference",
+        )
+    })
+}
+
+/// Compares generated code's hits with `want`, the hits of the reference `which`, bit for
+/// bit; prints the verdict or fails naming the first ray that differs.
+fn check_hits(hits: &[Hit], want: &[Hit], which: &str, n: usize) -> Result<(), CliError> {
     let differs = |(g, w): (&Hit, &Hit)| g.t.to_bits() != w.t.to_bits() || g.prim != w.prim;
-    let which = if wide {
-        "eight-wide reference"
-    } else {
-        "reference"
-    };
-    match hits.iter().zip(&want).position(differs) {
+    match hits.iter().zip(want).position(differs) {
         None => {
             outln!(
-                "check        identical to the {which} on all {} rays",
-                rays.len()
+                "check        identical to the {which} on all {n} rays"
             );
             Ok(())
         }
         Some(i) => {
-            let count = hits.iter().zip(&want).filter(|p| differs(*p)).count();
+            let count = hits.iter().zip(want).filter(|p| differs(*p)).count();
             Err(CliError::new(format!(
                 "ray {i}: the hit differs from the {which}'s: got {:?}, reference {:?} ({count} of \
                  {} rays differ)",
                 hits[i],
                 want[i],
-                rays.len()
+                n
             ))
             .note("--no-check traces without this comparison"))
         }
@@ -428,6 +500,14 @@ enum Engine {
         /// `jit` (Cranelift) or `llvm -O3`.
         engine: &'static str,
     },
+    /// A layout over blocks of four triangles, through its C entries (crate::trace_blocks).
+    Blocks {
+        entries: Entries,
+        layout: String,
+        driver: BatchDriver,
+        /// `jit` (Cranelift) or `llvm -O3`.
+        engine: &'static str,
+    },
 }
 
 impl Engine {
@@ -436,6 +516,7 @@ impl Engine {
             Engine::Free(b) => b.name(),
             Engine::Mem(b) => b.name(),
             Engine::Layout { code, engine, .. } => format!("{engine} ({})", code.layout()),
+            Engine::Blocks { layout, engine, .. } => format!("{engine} ({layout})"),
         }
     }
 }
@@ -646,11 +727,16 @@ pub(crate) fn over_triangles(
     if r.primitive == "Triangle" {
         return Ok(());
     }
-    Err(CliError::usage(format!(
+    let e = CliError::usage(format!(
         "--layout {name}: its leaves hold `{}`s, and this command's scenes are triangle meshes",
         r.primitive
-    ))
-    .note("`scion strands trace --scene FILE.hair --layout NAME` traces strand scenes"))
+    ));
+    Err(match r.primitive == crate::trace_blocks::PRIMITIVE {
+        true => e.note(format!(
+            "`scion trace --backend llvm --layout {name}` traces a mesh's triangles in blocks of four"
+        )),
+        false => e.note("`scion strands trace --scene FILE.hair --layout NAME` traces strand scenes"),
+    })
 }
 
 pub(crate) fn progress(what: &str) {
