@@ -24,9 +24,9 @@ use crate::results::{csv_field, key, now_utc, provenance, read_csv, read_rows, R
 use crate::trace::build_with;
 use crate::{CliError, DeviceArg, ExploreArgs, RunBackend};
 use scion_host::entries::Entries;
+use scion_host::hit_reference::Traversed;
 use scion_host::jit::Codegen;
 use scion_host::library::{self, resolve_kind, QueryKind, Resolved};
-use scion_host::quantized::DecodedTree;
 use scion_host::queries::{uniform_points, Queries};
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::LogicalTree;
@@ -353,23 +353,21 @@ fn sweep(
                       results: &[u8],
                       timing: scion_runtime::timing::Timing|
          -> Vec<String> {
-            // An eight-wide layout's hits are those of the wide reference over the tree
-            // collapsed to eight children (with its decoded boxes when quantized), which can
-            // differ from the binary one's on rays grazing axis-aligned geometry
-            // (docs/runtime.md).
-            let wide = resolved.tree_type == "BVH8" && job.kind != QueryKind::ClosestPoint;
-            let checked = if wide {
-                check_wide(resolved.boxes, tree, queries, results)
-            } else if job.kind == QueryKind::ClosestPoint {
+            // Hits against the reference of the tree the layout traverses (binary or wide,
+            // decoded boxes; scion_host::hit_reference), closest points against brute force.
+            let traversed = Traversed::of(resolved, tree);
+            let checked = if job.kind == QueryKind::ClosestPoint {
                 // Brute force's answers, computed once for every layout of the context.
                 let want = points_want.get_or_init(|| {
-                    queries.expected(&scene.triangles, tree, CHECKED_POINTS, &driver)
+                    queries.expected(&scene.triangles, traversed, CHECKED_POINTS, &driver)
                 });
-                queries.compare(want, results)
+                want.as_ref()
+                    .map_err(Clone::clone)
+                    .and_then(|w| queries.compare(w, results, &scene.triangles))
             } else {
                 queries.check(
                     &scene.triangles,
-                    &resolved.boxes.decoded_tree(tree),
+                    traversed,
                     results,
                     CHECKED_POINTS,
                     &driver,
@@ -597,36 +595,6 @@ fn sweep(
         args.output.display()
     );
     Ok(failed)
-}
-
-/// Compares hit results with the wide reference: closest hits bit for bit, any hits by
-/// whether the ray hits.
-fn check_wide(
-    boxes: scion_host::quantized::Boxes,
-    tree: &LogicalTree,
-    queries: &Queries,
-    results: &[u8],
-) -> Result<String, String> {
-    use scion_runtime::reference::closest_hit_wide;
-    let exact = scion_runtime::bvh::wide::collapse::<8>(tree);
-    let w8 = scion_host::quantized::decoded_wide(boxes, &exact);
-    let word = |i: usize| u32::from_le_bytes(results[i..i + 4].try_into().unwrap());
-    for (i, ray) in queries.rays.iter().enumerate() {
-        let want = closest_hit_wide(&w8, &tree.primitives, ray);
-        let same = match queries.kind {
-            QueryKind::ClosestHit => {
-                f32::from_bits(word(8 * i)).to_bits() == want.t.to_bits()
-                    && word(8 * i + 4) == want.prim
-            }
-            _ => (word(4 * i) != 0) == want.is_hit(),
-        };
-        if !same {
-            return Err(format!(
-                "query {i}: the answer differs from the wide reference's {want:?}"
-            ));
-        }
-    }
-    Ok("identical to the wide reference".into())
 }
 
 /// A warning above the bar, or on standard error when the bar is hidden (not a terminal).

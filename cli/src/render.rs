@@ -19,9 +19,9 @@ use crate::trace::{build_with, progress, secs};
 use crate::{CliError, RenderArgs, RunBackend, ShadingArg};
 use plotters::prelude::{BitMapBackend, Color, DrawingBackend, RGBColor};
 use scion_host::entries::Entries;
+use scion_host::hit_reference::Traversed;
 use scion_host::jit::Codegen;
 use scion_host::library::{resolve_kind, QueryKind};
-use scion_host::quantized::DecodedTree;
 use scion_host::queries::Queries;
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::geom::{Hit, Ray, Triangle};
@@ -84,7 +84,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let check = queries
         .check(
             &scene.triangles,
-            &resolved.boxes.decoded_tree(&tree),
+            Traversed::of(&resolved, &tree),
             &results,
             0,
             &driver,

@@ -13,9 +13,9 @@ use crate::io::outln;
 use crate::trace::{build_with, progress, secs, significant, timed};
 use crate::{CliError, DeviceArg, RunArgs};
 use scion_host::entries::Entries;
+use scion_host::hit_reference::Traversed;
 use scion_host::jit::Codegen;
 use scion_host::library::{resolve_kind, QueryKind, Resolved};
-use scion_host::quantized::DecodedTree;
 use scion_host::queries::{points_from_bytes, uniform_points, Queries};
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::query::{axis_rays, primary_rays_n, read_rays, secondary_rays};
@@ -131,11 +131,10 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
         }
     };
     progress("checking the answers against the reference");
-    let traversed = resolved.boxes.decoded_tree(&tree);
     let check = queries
         .check(
             &scene.triangles,
-            &traversed,
+            Traversed::of(&resolved, &tree),
             &results,
             CHECKED_POINTS,
             &driver,

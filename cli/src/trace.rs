@@ -16,6 +16,7 @@ use crate::{BackendArg, BuilderArg, CliError, DeviceArg, RaysArg, TraceArgs};
 use scion_host::backend::{Backend, BackendKind};
 use scion_host::contract::{LayoutCode, Packed};
 use scion_host::entries::Entries;
+use scion_host::hit_reference::{check_hits, Traversed};
 use scion_host::jit::{Codegen, JitClosestHit};
 use scion_host::mem_interp::{layout_boxes, library_layouts, MemInterpBackend};
 use scion_host::quantized::{Boxes, DecodedTree};
@@ -24,13 +25,11 @@ use scion_runtime::bvh::wide::collapse;
 use scion_runtime::bvh::{
     build_fcpw, build_median, build_sah_binned, FcpwOptions, LogicalNode, LogicalTree, SahOptions,
 };
-use scion_runtime::geom::{Hit, Ray, Triangle};
+use scion_runtime::geom::{Ray, Triangle};
 use scion_runtime::query::{
     axis_rays, hits_checksum, primary_rays_n, read_rays, secondary_rays, write_hits,
 };
-use scion_runtime::reference::{
-    closest_hit_wide, closest_hits_tree, closest_hits_tree_stats, closest_hits_wide_stats,
-};
+use scion_runtime::reference::{closest_hits_tree_stats, closest_hits_wide_stats};
 use scion_runtime::scene::{load_obj, Scene};
 use scion_runtime::timing::{measure_with, Timing, TimingPlan};
 use std::time::{Duration, Instant};
@@ -355,21 +354,26 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         timing.ns_per_query(rays.len())
     );
     outln!("hits         {hit_count} of {} rays", rays.len());
-    if compiled && !args.no_check {
+    if let Some(r) = resolved.as_ref().filter(|_| !args.no_check) {
+        progress("checking every hit against the reference");
         let (want, which) = match &block_tree {
-            Some(b) => {
-                progress("checking every hit against the reference");
-                (
-                    crate::trace_blocks::reference(b, &rays),
-                    "eight-wide reference over the same blocks",
-                )
-            }
+            Some(b) => (
+                crate::trace_blocks::reference(b, &rays),
+                "eight-wide reference over the same blocks",
+            ),
             None => {
-                let wide = resolved.as_ref().is_some_and(|r| r.tree_type == "BVH8");
-                reference_hits(boxes, wide, &tree, &rays, threads)?
+                let traversed = Traversed::of(r, &tree);
+                let driver = BatchDriver::new(threads).map_err(CliError::new)?;
+                let want = traversed.hits(&rays, &driver).map_err(|e| {
+                    CliError::new(format!("cannot check the hits: {e}"))
+                        .note("--no-check traces without the check")
+                })?;
+                (want, traversed.name())
             }
         };
-        check_hits(&hits, &want, which, rays.len())?;
+        let agreement = check_hits(&hits, &want, &rays, &scene.triangles, which, "ray")
+            .map_err(|e| CliError::new(e).note("--no-check traces without this comparison"))?;
+        outln!("check        {}", agreement.describe(which, "rays"));
     }
     if args.stats {
         if let Some(b) = &block_tree {
@@ -433,60 +437,6 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         outln!("output       {} ({} bytes)", path.display(), hits.len() * 8);
     }
     Ok(())
-}
-
-/// The hits of the reference traversal of the tree the layout traverses (its decoded boxes;
-/// for an eight-wide layout the wide reference over the tree collapsed to eight children, whose
-/// hits can differ from the binary one's on rays grazing axis-aligned geometry,
-/// docs/runtime.md), and what to call it.
-fn reference_hits(
-    boxes: Boxes,
-    wide: bool,
-    tree: &LogicalTree,
-    rays: &[Ray],
-    threads: usize,
-) -> Result<(Vec<Hit>, &'static str), CliError> {
-    progress("checking every hit against the reference");
-    let driver = BatchDriver::new(threads).map_err(CliError::new)?;
-    Ok(if wide {
-        let exact = collapse::<8>(tree);
-        let w8 = scion_host::quantized::decoded_wide(boxes, &exact);
-        let want = rays
-            .iter()
-            .map(|r| closest_hit_wide(&w8, &tree.primitives, r))
-            .collect();
-        (want, "eight-wide reference")
-    } else {
-        (
-            closest_hits_tree(&boxes.decoded_tree(tree), rays, &driver),
-            "reference",
-        )
-    })
-}
-
-/// Compares generated code's hits with `want`, the hits of the reference `which`, bit for
-/// bit; prints the verdict or fails naming the first ray that differs.
-fn check_hits(hits: &[Hit], want: &[Hit], which: &str, n: usize) -> Result<(), CliError> {
-    let differs = |(g, w): (&Hit, &Hit)| g.t.to_bits() != w.t.to_bits() || g.prim != w.prim;
-    match hits.iter().zip(want).position(differs) {
-        None => {
-            outln!(
-                "check        identical to the {which} on all {n} rays"
-            );
-            Ok(())
-        }
-        Some(i) => {
-            let count = hits.iter().zip(want).filter(|p| differs(*p)).count();
-            Err(CliError::new(format!(
-                "ray {i}: the hit differs from the {which}'s: got {:?}, reference {:?} ({count} of \
-                 {} rays differ)",
-                hits[i],
-                want[i],
-                n
-            ))
-            .note("--no-check traces without this comparison"))
-        }
-    }
 }
 
 /// How `scion trace` traces: a layout-free backend, or code specialized to a layout driven

@@ -119,11 +119,7 @@ pub(crate) fn reference(blocks: &LogicalTree<Triangle4>, rays: &[Ray]) -> Vec<Hi
 }
 
 /// `--stats`: the eight-wide reference's work over the blocks, per ray.
-pub(crate) fn stats(
-    blocks: &LogicalTree<Triangle4>,
-    rays: &[Ray],
-    driver: &BatchDriver,
-) {
+pub(crate) fn stats(blocks: &LogicalTree<Triangle4>, rays: &[Ray], driver: &BatchDriver) {
     let wide = collapse::<8>(blocks);
     let s = closest_hits_wide_stats(&wide, &blocks.primitives, rays, driver);
     let per = |x: u64| x as f64 / rays.len().max(1) as f64;

@@ -21,8 +21,19 @@ fn blocks_of_four_are_traced_checked_and_hit_the_triangles() {
     let run = |backend: &str, layout: &str, rays: &str, extra: &[&str]| {
         let out = dir.join(format!("{backend}-{layout}-{rays}-{}.hits", extra.join("")));
         let mut args = vec![
-            "trace", "--scene", &scene, "--backend", backend, "--layout", layout, "--rays", rays,
-            "--n", "3000", "--runs", "1",
+            "trace",
+            "--scene",
+            &scene,
+            "--backend",
+            backend,
+            "--layout",
+            layout,
+            "--rays",
+            rays,
+            "--n",
+            "3000",
+            "--runs",
+            "1",
         ];
         let path = out.display().to_string();
         args.extend(["-o", &path]);
@@ -68,7 +79,15 @@ fn blocks_of_four_are_traced_checked_and_hit_the_triangles() {
 fn backends_and_stacks_that_cannot_trace_blocks_are_clear_errors() {
     let dir = scratch("errors");
     let scene = write(&dir, "soup.obj", &soup(600));
-    let base = ["trace", "--scene", &scene, "--layout", "bvh8-tri4", "--runs", "1"];
+    let base = [
+        "trace",
+        "--scene",
+        &scene,
+        "--layout",
+        "bvh8-tri4",
+        "--runs",
+        "1",
+    ];
     let mut args = base.to_vec();
     args.extend(["--backend", "mem-interp"]);
     let o = scion(&args);
@@ -77,7 +96,14 @@ fn backends_and_stacks_that_cannot_trace_blocks_are_clear_errors() {
     assert!(e.contains("`bvh8-tri4` for --backend mem-interp"), "{e}");
     assert!(!e.contains("panicked"), "{e}");
     let mut args = base.to_vec();
-    args.extend(["--backend", "llvm", "--stack-size", "1", "--rays", "secondary"]);
+    args.extend([
+        "--backend",
+        "llvm",
+        "--stack-size",
+        "1",
+        "--rays",
+        "secondary",
+    ]);
     let o = scion(&args);
     assert_eq!(o.status.code(), Some(1), "{}", text(&o.stdout));
     let e = text(&o.stderr);

@@ -25,6 +25,9 @@
 //!   compiled for the host (`lo-host-kernels`), launched as grids of host threads.
 //! - [`progress`]: how many queries the interpreters have answered, for progress bars.
 //! - [`queries`]: the table of query kinds: queries, initial results, reference answers.
+//! - [`hit_reference`]: which reference traversal a layout's hits are compared with (binary,
+//!   or wide over the tree collapsed to its children per node) and the rule every check of
+//!   hits follows (equal to it, or brute force's where its rounding pruned that hit).
 //! - [`quantized`]: how a layout stores its boxes, and the decoded tree a quantized layout
 //!   really traverses (its bit-for-bit reference).
 pub mod backend;
@@ -32,6 +35,7 @@ pub mod collide;
 pub mod contract;
 pub mod entries;
 pub mod gpu_emu;
+pub mod hit_reference;
 pub mod jit;
 pub mod library;
 pub mod mem_interp;

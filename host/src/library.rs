@@ -67,6 +67,9 @@ pub struct DeclaredLayout {
     /// The record type its leaves hold (`Triangle`, `Segment`), when its tree type has a
     /// primitive array.
     pub primitive: Option<String>,
+    /// Children per interior node of its tree type: `n` for an array of children `T[n]`
+    /// (`BVH8`: 8), else 2 (two subtree fields, `left` and `right`).
+    pub arity: u32,
 }
 
 /// The kinds of query an entry answers, by its signature `(query, tree: T, result: mut R)`:
@@ -195,6 +198,7 @@ pub fn declared(files: &[(String, String)]) -> Result<Declared, String> {
                 tree_type: l.adt.clone(),
                 boxes: build_boxes(&module, &l.name, l.adt.as_deref()),
                 primitive: l.adt.as_deref().and_then(|t| primitive_of(&module, t)),
+                arity: l.adt.as_deref().map_or(2, |t| arity_of(&module, t)),
             })
             .collect(),
         entries: entries(&module),
@@ -216,6 +220,28 @@ fn primitive_of(module: &Module, adt: &str) -> Option<String> {
             },
             _ => None,
         })
+}
+
+/// Children per interior node of sum type `adt`: the length of an array of `adt` in a variant
+/// (`children: BVH8[8]`), else 2.
+fn arity_of(module: &Module, adt: &str) -> u32 {
+    let Some(def) = module.adt(adt) else {
+        return 2;
+    };
+    def.variants
+        .iter()
+        .flat_map(|v| &v.fields)
+        .filter_map(|f| match module.types.get(f.ty) {
+            Type::Array {
+                elem,
+                len: Some(n),
+            } if matches!(module.types.get(*elem), Type::Adt(a) if a == adt) => {
+                u32::try_from(*n).ok()
+            }
+            _ => None,
+        })
+        .max()
+        .unwrap_or(2)
 }
 
 /// The names of the functions that another function of `module` calls.
@@ -351,6 +377,9 @@ pub struct Resolved {
     /// The record type the layout's leaves hold (`Triangle` unless its tree type says
     /// otherwise: `Segment` for strands); scenes of triangles need `Triangle`.
     pub primitive: String,
+    /// Children per interior node of the tree type ([`DeclaredLayout::arity`]): which
+    /// reference traversal its hits are compared with (`crate::queries::Traversed`).
+    pub arity: u32,
 }
 
 /// True when `arg` names a file rather than a library entry.
@@ -537,6 +566,7 @@ pub fn resolve_kind(
             .primitive
             .clone()
             .unwrap_or_else(|| "Triangle".to_string()),
+        arity: chosen.arity,
     })
 }
 

@@ -5,16 +5,15 @@
 //!
 //! | kind | query record | result record (starts as) | reference, equality |
 //! |---|---|---|---|
-//! | closest hit | a `Ray` (32 B) | `(t, id)` 8 B (`(tmax, u32::MAX)`) | the reference traversal of the tree the layout traverses; `t` bits and id |
-//! | any hit | a `Ray` | `u32` (0) | that traversal's closest hit: nonzero iff it hits |
+//! | closest hit | a `Ray` (32 B) | `(t, id)` 8 B (`(tmax, u32::MAX)`) | the reference traversal of the tree the layout traverses (`crate::hit_reference::Traversed`: binary or wide, decoded boxes); `t` bits and id, or brute force's hit where that reference's rounding pruned it |
+//! | any hit | a `Ray` | `u32` (0) | that traversal's closest hit: nonzero iff it hits (or iff brute force hits, likewise) |
 //! | closest point | `f32x3` (12 B) | `(d, id, point)` 20 B (`(inf, u32::MAX, 0)`) | float32 brute force, every bit |
 
+use crate::hit_reference::{check_answers, Traversed};
 use crate::library::QueryKind;
 use scion_runtime::batch::{BatchDriver, BLOCK};
-use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Hit, Ray, Triangle, Vec3};
 use scion_runtime::query::{hits_checksum, io::rays_to_bytes};
-use scion_runtime::reference::closest_hits_tree;
 use scion_runtime::reference::closest_point::{closest_point_brute, ClosestPoint};
 use std::sync::Mutex;
 
@@ -110,19 +109,21 @@ impl Queries {
     }
 
     /// Compares `results` with the reference: for hits, the reference traversal of
-    /// `traversed` (the tree the layout traverses: its decoded boxes when quantized); for
-    /// closest points, brute force over `triangles` on the first `max_brute` points. `Ok` says
-    /// what was checked; `Err` names the first query whose answer differs, with both answers.
+    /// `traversed` (the tree the layout traverses: binary or wide, its decoded boxes when
+    /// quantized; `crate::hit_reference`'s rule, brute force over `triangles` settling the
+    /// answers that differ); for closest points, brute force over `triangles` on the first
+    /// `max_brute` points. `Ok` says what was checked; `Err` names the first query whose
+    /// answer is wrong, with both answers.
     pub fn check(
         &self,
         triangles: &[Triangle],
-        traversed: &LogicalTree,
+        traversed: Traversed,
         results: &[u8],
         max_brute: usize,
         driver: &BatchDriver,
     ) -> Result<String, String> {
-        let want = self.expected(triangles, traversed, max_brute, driver);
-        self.compare(&want, results)
+        let want = self.expected(triangles, traversed, max_brute, driver)?;
+        self.compare(&want, results, triangles)
     }
 
     /// The reference's answers [`Queries::check`] compares with (computed once, they can be
@@ -131,45 +132,70 @@ impl Queries {
     pub fn expected(
         &self,
         triangles: &[Triangle],
-        traversed: &LogicalTree,
+        traversed: Traversed,
         max_brute: usize,
         driver: &BatchDriver,
-    ) -> Expected {
+    ) -> Result<Expected, String> {
         match self.kind {
-            QueryKind::ClosestHit | QueryKind::AnyHit => {
-                Expected::Hits(closest_hits_tree(traversed, &self.rays, driver))
-            }
+            QueryKind::ClosestHit | QueryKind::AnyHit => Ok(Expected::Hits(
+                traversed.hits(&self.rays, driver)?,
+                traversed.name(),
+            )),
             QueryKind::ClosestPoint => {
                 let k = self.points.len().min(max_brute);
-                Expected::Points(brute_points(triangles, &self.points[..k], driver))
+                Ok(Expected::Points(brute_points(
+                    triangles,
+                    &self.points[..k],
+                    driver,
+                )))
             }
             QueryKind::Collide => unreachable!("{NOT_BATCHED}"),
         }
     }
 
-    /// Compares `results` with the reference's answers `want` (of [`Queries::expected`]).
-    pub fn compare(&self, want: &Expected, results: &[u8]) -> Result<String, String> {
+    /// Compares `results` with the reference's answers `want` (of [`Queries::expected`]); a
+    /// hit that differs is settled by brute force over `triangles`
+    /// (`crate::hit_reference`).
+    pub fn compare(
+        &self,
+        want: &Expected,
+        results: &[u8],
+        triangles: &[Triangle],
+    ) -> Result<String, String> {
         let word = |i: usize| u32::from_le_bytes(results[i..i + 4].try_into().unwrap());
-        let differ = |i: usize, got: String, want: String| {
-            Err(format!(
-                "query {i}: the answer differs from the reference: got {got}, reference {want}"
-            ))
-        };
         match want {
-            Expected::Hits(want) => {
-                for (i, w) in want.iter().enumerate() {
-                    if self.kind == QueryKind::ClosestHit {
-                        let got = Hit::from_best(f32::from_bits(word(8 * i)), word(8 * i + 4));
-                        if got.t.to_bits() != w.t.to_bits() || got.prim != w.prim {
-                            return differ(i, format!("{got:?}"), format!("{w:?}"));
+            Expected::Hits(want, name) => {
+                let closest = self.kind == QueryKind::ClosestHit;
+                let got = |i: usize| Hit::from_best(f32::from_bits(word(8 * i)), word(8 * i + 4));
+                let occluded = |i: usize| word(4 * i) != 0;
+                let agreement = check_answers(
+                    &self.rays,
+                    triangles,
+                    |i| match closest {
+                        true => !got(i).bit_eq(&want[i]),
+                        false => occluded(i) != want[i].is_hit(),
+                    },
+                    |i, brute| match closest {
+                        true => got(i).bit_eq(brute) && !want[i].bit_eq(brute),
+                        false => {
+                            occluded(i) == brute.is_hit() && want[i].is_hit() != brute.is_hit()
                         }
-                    } else if (word(4 * i) != 0) != w.is_hit() {
-                        return differ(i, format!("occluded {}", word(4 * i)), format!("{w:?}"));
-                    }
-                }
+                    },
+                    |i| {
+                        let answer = match closest {
+                            true => format!("{:?}", got(i)),
+                            false => format!("occluded {}", word(4 * i)),
+                        };
+                        format!(
+                            "query {i}: the answer differs from the {name}'s: got {answer}, \
+                             reference {:?}",
+                            want[i]
+                        )
+                    },
+                )?;
                 Ok(format!(
-                    "identical to the reference on all {} queries (checksum of its hits {:016x})",
-                    self.rays.len(),
+                    "{} (checksum of its hits {:016x})",
+                    agreement.describe(name, "queries"),
                     hits_checksum(want)
                 ))
             }
@@ -178,7 +204,10 @@ impl Queries {
                 for (i, w) in want.iter().enumerate() {
                     let got = closest_point_from(&results[20 * i..20 * i + 20]);
                     if !got.bit_eq(w) {
-                        return differ(i, format!("{got:?}"), format!("{w:?}"));
+                        return Err(format!(
+                            "query {i}: the answer differs from the reference: got {got:?}, \
+                             reference {w:?}"
+                        ));
                     }
                 }
                 Ok(format!(
@@ -192,8 +221,8 @@ impl Queries {
 /// The reference's answers to a set of queries ([`Queries::expected`]).
 #[derive(Clone, Debug)]
 pub enum Expected {
-    /// The reference traversal's hits, one per ray.
-    Hits(Vec<Hit>),
+    /// The reference traversal's hits, one per ray, and its name.
+    Hits(Vec<Hit>, &'static str),
     /// Brute force's closest points of the first points.
     Points(Vec<ClosestPoint>),
 }

@@ -9,9 +9,9 @@
 //! without editing it.
 
 use scion_host::entries::Entries;
+use scion_host::hit_reference::Traversed;
 use scion_host::jit::Codegen;
 use scion_host::library::{library_entries, resolve_kind, QueryKind, LAYOUT_FILES};
-use scion_host::quantized::DecodedTree;
 use scion_host::queries::{uniform_points, Queries};
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::geom::Triangle;
@@ -83,8 +83,9 @@ fn every_kind_layout_and_backend_answers_as_its_reference() {
                         entries
                             .run(&packed, &q.bytes, &mut results, &driver)
                             .unwrap_or_else(|e| panic!("{stem} {kind:?} {}: {e}", scene.name));
-                        let traversed = resolved.boxes.decoded_tree(&tree);
-                        q.check(&scene.triangles, &traversed, &results, usize::MAX, &driver)
+                        let traversed = Traversed::of(&resolved, &tree);
+                        let verdict = q
+                            .check(&scene.triangles, traversed, &results, usize::MAX, &driver)
                             .unwrap_or_else(|e| {
                                 panic!(
                                     "{stem} {} {codegen:?} scene {} ({tree_kind:?}): {e}",
@@ -92,6 +93,14 @@ fn every_kind_layout_and_backend_answers_as_its_reference() {
                                     scene.name
                                 )
                             });
+                        // A binary layout's code returns exactly its reference's answers: no
+                        // answer is settled by brute force.
+                        assert!(
+                            !verdict.contains("brute force's hits"),
+                            "{stem} {} {codegen:?} scene {}: {verdict}",
+                            kind.name(),
+                            scene.name
+                        );
                         rows += 1;
                     }
                 }
@@ -150,9 +159,11 @@ fn every_kind_runs_through_the_gpu_pipeline_as_its_reference() {
                 let (results, _) = pipeline
                     .run_queries(&packed, &on_device, &q.initial_results())
                     .unwrap_or_else(|e| panic!("{stem} {kind:?} {}: {e}", scene.name));
-                let traversed = resolved.boxes.decoded_tree(&tree);
-                q.check(&scene.triangles, &traversed, &results, usize::MAX, &driver)
+                let traversed = Traversed::of(&resolved, &tree);
+                let verdict = q
+                    .check(&scene.triangles, traversed, &results, usize::MAX, &driver)
                     .unwrap_or_else(|e| panic!("{stem} {} {}: {e}", kind.name(), scene.name));
+                assert!(!verdict.contains("brute force's hits"), "{stem}: {verdict}");
                 rows += 1;
             }
         }
