@@ -108,7 +108,7 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
             };
             let r = resolved.as_ref().expect("resolved for jit and llvm");
             Engine::Blocks {
-                entries: crate::trace_blocks::compile(r, args, codegen)?,
+                entries: Box::new(crate::trace_blocks::compile(r, args, codegen)?),
                 layout: r.program.layout.clone(),
                 driver: BatchDriver::new(args.threads).map_err(CliError::new)?,
                 engine,
@@ -452,7 +452,7 @@ enum Engine {
     },
     /// A layout over blocks of four triangles, through its C entries (crate::trace_blocks).
     Blocks {
-        entries: Entries,
+        entries: Box<Entries>,
         layout: String,
         driver: BatchDriver,
         /// `jit` (Cranelift) or `llvm -O3`.
