@@ -12,18 +12,17 @@ use crate::io::outln;
 use crate::trace::{build, closest_hit_layout_names, progress, rays, secs, significant};
 use crate::{BackendArg, CliError, DeviceArg, PtxArgs, TraceArgs};
 use scion_compiler::abi::EntryTarget;
-use scion_cuda::compare::Comparison;
 use scion_cuda::kit::PtxKit;
 use scion_cuda::trace::GpuPipeline;
 use scion_cuda::{Device, Launcher};
 use scion_host::gpu_emu::EmulatedGpu;
+use scion_host::hit_reference::{check_hits, Traversed};
 use scion_host::jit::{program_lo, Codegen, LoOptions, ALGORITHM};
 use scion_host::mem_interp::Program;
-use scion_host::quantized::{Boxes, DecodedTree};
+use scion_host::quantized::Boxes;
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::Ray;
-use scion_runtime::reference::closest_hit::closest_hits_tree;
 use scion_runtime::scene::{load_obj, Scene};
 use scion_runtime::timing::trimmed_mean;
 use std::path::Path;
@@ -39,7 +38,7 @@ pub fn compile_kit(
     stack_size: Option<u32>,
     cpu: Option<&str>,
 ) -> Result<(PtxKit, Duration), CliError> {
-    let (program, boxes) = gpu_program(layout)?;
+    let (program, boxes) = gpu_program(layout, Target::Kit)?;
     let (kit, _, time) = compile_program_kit(&program, boxes, stack_size, cpu)?;
     Ok((kit, time))
 }
@@ -146,7 +145,14 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
             // Without --cpu, the device's own architecture when LLVM knows it.
             let own = own_cpu(&device);
             let cpu = args.cpu.as_deref().or(own.as_deref());
-            let (kit, t) = compile_kit(layout, args.stack_size, cpu)?;
+            // A kit written out (--emit-ptx) is for scion-gpu, whose check is the binary
+            // reference's; without one, any closest hit over triangles.
+            let target = match args.emit_ptx {
+                Some(_) => Target::Kit,
+                None => Target::Run,
+            };
+            let (program, boxes) = gpu_program(layout, target)?;
+            let (kit, _, t) = compile_program_kit(&program, boxes, args.stack_size, cpu)?;
             (kit, Some(t))
         }
     };
@@ -186,6 +192,7 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
         backend: format!("gpu ({} {})", kit.algorithm, kit.layout),
         layout: kit.layout.clone(),
         boxes: kit.boxes,
+        arity: kit.logical.arity,
         buffers: kit.buffers.clone(),
     };
     trace_and_report(&pipeline, args, &input, &report)
@@ -229,7 +236,7 @@ fn run_emulated(args: &TraceArgs) -> Result<(), CliError> {
         );
     }
     let layout = args.layout.as_deref().unwrap_or("pbrt");
-    let (program, boxes) = gpu_program(layout)?;
+    let (program, boxes) = gpu_program(layout, Target::Run)?;
     let name = program.layout.clone();
     progress(&format!(
         "compiling the GPU kernels of closest hit for layout `{layout}` for this CPU"
@@ -251,6 +258,7 @@ fn run_emulated(args: &TraceArgs) -> Result<(), CliError> {
         ))
     })?;
     let compile_time = gpu.compile_time;
+    let arity = gpu.entry().map_or(2, |e| e.logical.arity);
     let buffers = gpu.buffers().to_vec();
     let input = load(args)?;
     let pipeline = gpu.into_pipeline().map_err(CliError::new)?;
@@ -271,26 +279,54 @@ fn run_emulated(args: &TraceArgs) -> Result<(), CliError> {
         load: None,
         place: "on the emulated GPU",
         timing: "batch kernel on host threads, wall clock",
-        backend: format!("gpu-emulated ({ALGORITHM} {name})"),
+        backend: format!("gpu-emulated ({} {name})", program.algorithm),
         layout: name.to_string(),
         boxes,
+        arity,
         buffers,
     };
     trace_and_report(&pipeline, args, &input, &report)
 }
 
+/// What a GPU program is compiled for.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Target {
+    /// A PTX kit (`scion ptx`, `--emit-ptx`): `scion-gpu` checks its hits against the binary
+    /// reference, so kits hold the binary `closest_hit`.
+    Kit,
+    /// A trace in this process, checked against the reference of the tree the layout
+    /// traverses (`scion_host::hit_reference`): any library closest hit over triangles.
+    Run,
+}
+
 /// The closest-hit program of the layout `--layout` names (a library name or a layout file,
 /// `scion_host::library::resolve`) and how it stores boxes: the GPU kernels are closest hit's.
-fn gpu_program(layout: &str) -> Result<(Program, Boxes), CliError> {
+fn gpu_program(layout: &str, target: Target) -> Result<(Program, Boxes), CliError> {
     let unknown = |why: String| {
-        CliError::usage(format!("unknown layout `{layout}` for the GPU: {why}"))
-            .note(format!("library layouts: {}", closest_hit_layout_names()))
+        let e = CliError::usage(format!("unknown layout `{layout}` for the GPU: {why}"));
+        match target {
+            Target::Kit => e.note(format!(
+                "layouts a kit holds: {}",
+                closest_hit_layout_names()
+            )),
+            Target::Run => e.note("`scion layouts --primitive Triangle` lists the layouts it runs"),
+        }
     };
     let r = scion_host::library::resolve(layout, None).map_err(unknown)?;
-    if r.program.algorithm != ALGORITHM {
+    if target == Target::Kit && r.program.algorithm != ALGORITHM {
         return Err(unknown(format!(
-            "it is traversed by `{}`, and the GPU path runs `{ALGORITHM}`",
+            "it is traversed by `{}`, and a PTX kit holds `{ALGORITHM}` (scion-gpu checks it \
+             against the binary reference)",
             r.program.algorithm
+        ))
+        .note(format!(
+            "`scion trace --device gpu --layout {layout}` without --emit-ptx runs it"
+        )));
+    }
+    if r.primitive != "Triangle" {
+        return Err(unknown(format!(
+            "its leaves hold `{}`s; the GPU path traces a mesh's triangles one by one",
+            r.primitive
         )));
     }
     Ok((r.program, r.boxes))
@@ -326,6 +362,8 @@ struct Report {
     backend: String,
     layout: String,
     boxes: Boxes,
+    /// Children per node of the tree the kernels traverse (which reference checks them).
+    arity: u32,
     buffers: Vec<String>,
 }
 
@@ -357,10 +395,22 @@ fn trace_and_report<L: Launcher>(
         })?;
     progress("tracing the same rays with the reference for the check");
     let driver = BatchDriver::new(args.threads).map_err(CliError::new)?;
-    // A quantized layout traverses its decoded (conservative) boxes: that tree is its reference.
-    let decoded = r.boxes.decoded_tree(tree);
-    let reference = closest_hits_tree(&decoded, rays, &driver);
-    let check = Comparison::of(&hits, &reference);
+    // The reference of the tree the kernels traverse: its decoded boxes when quantized, the
+    // tree collapsed to the layout's children per node when wide (scion_host::hit_reference).
+    let traversed = Traversed {
+        tree,
+        boxes: r.boxes,
+        arity: r.arity,
+    };
+    let reference = traversed.hits(rays, &driver).map_err(CliError::new)?;
+    let check = check_hits(
+        &hits,
+        &reference,
+        rays,
+        &scene.triangles,
+        traversed.name(),
+        "ray",
+    );
 
     let drop = (runs - 1) / 4;
     let kernel = trimmed_mean(&times, drop, drop);
@@ -421,20 +471,25 @@ fn trace_and_report<L: Launcher>(
         "checksum: {:016x}",
         scion_runtime::query::hits_checksum(&hits)
     );
-    outln!("check        {check}");
+    let verdict = check.as_ref().map(|a| a.describe(traversed.name(), "rays"));
+    match &verdict {
+        Ok(v) => outln!("check        {v}"),
+        Err(e) => outln!("check        not identical: {e}"),
+    }
     if let Some(path) = &args.output {
         scion_runtime::query::write_hits(path, &hits)
             .map_err(|e| CliError::new(format!("cannot write the hits: {e}")))?;
         outln!("output       {} ({} bytes)", path.display(), hits.len() * 8);
     }
-    if !check.identical() {
+    if let Err(e) = verdict {
         return Err(CliError::new(format!(
-            "{} hits differ from the reference: {check}",
+            "{} hits differ from the {}: {e}",
             if r.place == "on the GPU" {
                 "GPU"
             } else {
                 "emulated GPU"
-            }
+            },
+            traversed.name()
         )));
     }
     Ok(())

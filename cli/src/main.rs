@@ -305,7 +305,8 @@ pub struct TraceArgs {
     /// library/layouts with `-` for `_`, e.g. pbrt, pbrt-q16, sg-eq, bvh8, bvh8-q8-ci,
     /// dop14-split, hair-bvh; `scion layouts` lists them all; default pbrt), or any layout file,
     /// `PATH.scion` (`PATH.scion:NAME` when it declares several). `--backend jit|llvm` take
-    /// either; mem-interp and the GPU the library's closest-hit layouts. A layout whose
+    /// either; mem-interp the library's binary closest-hit layouts; the GPU (`--device`) any
+    /// layout over triangles, a PTX kit (`--ptx`, `--emit-ptx`) the binary ones. A layout whose
     /// leaves hold blocks of four triangles (`Triangle4`: bvh8-tri4) traces a tree over blocks:
     /// the binned SAH counting a block as one test, leaves of at most 8 triangles (two blocks;
     /// `--leaf-size`), each leaf's triangles cut into fours. Layout-free backends trace the

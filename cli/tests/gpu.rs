@@ -159,9 +159,22 @@ fn unknown_layouts_are_errors() {
         "{err}"
     );
     assert!(
-        err.contains("library layouts: pbrt, pbrt-align16") && err.contains("sg-eq-align16"),
+        err.contains("layouts a kit holds: pbrt, pbrt-align16") && err.contains("sg-eq-align16"),
         "{err}"
     );
+    // A kit holds the binary closest hit (scion-gpu checks it against the binary reference);
+    // an eight-wide layout runs on the GPU only within `scion trace --device gpu|gpu-emulated`.
+    let o = scion(&[
+        "ptx",
+        "--layout",
+        "bvh8",
+        "-o",
+        dir.join("x.ptx").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "a bad command line");
+    let err = text(&o.stderr);
+    assert!(err.contains("a PTX kit holds `closest_hit`"), "{err}");
+    assert!(err.contains("without --emit-ptx runs it"), "{err}");
 }
 
 #[test]
@@ -262,7 +275,16 @@ fn device_gpu_emulated_traces_like_the_cpu() {
             .to_string()
     };
     let want = checksum(&text(&cpu.stdout));
-    for layout in ["pbrt", "ptr", "pbrt-q16", "sg-eq"] {
+    // The binary layouts and, checked against the reference of their width, wide ones.
+    for layout in [
+        "pbrt",
+        "ptr",
+        "pbrt-q16",
+        "sg-eq",
+        "bvh8",
+        "bvh8-q8-ci",
+        "dop14-split",
+    ] {
         let hits = dir.join(format!("{layout}.hits"));
         let o = scion(
             &[
@@ -280,13 +302,19 @@ fn device_gpu_emulated_traces_like_the_cpu() {
         );
         let (out, err) = (text(&o.stdout), text(&o.stderr));
         assert!(o.status.success(), "{layout}: {err}");
+        let reference = match layout.starts_with("bvh8") {
+            true => "eight-wide reference",
+            false => "reference",
+        };
         assert!(
-            out.contains("check        identical to the reference on all 1000 rays"),
+            out.contains(&format!(
+                "check        identical to the {reference} on all 1000 rays"
+            )),
             "{out}"
         );
         assert!(out.contains("device       emulated on the CPU"), "{out}");
         assert!(
-            out.contains("backend      gpu-emulated (closest_hit "),
+            out.contains("backend      gpu-emulated (closest_hit"),
             "{out}"
         );
         assert!(out.contains("Mrays/s"), "{out}");
