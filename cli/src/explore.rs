@@ -160,8 +160,8 @@ pub fn run(args: &ExploreArgs) -> Result<(), CliError> {
         })
         .collect::<Result<_, _>>()?;
     // The sweep's scenes are triangle meshes: the layouts over triangles.
-    let over_triangles =
-        |name: &str| library::resolve(name, None).map_or(true, |r| r.primitive == "Triangle");
+    let primitive = |name: &str| library::resolve(name, None).map(|r| r.primitive).ok();
+    let over_triangles = |name: &str| primitive(name).is_none_or(|p| p == "Triangle");
     let all_layouts: Vec<String> = library::layout_names();
     let layout_names: Vec<String> = match &args.layouts {
         Some(l) => {
@@ -173,10 +173,19 @@ pub fn run(args: &ExploreArgs) -> Result<(), CliError> {
                     )));
                 }
                 if all_layouts.contains(name) && !over_triangles(name) {
-                    return Err(CliError::usage(format!(
-                        "--layouts: `{name}` holds strand segments, and the sweep's scenes are \
-                         triangle meshes (`scion strands trace --scene F.hair` traces strand scenes)"
-                    )));
+                    let p = primitive(name).unwrap_or_default();
+                    let e = CliError::usage(format!(
+                        "--layouts: `{name}`'s leaves hold `{p}`s, and the sweep measures layouts \
+                         over triangles"
+                    ));
+                    return Err(match p == crate::trace_blocks::PRIMITIVE {
+                        true => e.note(format!(
+                            "`scion trace --backend llvm --layout {name} --scene S` measures it"
+                        )),
+                        false => {
+                            e.note("`scion strands trace --scene F.hair` traces strand scenes")
+                        }
+                    });
                 }
             }
             l.clone()

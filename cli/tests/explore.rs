@@ -141,6 +141,16 @@ fn a_sweep_writes_checked_rows_resumes_and_plots() {
     let mut bad_args = args.to_vec();
     bad_args.extend(["--peers", bad.to_str().unwrap()]);
     fails_with(&scion(&bad_args), 1, "not a peers file");
+    // A layout over blocks of four triangles or strand segments is not swept; the error says
+    // which command measures it.
+    for (layout, hint) in [
+        ("bvh8-tri4", "scion trace --backend llvm --layout bvh8-tri4"),
+        ("hair-bvh-strands", "scion strands trace"),
+    ] {
+        let mut a = args.to_vec();
+        a[4] = layout;
+        fails_with(&scion(&a), 2, hint);
+    }
 }
 
 #[test]
