@@ -25,6 +25,7 @@ use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::Ray;
 use scion_runtime::scene::{load_obj, Scene};
 use scion_runtime::timing::trimmed_mean;
+use scion_runtime::triangle4::{block_tree, Triangle4};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -38,7 +39,7 @@ pub fn compile_kit(
     stack_size: Option<u32>,
     cpu: Option<&str>,
 ) -> Result<(PtxKit, Duration), CliError> {
-    let (program, boxes) = gpu_program(layout, Target::Kit)?;
+    let (program, boxes, _) = gpu_program(layout, Target::Kit)?;
     let (kit, _, time) = compile_program_kit(&program, boxes, stack_size, cpu)?;
     Ok((kit, time))
 }
@@ -130,13 +131,13 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
     if args.ptx.is_some() && args.layout.is_some() {
         eprintln!("scion: note: --layout is not used with --ptx (the kit names its layout)");
     }
-    let (kit, compile_time) = match &args.ptx {
+    let (kit, compile_time, blocks) = match &args.ptx {
         Some(path) => {
             let text = std::fs::read_to_string(path)
                 .map_err(|e| CliError::new(format!("cannot read {}: {e}", path.display())))?;
             let kit = PtxKit::parse(&text)
                 .map_err(|e| CliError::new(format!("{}: {e}", path.display())))?;
-            (kit, None)
+            (kit, None, false)
         }
         None => {
             progress(&format!(
@@ -151,15 +152,15 @@ pub fn run_trace(args: &TraceArgs) -> Result<(), CliError> {
                 Some(_) => Target::Kit,
                 None => Target::Run,
             };
-            let (program, boxes) = gpu_program(layout, target)?;
+            let (program, boxes, blocks) = gpu_program(layout, target)?;
             let (kit, _, t) = compile_program_kit(&program, boxes, args.stack_size, cpu)?;
-            (kit, Some(t))
+            (kit, Some(t), blocks)
         }
     };
     if let Some(path) = &args.emit_ptx {
         write_kit(&kit, path)?;
     }
-    let input = load(args)?;
+    let input = load(args, blocks)?;
 
     progress(&format!("loading the PTX on {}", device.name));
     let t = Instant::now();
@@ -236,7 +237,7 @@ fn run_emulated(args: &TraceArgs) -> Result<(), CliError> {
         );
     }
     let layout = args.layout.as_deref().unwrap_or("pbrt");
-    let (program, boxes) = gpu_program(layout, Target::Run)?;
+    let (program, boxes, blocks) = gpu_program(layout, Target::Run)?;
     let name = program.layout.clone();
     progress(&format!(
         "compiling the GPU kernels of closest hit for layout `{layout}` for this CPU"
@@ -260,7 +261,7 @@ fn run_emulated(args: &TraceArgs) -> Result<(), CliError> {
     let compile_time = gpu.compile_time;
     let arity = gpu.entry().map_or(2, |e| e.logical.arity);
     let buffers = gpu.buffers().to_vec();
-    let input = load(args)?;
+    let input = load(args, blocks)?;
     let pipeline = gpu.into_pipeline().map_err(CliError::new)?;
     let workers = if args.threads == 0 {
         std::thread::available_parallelism().map_or(1, |n| n.get())
@@ -300,8 +301,10 @@ enum Target {
 }
 
 /// The closest-hit program of the layout `--layout` names (a library name or a layout file,
-/// `scion_host::library::resolve`) and how it stores boxes: the GPU kernels are closest hit's.
-fn gpu_program(layout: &str, target: Target) -> Result<(Program, Boxes), CliError> {
+/// `scion_host::library::resolve`), how it stores boxes, and whether its leaves hold blocks of
+/// four triangles (`Triangle4`, traced over the block tree as on the CPU): the GPU kernels are
+/// closest hit's.
+fn gpu_program(layout: &str, target: Target) -> Result<(Program, Boxes, bool), CliError> {
     let unknown = |why: String| {
         let e = CliError::usage(format!("unknown layout `{layout}` for the GPU: {why}"));
         match target {
@@ -323,13 +326,14 @@ fn gpu_program(layout: &str, target: Target) -> Result<(Program, Boxes), CliErro
             "`scion trace --device gpu --layout {layout}` without --emit-ptx runs it"
         )));
     }
-    if r.primitive != "Triangle" {
+    let blocks = r.primitive == crate::trace_blocks::PRIMITIVE;
+    if r.primitive != "Triangle" && !blocks {
         return Err(unknown(format!(
-            "its leaves hold `{}`s; the GPU path traces a mesh's triangles one by one",
+            "its leaves hold `{}`s, and the GPU path traces triangle meshes",
             r.primitive
         )));
     }
-    Ok((r.program, r.boxes))
+    Ok((r.program, r.boxes, blocks))
 }
 
 pub(crate) fn gpu_err(e: scion_cuda::CudaError) -> CliError {
@@ -340,16 +344,31 @@ pub(crate) fn gpu_err(e: scion_cuda::CudaError) -> CliError {
 struct Input {
     scene: Scene,
     tree: LogicalTree,
+    /// The tree over blocks of four triangles a `Triangle4` layout packs (crate::trace_blocks).
+    blocks: Option<LogicalTree<Triangle4>>,
     rays: Vec<Ray>,
 }
 
-fn load(args: &TraceArgs) -> Result<Input, CliError> {
+fn load(args: &TraceArgs, blocks: bool) -> Result<Input, CliError> {
     progress(&format!("loading {}", args.scene.display()));
     let scene =
         load_obj(&args.scene).map_err(|e| CliError::new(format!("cannot load the scene: {e}")))?;
-    let tree = build(&scene, args);
+    let (tree, blocks) = match blocks {
+        true => {
+            let tree = crate::trace_blocks::build(&scene, args);
+            let blocks =
+                block_tree(&tree).map_err(|e| CliError::new(format!("the block tree: {e}")))?;
+            (tree, Some(blocks))
+        }
+        false => (build(&scene, args), None),
+    };
     let rays = rays(&scene, args)?;
-    Ok(Input { scene, tree, rays })
+    Ok(Input {
+        scene,
+        tree,
+        blocks,
+        rays,
+    })
 }
 
 /// What the report says about where the kernels ran.
@@ -375,13 +394,22 @@ fn trace_and_report<L: Launcher>(
     input: &Input,
     r: &Report,
 ) -> Result<(), CliError> {
-    let Input { scene, tree, rays } = input;
+    let Input {
+        scene,
+        tree,
+        blocks,
+        rays,
+    } = input;
     let stats = tree.stats();
     progress(&format!(
         "packing the tree into layout `{}` {}",
         r.layout, r.place
     ));
-    let packed = pipeline.pack(tree, stats.depth).map_err(gpu_err)?;
+    let packed = match blocks {
+        Some(b) => pipeline.pack(b, stats.depth),
+        None => pipeline.pack(tree, stats.depth),
+    }
+    .map_err(gpu_err)?;
     let on_device = pipeline.upload_rays(rays).map_err(gpu_err)?;
     progress(&format!("tracing {} rays {}", rays.len(), r.place));
     let runs = args.runs as usize;
@@ -397,20 +425,23 @@ fn trace_and_report<L: Launcher>(
     let driver = BatchDriver::new(args.threads).map_err(CliError::new)?;
     // The reference of the tree the kernels traverse: its decoded boxes when quantized, the
     // tree collapsed to the layout's children per node when wide (scion_host::hit_reference).
+    // Blocks: the eight-wide reference over the same blocks (as on the CPU).
     let traversed = Traversed {
         tree,
         boxes: r.boxes,
         arity: r.arity,
     };
-    let reference = traversed.hits(rays, &driver).map_err(CliError::new)?;
-    let check = check_hits(
-        &hits,
-        &reference,
-        rays,
-        &scene.triangles,
-        traversed.name(),
-        "ray",
-    );
+    let (reference, which) = match blocks {
+        Some(b) => (
+            crate::trace_blocks::reference(b, rays),
+            "eight-wide reference over the same blocks",
+        ),
+        None => (
+            traversed.hits(rays, &driver).map_err(CliError::new)?,
+            traversed.name(),
+        ),
+    };
+    let check = check_hits(&hits, &reference, rays, &scene.triangles, which, "ray");
 
     let drop = (runs - 1) / 4;
     let kernel = trimmed_mean(&times, drop, drop);
@@ -471,7 +502,7 @@ fn trace_and_report<L: Launcher>(
         "checksum: {:016x}",
         scion_runtime::query::hits_checksum(&hits)
     );
-    let verdict = check.as_ref().map(|a| a.describe(traversed.name(), "rays"));
+    let verdict = check.as_ref().map(|a| a.describe(which, "rays"));
     match &verdict {
         Ok(v) => outln!("check        {v}"),
         Err(e) => outln!("check        not identical: {e}"),
@@ -489,7 +520,7 @@ fn trace_and_report<L: Launcher>(
             } else {
                 "emulated GPU"
             },
-            traversed.name()
+            which
         )));
     }
     Ok(())

@@ -48,6 +48,21 @@ fn blocks_of_four_are_traced_checked_and_hit_the_triangles() {
     };
     for rays in ["primary", "secondary"] {
         let (_, want) = run("reference", "pbrt", rays, &[]);
+        // The GPU kernels over the same block tree, emulated on this CPU.
+        let (stdout, got) = run(
+            "reference",
+            "bvh8-tri4",
+            rays,
+            &["--device", "gpu-emulated"],
+        );
+        assert!(
+            stdout.contains(
+                "check        identical to the eight-wide reference over the same blocks on \
+                 all 3000 rays"
+            ),
+            "{stdout}"
+        );
+        assert!(got == want, "gpu-emulated {rays}: hits differ");
         for backend in ["jit", "llvm"] {
             for extra in [
                 &["--stats"][..],

@@ -39,6 +39,9 @@ unsafe impl DeviceCopy for Ray {}
 unsafe impl DeviceCopy for Triangle {}
 // SAFETY: `#[repr(C)]`, eight `f32`s and a `u32` (36 bytes, checked in the runtime), no padding.
 unsafe impl DeviceCopy for scion_runtime::primitive::Segment {}
+// SAFETY: `#[repr(C)]`, nine `[f32; 4]` and a `[u32; 4]` (160 bytes, checked in the runtime),
+// no padding.
+unsafe impl DeviceCopy for scion_runtime::triangle4::Triangle4 {}
 
 /// The bytes of a `DeviceCopy` slice.
 pub fn bytes_of<T: DeviceCopy>(data: &[T]) -> &[u8] {

@@ -8,8 +8,10 @@
 //! tree the layout traverses (binary or collapsed to its width, decoded boxes); layouts whose
 //! traversal is that reference's (binary `BVH`, eight-wide `BVH8`) must match it on every ray,
 //! the case studies (DOP-14 slabs, oriented hair nodes) may differ only where brute force's hit
-//! is theirs and the reference's rounding lost it. The differential table
-//! (tests/differential.rs) runs the binary GPU rows on more trees and ray counts.
+//! is theirs and the reference's rounding lost it. Layouts over blocks of four triangles
+//! (`bvh8-tri4`) pack the block tree and equal the eight-wide reference over the same blocks.
+//! The differential table (tests/differential.rs) runs the binary GPU rows on more trees and
+//! ray counts.
 
 use scion_host::gpu_emu::EmulatedGpu;
 use scion_host::hit_reference::{check_hits, Traversed};
@@ -111,4 +113,63 @@ fn every_library_layout_runs_through_the_emulated_gpu_pipeline() {
         "{settled} of {checked} rays settled by brute force"
     );
     eprintln!("{rows} rows, {checked} rays, {settled} settled by brute force");
+}
+
+/// The layouts over blocks of four triangles (`Triangle4`: `bvh8-tri4`) the same way: the
+/// block tree (`sah_block_tree`) packed by the packing kernels and traced by the emulated GPU
+/// pipeline equals the runtime's eight-wide reference over the same blocks on every ray.
+#[test]
+fn blocks_of_four_run_through_the_emulated_gpu_pipeline() {
+    use scion_runtime::bvh::wide::collapse;
+    use scion_runtime::reference::closest_hit_wide;
+    use scion_runtime::triangle4::sah_block_tree;
+    let opts = LoOptions {
+        stack_size: Some(256),
+        opt_level: 3,
+        dsl_opt: true,
+        target: scion_compiler::abi::EntryTarget::Gpu,
+    };
+    let layouts: Vec<(String, Resolved)> = layout_names()
+        .into_iter()
+        .filter_map(|name| {
+            let r = resolve(&name, None).unwrap_or_else(|e| panic!("{name}: {e}"));
+            (r.primitive == "Triangle4").then_some((name, r))
+        })
+        .collect();
+    assert!(!layouts.is_empty(), "bvh8-tri4 is a library layout");
+    let mut scenes = scion_runtime::scene::gen::hard_cases();
+    for info in REAL_SCENES {
+        scenes.push(real_scene(info.name).unwrap_or_else(|e| panic!("{e}")));
+    }
+    let mut rows = 0;
+    for (name, r) in &layouts {
+        let p = EmulatedGpu::compile_program(&r.program, &opts, Codegen::Llvm(3), 2)
+            .and_then(EmulatedGpu::into_pipeline)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        for (i, scene) in scenes.iter().enumerate() {
+            let blocks = sah_block_tree(&scene.triangles);
+            if blocks.is_empty() {
+                continue;
+            }
+            let rays = rays(scene, 70 + i as u64);
+            let packed = p
+                .pack(&blocks, blocks.stats().depth)
+                .unwrap_or_else(|e| panic!("{name} {}: {e}", scene.name));
+            // Blocks go to the device as their 160-byte records.
+            assert_eq!(packed.sizes[1], 160 * blocks.primitives.len() as u64);
+            let on_device = p.upload_rays(&rays).unwrap();
+            let got = p.trace(&packed, &on_device).unwrap().hits;
+            let wide = collapse::<8>(&blocks);
+            for (k, (ray, got)) in rays.iter().zip(&got).enumerate() {
+                let want = closest_hit_wide(&wide, &blocks.primitives, ray);
+                assert!(
+                    got.bit_eq(&want),
+                    "{name} {} ray {k}: {got:?}, the wide reference over the blocks {want:?}",
+                    scene.name
+                );
+            }
+            rows += 1;
+        }
+    }
+    assert!(rows >= 20, "{rows} rows");
 }
