@@ -16,7 +16,7 @@ use scion_host::entries::Entries;
 use scion_host::hit_reference::Traversed;
 use scion_host::jit::Codegen;
 use scion_host::library::{resolve_kind, QueryKind, Resolved};
-use scion_host::queries::{points_from_bytes, uniform_points, Queries};
+use scion_host::queries::{points_from_bytes, uniform_points, Expected, Queries};
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::query::{axis_rays, primary_rays_n, read_rays, secondary_rays};
 use scion_runtime::scene::{load_obj, Scene};
@@ -57,7 +57,20 @@ fn resolve(args: &RunArgs) -> Result<(QueryKind, Resolved), CliError> {
 /// Runs `scion run`.
 pub fn run(args: &RunArgs) -> Result<(), CliError> {
     let (kind, resolved) = resolve(args)?;
-    crate::trace::over_triangles(&resolved, args.layout.as_deref().unwrap_or("pbrt"))?;
+    let layout = args.layout.as_deref().unwrap_or("pbrt");
+    // A layout over blocks of four triangles (`bvh8-tri4`) runs over the block tree of the
+    // scene's triangles (crate::trace_blocks), on the CPU.
+    let blocks = resolved.primitive == crate::trace_blocks::PRIMITIVE;
+    if !blocks {
+        crate::trace::over_triangles(&resolved, layout)?;
+    } else if args.device != DeviceArg::Cpu {
+        return Err(CliError::usage(format!(
+            "--layout {layout} holds blocks of four triangles, which `scion run` runs on the CPU"
+        ))
+        .note(format!(
+            "`scion trace --device gpu-emulated --layout {layout}` runs its GPU kernels"
+        )));
+    }
     let p = &resolved.program;
     let codegen = match args.backend {
         crate::RunBackend::Jit => Codegen::Cranelift,
@@ -99,13 +112,28 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
         let entries = entries.as_ref().expect("collision runs on the CPU");
         return crate::collide::run(args, &resolved, entries, &scene, load_time);
     }
-    let tree = build_with(&scene, args.builder, args.leaf_size);
+    let (tree, block_tree) = match blocks {
+        true => {
+            let tree = crate::trace_blocks::build_with(&scene, args.builder, args.leaf_size);
+            let b = scion_runtime::triangle4::block_tree(&tree)
+                .map_err(|e| CliError::new(format!("the block tree: {e}")))?;
+            (tree, Some(b))
+        }
+        false => (build_with(&scene, args.builder, args.leaf_size), None),
+    };
     let driver = BatchDriver::new(args.threads).map_err(CliError::new)?;
     let (queries, source) = make_queries(kind, &scene, args)?;
     let n = queries.len();
     let init = queries.initial_results();
     let (results, timing, ran) = match &entries {
-        Some(entries) => run_cpu(entries, &queries, &init, &tree, &driver, args, kind)?,
+        Some(entries) => {
+            progress(&format!("packing the tree into layout `{}`", p.layout));
+            let packed = match &block_tree {
+                Some(b) => entries.pack(b),
+                None => entries.pack(&tree),
+            };
+            run_cpu(entries, &queries, &init, packed, &driver, args, kind)?
+        }
         None => {
             let options = crate::run_gpu::GpuOptions {
                 device: args.device,
@@ -131,15 +159,23 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
         }
     };
     progress("checking the answers against the reference");
-    let check = queries
-        .check(
+    let check = match &block_tree {
+        Some(b) => {
+            let want = Expected::Hits(
+                crate::trace_blocks::reference(b, &queries.rays),
+                "eight-wide reference over the same blocks",
+            );
+            queries.compare(&want, &results, &scene.triangles)
+        }
+        None => queries.check(
             &scene.triangles,
             Traversed::of(&resolved, &tree),
             &results,
             CHECKED_POINTS,
             &driver,
-        )
-        .map_err(CliError::new)?;
+        ),
+    }
+    .map_err(CliError::new)?;
 
     outln!("scene        {}", args.scene.display());
     outln!("triangles    {}", scene.len());
@@ -188,7 +224,7 @@ fn run_cpu(
     entries: &Entries,
     queries: &Queries,
     init: &[u8],
-    tree: &scion_runtime::bvh::LogicalTree,
+    packed: Result<scion_host::entries::PackedEntries, String>,
     driver: &BatchDriver,
     args: &RunArgs,
     kind: QueryKind,
@@ -205,8 +241,7 @@ fn run_cpu(
             kind.name()
         )));
     }
-    progress(&format!("packing the tree into layout `{}`", p.1));
-    let packed = entries.pack(tree).map_err(CliError::new)?;
+    let packed = packed.map_err(CliError::new)?;
     progress(&format!("running {} queries", queries.len()));
     let (results, timing) = timed(args.runs, || {
         let mut r = init.to_vec();

@@ -62,8 +62,13 @@ pub(crate) fn compile(
 /// `--leaf-size` (default [`BLOCK_TREE_MAX_LEAF`], two blocks); the other builders as
 /// `scion trace` builds them.
 pub(crate) fn build(scene: &Scene, args: &TraceArgs) -> LogicalTree {
-    if args.builder != BuilderArg::Sah {
-        return crate::trace::build(scene, args);
+    build_with(scene, args.builder, args.leaf_size)
+}
+
+/// [`build`] from the builder and `--leaf-size` alone (`scion run`'s arguments too).
+pub(crate) fn build_with(scene: &Scene, builder: BuilderArg, leaf: Option<u32>) -> LogicalTree {
+    if builder != BuilderArg::Sah {
+        return crate::trace::build_with(scene, builder, leaf);
     }
     crate::trace::progress(&format!(
         "building the logical tree of {} triangles (blocks of four)",
@@ -72,7 +77,7 @@ pub(crate) fn build(scene: &Scene, args: &TraceArgs) -> LogicalTree {
     build_sah_binned(
         &scene.triangles,
         &SahOptions {
-            max_leaf: leaf_size(args),
+            max_leaf: leaf.map_or(BLOCK_TREE_MAX_LEAF, |n| n as usize),
             block: 4,
             ..SahOptions::default()
         },

@@ -1,4 +1,4 @@
-//! `scion trace --layout bvh8-tri4`: a layout whose leaves hold blocks of four triangles
+//! `scion trace` and `scion run` with `--layout bvh8-tri4`: a layout whose leaves hold blocks of four triangles
 //! (`Triangle4`) traced from the library's registry by Cranelift and LLVM, on primary and
 //! secondary rays and trees of every builder: every hit checked against the eight-wide
 //! reference over the same blocks, the hits written equal to the reference traversal's over the
@@ -63,6 +63,35 @@ fn blocks_of_four_are_traced_checked_and_hit_the_triangles() {
             "{stdout}"
         );
         assert!(got == want, "gpu-emulated {rays}: hits differ");
+        // `scion run`'s closest hit over the same blocks writes the same records.
+        let out = dir.join(format!("run-{rays}.hits")).display().to_string();
+        let o = scion(&[
+            "run",
+            "--algorithm",
+            "closest-hit",
+            "--layout",
+            "bvh8-tri4",
+            "--scene",
+            &scene,
+            "--rays",
+            rays,
+            "--n",
+            "3000",
+            "--runs",
+            "1",
+            "-o",
+            &out,
+        ]);
+        assert!(o.status.success(), "run {rays}: {}", text(&o.stderr));
+        assert!(
+            text(&o.stdout).contains("identical to the eight-wide reference over the same blocks"),
+            "{}",
+            text(&o.stdout)
+        );
+        assert!(
+            std::fs::read(&out).unwrap() == want,
+            "run {rays}: hits differ"
+        );
         for backend in ["jit", "llvm"] {
             for extra in [
                 &["--stats"][..],
@@ -110,6 +139,20 @@ fn backends_and_stacks_that_cannot_trace_blocks_are_clear_errors() {
     let e = text(&o.stderr);
     assert!(e.contains("`bvh8-tri4` for --backend mem-interp"), "{e}");
     assert!(!e.contains("panicked"), "{e}");
+    // `scion run` runs blocks on the CPU; its GPU path says which command runs their kernels.
+    let o = scion(&[
+        "run",
+        "--algorithm",
+        "closest-hit",
+        "--layout",
+        "bvh8-tri4",
+        "--scene",
+        &scene,
+        "--device",
+        "gpu-emulated",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stdout));
+    assert!(text(&o.stderr).contains("scion trace --device gpu-emulated"));
     let mut args = base.to_vec();
     args.extend([
         "--backend",
