@@ -1,9 +1,10 @@
 //! `scion trace` and `scion run` with `--layout bvh8-tri4`: a layout whose leaves hold blocks
-//! of four triangles (`Triangle4`) traced from the library's registry by Cranelift and LLVM, on primary and
-//! secondary rays and trees of every builder: every hit checked against the eight-wide
-//! reference over the same blocks, the hits written equal to the reference traversal's over the
-//! triangles, `--stats` reporting the blocks' work, and the errors (a backend that does not
-//! trace blocks, a stack too small) as clear messages.
+//! of four triangles (`Triangle4`) traced from the library's registry by Cranelift, LLVM and
+//! the emulated GPU pipeline, on primary and secondary rays and trees of every builder: every
+//! hit checked against the eight-wide reference over the same blocks, the hits written equal
+//! to the reference traversal's over the triangles, `--stats` reporting the blocks' work, and
+//! the errors (a backend that does not trace blocks, `scion run` on a GPU, a stack too small)
+//! as clear messages.
 
 mod common;
 
