@@ -1,12 +1,13 @@
-//! `scion trace` over a layout whose leaves hold blocks of four triangles (the prelude's
-//! `Triangle4`, `--layout bvh8-tri4`): the scene's triangles under a binned SAH tree that counts
-//! a block as one test (`SahOptions::block`, leaves of at most
-//! [`BLOCK_TREE_MAX_LEAF`] triangles unless `--leaf-size` says otherwise), each leaf's
-//! triangles cut into blocks of four (`scion_runtime::triangle4::block_tree`), packed by the
-//! layout's generated builder and traced through its batch entry (`scion_host::entries`, the
-//! C entries `scionc --entry` exports), and checked bit for bit against the runtime's
-//! eight-wide reference over the same blocks (docs/runtime.md: a block answers for its nearest
-//! triangle by the tie rule, so those hits are the triangles').
+//! `scion trace` (and `scion run`'s closest hit, and the GPU path of `scion trace`) over a
+//! layout whose leaves hold blocks of four triangles (the prelude's `Triangle4`, `--layout
+//! bvh8-tri4`): the scene's triangles under a binned SAH tree that counts a block as one test
+//! (`triangle4::block_sah_options`, leaves of at most [`BLOCK_TREE_MAX_LEAF`] triangles unless
+//! `--leaf-size` says otherwise), each leaf's triangles cut into blocks of four
+//! (`scion_runtime::triangle4::block_tree`), packed by the layout's generated builder and traced
+//! through its batch entry (`scion_host::entries`, the C entries `scionc --entry` exports), and
+//! checked bit for bit against the runtime's eight-wide reference over the same blocks
+//! (docs/runtime.md: a block answers for its nearest triangle by the tie rule, so those hits are
+//! the triangles').
 
 use crate::io::outln;
 use crate::{BuilderArg, CliError, TraceArgs};
@@ -15,12 +16,12 @@ use scion_host::jit::Codegen;
 use scion_host::library::Resolved;
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::wide::collapse;
-use scion_runtime::bvh::{build_sah_binned, LogicalTree, SahOptions};
+use scion_runtime::bvh::{build_sah_binned, LogicalTree};
 use scion_runtime::geom::{Hit, Ray};
 use scion_runtime::primitive::Primitive;
 use scion_runtime::reference::{closest_hit_wide, closest_hits_wide_stats};
 use scion_runtime::scene::Scene;
-use scion_runtime::triangle4::{block_tree, Triangle4, BLOCK_TREE_MAX_LEAF};
+use scion_runtime::triangle4::{block_sah_options, block_tree, Triangle4, BLOCK_TREE_MAX_LEAF};
 
 /// The primitive type whose layouts this module traces.
 pub(crate) const PRIMITIVE: &str = Triangle4::TYPE_NAME;
@@ -74,14 +75,8 @@ pub(crate) fn build_with(scene: &Scene, builder: BuilderArg, leaf: Option<u32>) 
         "building the logical tree of {} triangles (blocks of four)",
         scene.len()
     ));
-    build_sah_binned(
-        &scene.triangles,
-        &SahOptions {
-            max_leaf: leaf.map_or(BLOCK_TREE_MAX_LEAF, |n| n as usize),
-            block: 4,
-            ..SahOptions::default()
-        },
-    )
+    let max_leaf = leaf.map_or(BLOCK_TREE_MAX_LEAF, |n| n as usize);
+    build_sah_binned(&scene.triangles, &block_sah_options(max_leaf))
 }
 
 /// The largest leaf of [`build`]'s SAH tree.

@@ -165,12 +165,18 @@ pub const BLOCK_TREE_MAX_LEAF: usize = 8;
 /// the SAH counting a leaf of `n` as `ceil(n / 4)` tests (`SahOptions::block`, as Embree's SAH
 /// for `Triangle4` leaves: fuller leaves, fewer nodes), as a tree over blocks ([`block_tree`]).
 pub fn sah_block_tree(tris: &[Triangle]) -> LogicalTree<Triangle4> {
-    let options = SahOptions {
-        max_leaf: BLOCK_TREE_MAX_LEAF,
+    let options = block_sah_options(BLOCK_TREE_MAX_LEAF);
+    block_tree(&build_sah_binned(tris, &options)).expect("a binned SAH tree has no empty leaf")
+}
+
+/// The binned SAH's options for a tree whose leaves become blocks of four: leaves of at most
+/// `max_leaf` triangles, a leaf of `n` counted as `ceil(n / 4)` tests.
+pub fn block_sah_options(max_leaf: usize) -> SahOptions {
+    SahOptions {
+        max_leaf,
         block: 4,
         ..SahOptions::default()
-    };
-    block_tree(&build_sah_binned(tris, &options)).expect("a binned SAH tree has no empty leaf")
+    }
 }
 
 /// `tris` grouped into blocks of up to four nearby triangles: the blocks of
