@@ -2,7 +2,8 @@
 //! one line each: the name `--layout` takes, the layout's name in its source, the sum type it
 //! realizes, the primitives its leaves hold, the closest hit `scion trace` compiles for it, and
 //! how it stores boxes. `--names` prints only the names (for scripts), `--gpu` only the layouts
-//! the GPU path runs, `--primitive Triangle|Segment` only those over that primitive.
+//! `scion trace --device gpu` runs, `--kit` only those a PTX kit holds, `--primitive
+//! Triangle|Segment` only those over that primitive.
 
 use crate::io::outln;
 use crate::CliError;
@@ -10,7 +11,7 @@ use scion_host::library;
 
 /// Runs `scion layouts`.
 pub fn run(args: &crate::LayoutsArgs) -> Result<(), CliError> {
-    let gpu: Vec<&str> = scion_host::mem_interp::library_layouts()
+    let kit: Vec<&str> = scion_host::mem_interp::library_layouts()
         .iter()
         .map(|l| l.0)
         .collect();
@@ -25,11 +26,17 @@ pub fn run(args: &crate::LayoutsArgs) -> Result<(), CliError> {
         );
     }
     for &(stem, _) in library::LAYOUT_FILES {
-        if args.gpu && !gpu.contains(&stem) {
+        if args.kit && !kit.contains(&stem) {
             continue;
         }
         let name = library::layout_name(stem);
         let resolved = library::resolve(stem, None);
+        let on_gpu = |r: &library::Resolved| {
+            r.primitive == "Triangle" || r.primitive == crate::trace_blocks::PRIMITIVE
+        };
+        if args.gpu && !resolved.as_ref().is_ok_and(on_gpu) {
+            continue;
+        }
         if let Some(p) = &args.primitive {
             if !resolved
                 .as_ref()

@@ -173,10 +173,14 @@ pub struct LayoutsArgs {
     /// Print only the names, one per line.
     #[arg(long)]
     pub names: bool,
-    /// Only the layouts the GPU path (`scion ptx`, `--device gpu`) runs: the prelude's
-    /// closest hit over `BVH`.
+    /// Only the layouts `scion trace --device gpu|gpu-emulated` runs: those over triangles
+    /// (or blocks of four), each with its closest hit.
     #[arg(long)]
     pub gpu: bool,
+    /// Only the layouts a PTX kit holds (`scion ptx`, `--emit-ptx`, `scion-gpu`): the prelude's
+    /// `closest_hit` over `BVH`.
+    #[arg(long)]
+    pub kit: bool,
     /// Only the layouts whose leaves hold this primitive: `Triangle` (meshes, OBJ scenes) or
     /// `Segment` (strands, `.hair` scenes).
     #[arg(long, value_name = "TYPE")]
