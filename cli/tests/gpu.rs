@@ -175,6 +175,26 @@ fn unknown_layouts_are_errors() {
     let err = text(&o.stderr);
     assert!(err.contains("a PTX kit holds `closest_hit`"), "{err}");
     assert!(err.contains("without --emit-ptx runs it"), "{err}");
+    // `scion layouts` says which layouts a kit holds and which the GPU path runs.
+    let names = |flag: &str| {
+        let o = scion(&["layouts", flag, "--names"]);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        text(&o.stdout)
+            .lines()
+            .map(String::from)
+            .collect::<Vec<_>>()
+    };
+    let (kit, gpu) = (names("--kit"), names("--gpu"));
+    assert!(
+        kit.contains(&"pbrt".into()) && kit.contains(&"sg-eq-align16".into()),
+        "{kit:?}"
+    );
+    assert!(!kit.contains(&"bvh8".into()), "{kit:?}");
+    for name in ["pbrt", "bvh8", "bvh8-q8-ci", "dop14-split", "bvh8-tri4"] {
+        assert!(gpu.contains(&name.into()), "{name}: {gpu:?}");
+    }
+    assert!(!gpu.contains(&"hair-bvh-strands".into()), "{gpu:?}");
+    assert!(kit.iter().all(|k| gpu.contains(k)), "{kit:?} {gpu:?}");
 }
 
 #[test]
