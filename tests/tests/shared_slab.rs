@@ -2,7 +2,8 @@
 //! and traced end to end: `lit-tests/Inputs/shared_slab.scion` (16-byte nodes keeping one axis
 //! and two planes; the reference `(I, lo, hi)` carries the node's box, the root's from the
 //! scene box `build root` stores) built by its generated builder and traced by the library's
-//! closest hit through the C entries, by Cranelift and LLVM -O3. Its boxes are the parents'
+//! closest hit through the C entries, by Cranelift and LLVM -O3, and by the GPU kernels emulated
+//! on the CPU (`scion_host::gpu_emu`). Its boxes are the parents'
 //! with one plane replaced, so they enclose the true boxes: every hit equals the reference
 //! traversal over those reconstructed boxes (computed here the way the build chooses the axis)
 //! bit for bit, and the reference over the true boxes except where one of the two pruned the
@@ -10,7 +11,8 @@
 
 mod c_entries;
 
-use scion_host::jit::Codegen;
+use scion_host::gpu_emu::EmulatedGpu;
+use scion_host::jit::{Codegen, LoOptions};
 use scion_host::mem_interp::Program;
 use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Aabb, Vec3};
@@ -98,8 +100,26 @@ fn traced_like_the_reference(layout: &str) {
         .collect();
     assert_eq!(nodes, [16], "{:?}", lo.entry.buffers);
     let (mut compared, mut exceptions, mut visits) = (0, 0, (0u64, 0u64));
-    for codegen in [Codegen::Cranelift, Codegen::Llvm(3)] {
-        let code = codegen.backend().jit(&lo.module).unwrap();
+    // The C entries by Cranelift and LLVM, and the GPU kernels emulated on the CPU.
+    let gpu = EmulatedGpu::compile_program(
+        &program(layout),
+        &LoOptions {
+            stack_size: Some(2048),
+            opt_level: 3,
+            dsl_opt: true,
+            target: scion_compiler::abi::EntryTarget::Gpu,
+        },
+        Codegen::Llvm(3),
+        2,
+    )
+    .and_then(EmulatedGpu::into_pipeline)
+    .unwrap();
+    for engine in ["cranelift", "llvm", "gpu-emulated"] {
+        let code = match engine {
+            "cranelift" => Some(Codegen::Cranelift.backend().jit(&lo.module).unwrap()),
+            "llvm" => Some(Codegen::Llvm(3).backend().jit(&lo.module).unwrap()),
+            _ => None,
+        };
         for (i, scene) in hard_and_real(&["teapot", "suzanne"]).iter().enumerate() {
             for kind in [TreeKind::Sah4, TreeKind::Median] {
                 let tree = kind.build(scene);
@@ -108,7 +128,16 @@ fn traced_like_the_reference(layout: &str) {
                 }
                 let boxes = slab_boxes(&tree);
                 let rays = mixed_rays(scene, i as u64);
-                let hits = c_entries::closest_hits(&lo, code.as_ref(), &tree, "closest_hit", &rays);
+                let hits = match &code {
+                    Some(code) => {
+                        c_entries::closest_hits(&lo, code.as_ref(), &tree, "closest_hit", &rays)
+                    }
+                    None => {
+                        let packed = gpu.pack(&tree, tree.stats().depth).unwrap();
+                        let on_device = gpu.upload_rays(&rays).unwrap();
+                        gpu.trace(&packed, &on_device).unwrap().hits
+                    }
+                };
                 for (k, (ray, got)) in rays.iter().zip(&hits).enumerate() {
                     let (mut s_slab, mut s_box) =
                         (TraversalStats::default(), TraversalStats::default());
@@ -118,7 +147,7 @@ fn traced_like_the_reference(layout: &str) {
                     let exact = closest_hit_tree_stats(&tree, ray, &mut s_box);
                     assert!(
                         got.bit_eq(&want),
-                        "{codegen:?} {} {kind:?} ray {k} {ray:?}: {got:?}, the reference over \
+                        "{engine} {} {kind:?} ray {k} {ray:?}: {got:?}, the reference over \
                          the slab boxes {want:?}",
                         scene.name
                     );
