@@ -18,7 +18,6 @@ use crate::io::outln;
 use crate::trace::{build_with, progress, secs};
 use crate::{CliError, RenderArgs, RunBackend, ShadingArg};
 use plotters::prelude::{BitMapBackend, Color, DrawingBackend, RGBColor};
-use scion_host::entries::Entries;
 use scion_host::hit_reference::Traversed;
 use scion_host::jit::Codegen;
 use scion_host::library::{resolve_kind, QueryKind};
@@ -44,16 +43,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         RunBackend::Jit => Codegen::Cranelift,
         RunBackend::Llvm => Codegen::Llvm(3),
     };
-    progress(&format!(
-        "compiling {} for layout `{}`",
-        p.algorithm, p.layout
-    ));
-    let entries = Entries::compile(p, codegen, args.stack_size).map_err(|e| {
-        CliError::new(format!(
-            "cannot compile {} for `{}`: {e}",
-            p.algorithm, p.layout
-        ))
-    })?;
+    let entries = crate::trace::compile_entries(p, codegen, args.stack_size)?;
     progress(&format!("loading {}", args.scene.display()));
     let scene =
         load_obj(&args.scene).map_err(|e| CliError::new(format!("cannot load the scene: {e}")))?;

@@ -536,6 +536,25 @@ fn jit_code(
     Ok(Box::new(code))
 }
 
+/// Any program's C entries (`scion_host::entries`, as `scionc -O3 --entry` compiles them) by
+/// `codegen`, with a traversal stack of `stack_size` entries; says what it compiles.
+pub(crate) fn compile_entries(
+    p: &scion_host::mem_interp::Program,
+    codegen: Codegen,
+    stack_size: Option<u32>,
+) -> Result<Entries, CliError> {
+    progress(&format!(
+        "compiling {} for layout `{}`",
+        p.algorithm, p.layout
+    ));
+    Entries::compile(p, codegen, stack_size).map_err(|e| {
+        CliError::new(format!(
+            "cannot compile {} for `{}`: {e}",
+            p.algorithm, p.layout
+        ))
+    })
+}
+
 pub(crate) fn build(scene: &Scene, args: &TraceArgs) -> LogicalTree {
     build_with(scene, args.builder, args.leaf_size)
 }

@@ -41,16 +41,7 @@ pub(crate) fn compile(
             p.layout
         );
     }
-    crate::trace::progress(&format!(
-        "compiling {} for layout `{}`",
-        p.algorithm, p.layout
-    ));
-    let entries = Entries::compile(p, codegen, args.stack_size).map_err(|e| {
-        CliError::new(format!(
-            "cannot compile {} for `{}`: {e}",
-            p.algorithm, p.layout
-        ))
-    })?;
+    let entries = crate::trace::compile_entries(p, codegen, args.stack_size)?;
     eprintln!(
         "scion: compiled in {:.3} s",
         entries.compile_time.as_secs_f64()

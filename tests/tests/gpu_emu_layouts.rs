@@ -31,21 +31,31 @@ fn rays(scene: &Scene, seed: u64) -> Vec<Ray> {
     rays
 }
 
-#[test]
-fn every_library_layout_runs_through_the_emulated_gpu_pipeline() {
-    let opts = LoOptions {
+/// The GPU entries compiled for this CPU at -O3, with a traversal stack of 256 entries.
+fn gpu_options() -> LoOptions {
+    LoOptions {
         stack_size: Some(256),
         opt_level: 3,
         dsl_opt: true,
         target: scion_compiler::abi::EntryTarget::Gpu,
-    };
-    let layouts: Vec<(String, Resolved)> = layout_names()
+    }
+}
+
+/// The library layouts whose leaves hold `primitive`, resolved with their closest hit.
+fn layouts_over(primitive: &str) -> Vec<(String, Resolved)> {
+    layout_names()
         .into_iter()
         .filter_map(|name| {
             let r = resolve(&name, None).unwrap_or_else(|e| panic!("{name}: {e}"));
-            (r.primitive == "Triangle").then_some((name, r))
+            (r.primitive == primitive).then_some((name, r))
         })
-        .collect();
+        .collect()
+}
+
+#[test]
+fn every_library_layout_runs_through_the_emulated_gpu_pipeline() {
+    let opts = gpu_options();
+    let layouts = layouts_over("Triangle");
     assert!(
         layouts.len() >= 21,
         "{} layouts over triangles",
@@ -123,19 +133,8 @@ fn blocks_of_four_run_through_the_emulated_gpu_pipeline() {
     use scion_runtime::bvh::wide::collapse;
     use scion_runtime::reference::closest_hit_wide;
     use scion_runtime::triangle4::sah_block_tree;
-    let opts = LoOptions {
-        stack_size: Some(256),
-        opt_level: 3,
-        dsl_opt: true,
-        target: scion_compiler::abi::EntryTarget::Gpu,
-    };
-    let layouts: Vec<(String, Resolved)> = layout_names()
-        .into_iter()
-        .filter_map(|name| {
-            let r = resolve(&name, None).unwrap_or_else(|e| panic!("{name}: {e}"));
-            (r.primitive == "Triangle4").then_some((name, r))
-        })
-        .collect();
+    let opts = gpu_options();
+    let layouts = layouts_over("Triangle4");
     assert!(!layouts.is_empty(), "bvh8-tri4 is a library layout");
     let mut scenes = scion_runtime::scene::gen::hard_cases();
     for info in REAL_SCENES {
