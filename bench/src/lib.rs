@@ -68,6 +68,9 @@ pub struct Workload {
     pub rays: Vec<Ray>,
     /// Which rays they are.
     pub kind: RayKind,
+    /// The tree of blocks of four triangles the `Triangle4` layouts traverse, when another
+    /// builder than Scion's block SAH tree makes it (`--tree`); `None`: `sah_block_tree`.
+    pub blocks: Option<LogicalTree<scion_runtime::triangle4::Triangle4>>,
 }
 
 impl Workload {
@@ -96,6 +99,7 @@ impl Workload {
             tree,
             rays,
             kind,
+            blocks: None,
         })
     }
 }

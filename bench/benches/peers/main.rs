@@ -20,10 +20,12 @@
 //! `scion_runtime::timing::PEER_FIELDS`), `--trace-only NAME` (trace only the row NAME, once,
 //! untimed: what scripts/perf-counters.sh runs under valgrind), `--builders` (instead of timing,
 //! compare the trees of Scion's builder, tinybvh's and obvhs's: SAH cost and the reference
-//! traversal's work per ray on each, see `builders`), `--tree scion|tinybvh|obvhs` (the tree the
-//! reference, the hand-written kernel and Scion's rows traverse: Scion's binned SAH tree by
-//! default, or the one tinybvh's or obvhs's builder makes, read back as a logical tree; the
-//! peers always use their own), `--max-leaf N` (Scion's tree with leaves of at most N
+//! traversal's work per ray on each, see `builders`), `--tree scion|tinybvh|obvhs|embree` (the
+//! tree the reference, the hand-written kernel and Scion's rows traverse: Scion's binned SAH
+//! tree by default, or the one tinybvh's, obvhs's or Embree's builder makes, read back as a
+//! logical tree; Embree's through its builder API `rtcBuildBVH`, which also makes the tree of
+//! blocks the `Triangle4` layouts traverse, its SAH counting blocks of four, see `embree_tree`;
+//! the peers always use their own), `--max-leaf N` (Scion's tree with leaves of at most N
 //! primitives, for layouts with narrower counts: the hair BVH's 3 bits hold 7),
 //! `--traversal-cost C` (Scion's tree built with the SAH's cost of an interior visit set to
 //! `C` triangle tests instead of 1: larger leaves and fewer nodes as `C` grows; for measuring
@@ -33,6 +35,7 @@
 
 mod builders;
 mod embree_peer;
+mod embree_tree;
 mod obvhs_peer;
 mod scion_rows;
 mod tinybvh_peer;
@@ -186,9 +189,19 @@ fn run(a: &Args) -> Result<(), String> {
         }
         "tinybvh" => w.tree = tinybvh_peer::logical_tree(&w.triangles)?,
         "obvhs" => w.tree = obvhs_peer::logical_tree(&w.triangles)?,
+        "embree" => {
+            let leaf = a.max_leaf.unwrap_or(scion_runtime::bvh::SahOptions::default().max_leaf);
+            w.tree = embree_tree::logical_tree(&w.triangles, leaf, 1)?;
+            let blocks = embree_tree::logical_tree(
+                &w.triangles,
+                scion_runtime::triangle4::BLOCK_TREE_MAX_LEAF,
+                4,
+            )?;
+            w.blocks = Some(scion_runtime::triangle4::block_tree(&blocks)?);
+        }
         t => {
             return Err(format!(
-                "--tree: unknown builder `{t}` (scion, tinybvh or obvhs)"
+                "--tree: unknown builder `{t}` (scion, tinybvh, obvhs or embree)"
             ))
         }
     }

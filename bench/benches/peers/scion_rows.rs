@@ -98,8 +98,15 @@ fn block_contender<'a>(
     driver: &'a BatchDriver,
 ) -> Result<Contender<'a>, String> {
     let start = Instant::now();
-    let tree = sah_block_tree(&w.triangles);
-    let packed = entries.pack(&tree)?;
+    let own;
+    let tree = match &w.blocks {
+        Some(t) => t,
+        None => {
+            own = sah_block_tree(&w.triangles);
+            &own
+        }
+    };
+    let packed = entries.pack(tree)?;
     Ok(Contender {
         name,
         bytes: Some(packed.bytes()),

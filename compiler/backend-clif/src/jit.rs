@@ -93,6 +93,12 @@ impl JitModule {
                 .map_err(|e| ClifError(format!("@{name}: {e}")))?;
             cl.define_function(id, &mut ctx)
                 .map_err(|e| ClifError(format!("@{name}: {e:?}")))?;
+            // For reading the machine code (docs/backends.md, "In-process execution").
+            if let Ok(dir) = std::env::var("SCION_CLIF_DUMP") {
+                if let Some(c) = ctx.compiled_code() {
+                    let _ = std::fs::write(format!("{dir}/{name}.bin"), c.code_buffer());
+                }
+            }
             cl.clear_context(&mut ctx);
             let entry = trampoline(&mut cl, m, f, id, &mut fctx)?;
             let ty = |t: &scion_ir::TypeId| m.types.get(*t).clone();
