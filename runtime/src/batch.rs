@@ -7,7 +7,7 @@
 //! the next ones and a slow block never holds up the others. (A shared atomic counter read by
 //! every thread of `ThreadPool::broadcast` did the same in principle, but two threads ran only
 //! 1.64-1.71 times as fast as one on teapot's primary rays, against 1.89 now: docs/
-//! performance.md, "Thirteenth session".) One thread means the calling thread runs every
+//! performance-eight-wide.md, "Thirteenth session".) One thread means the calling thread runs every
 //! block in order; `0` means one thread per core (rayon's default, which honors
 //! `RAYON_NUM_THREADS`).
 

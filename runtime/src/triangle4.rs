@@ -158,7 +158,7 @@ pub fn block_tree(tree: &LogicalTree<Triangle>) -> Result<LogicalTree<Triangle4>
 /// seven blocks; against leaves of one block, two raised `bvh8-tri4` by 13 to 17 % on
 /// fzk_haus and 8 to 16 % on dragon, a few per cent on most other library scenes, and lost
 /// 1 to 3 % on bunny, suzanne and sponza (peers bench, one thread, 65,536 rays, same runs);
-/// four blocks were slower than two (docs/performance.md, "Sixteenth session").
+/// four blocks were slower than two (docs/performance-eight-wide.md, "Sixteenth session").
 pub const BLOCK_TREE_MAX_LEAF: usize = 8;
 
 /// The binned SAH tree over `tris` with leaves of at most [`BLOCK_TREE_MAX_LEAF`] triangles,

@@ -5,7 +5,7 @@
 //! vectorizer has to find the vectors again, and where one lane's computation holds several
 //! operations of one shape (the components of a cross product, the dot products of a
 //! Möller-Trumbore test) it packs those together and mixes the lanes with shuffles
-//! (docs/performance.md, "Fifteenth session"). So a run of `n` consecutive ops marked as lanes
+//! (docs/performance-eight-wide.md, "Fifteenth session"). So a run of `n` consecutive ops marked as lanes
 //! `0 .. n` of one group, all of one kind (and predicate), is translated here as one `<n x T>`
 //! operation, whose lanes are then the `lo` values (`extractelement`, which LLVM folds away where
 //! the next group reads the whole vector). An operand is the vector of an earlier group when its
