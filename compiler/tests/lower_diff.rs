@@ -107,6 +107,24 @@ func t_mask(a: f32x3, b: f32x3, x: f32) -> (u32, u32, u16, u64) = {
              | (((d[5] <= x) as u64) << 3);
   return (m, popcount(m), m4, w);
 }
+// Four-lane operations (one vector instruction each in Cranelift and LLVM, lane groups):
+// arithmetic, compares into masks, mask logic, selects, bitcasts, integer lanes.
+func t_v4(a: f32x4, b: f32x4, c: u32x4, d: u32x4) -> (f32x4, f32x4, u32x4, u32x4) = {
+  let m = (a < b) | (!(a == b) & (c > d));
+  let s: f32x4 = select(m, a - b, a * b / (a + b));
+  let t: u32x4 = ((a to u32x4) ^ (c + d)) & ~(c - d);
+  return (s, -a, t, select(c >= d, c, d));
+}
+// The prelude's four-triangle test (`hit_lanes`, `hit_block`) on four random triangles.
+func t_tri4(ray: Ray, x0: f32x4, y0: f32x4, z0: f32x4, x1: f32x4, y1: f32x4, z1: f32x4,
+            x2: f32x4, y2: f32x4, z2: f32x4) -> (f32x4, (f32, u32)) = {
+  let b: Triangle4 = Triangle4([x0[0], x0[1], x0[2], x0[3]], [y0[0], y0[1], y0[2], y0[3]],
+                               [z0[0], z0[1], z0[2], z0[3]], [x1[0], x1[1], x1[2], x1[3]],
+                               [y1[0], y1[1], y1[2], y1[3]], [z1[0], z1[1], z1[2], z1[3]],
+                               [x2[0], x2[1], x2[2], x2[3]], [y2[0], y2[1], y2[2], y2[3]],
+                               [z2[0], z2[1], z2[2], z2[3]], [7, 3, 5, 1]);
+  return (hit_lanes(ray, b), hit_block(ray, b));
+}
 func t_ifx(a: f32x3, k: u32) -> (f32, u32) = {
   let lo: f32 = if a.x <= a.y { a.x } elif isnan(a.y) { a.z } else { a.y };
   let which: u32 = if lo < a.z { if k > 500 { k - 500 } else { 0 } } else { 2 };
@@ -117,7 +135,7 @@ func t_ifx(a: f32x3, k: u32) -> (f32, u32) = {
 const FUNCS: &[&str] = &[
     "t_hit", "t_slab", "t_box", "t_tri", "t_cpb", "t_cpt", "t_cpc", "t_sat", "t_bb", "t_d2",
     "t_axis", "t_dir", "t_lanes", "t_bits", "t_mut", "t_ifx", "t_clamp", "t_assign", "t_pick",
-    "t_mask",
+    "t_mask", "t_v4", "t_tri4",
 ];
 
 /// The `tree` module of the prelude functions above.

@@ -195,8 +195,11 @@ pub fn logical_tree(tris: &[Triangle], max_leaf: usize, block: u32) -> Result<Lo
                     stack.extend((*p).children.iter().rev().copied());
                 }
             }
-            let index: std::collections::HashMap<*const Node, u32> =
-                all.iter().enumerate().map(|(i, &p)| (p, i as u32)).collect();
+            let index: std::collections::HashMap<*const Node, u32> = all
+                .iter()
+                .enumerate()
+                .map(|(i, &p)| (p, i as u32))
+                .collect();
             read_tree(tris, 0, |i| {
                 let p = all[i as usize];
                 if (*p).leaf != 0 {

@@ -190,7 +190,9 @@ fn run(a: &Args) -> Result<(), String> {
         "tinybvh" => w.tree = tinybvh_peer::logical_tree(&w.triangles)?,
         "obvhs" => w.tree = obvhs_peer::logical_tree(&w.triangles)?,
         "embree" => {
-            let leaf = a.max_leaf.unwrap_or(scion_runtime::bvh::SahOptions::default().max_leaf);
+            let leaf = a
+                .max_leaf
+                .unwrap_or(scion_runtime::bvh::SahOptions::default().max_leaf);
             w.tree = embree_tree::logical_tree(&w.triangles, leaf, 1)?;
             let blocks = embree_tree::logical_tree(
                 &w.triangles,

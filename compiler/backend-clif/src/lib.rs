@@ -24,6 +24,7 @@
 
 pub mod flatten;
 pub mod jit;
+mod lanes;
 pub mod translate;
 
 pub use jit::{ClifError, Cranelift, JitModule};

@@ -30,7 +30,7 @@ use scion_ir::op::OpKind;
 use scion_ir::tree::CmpPred;
 use scion_ir::types::{FloatTy, IntTy, Type};
 use scion_ir::Module;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// The Cranelift type of a `lo` type.
 pub fn clif_type(m: &Module, ty: TypeId, ptr: ir::Type) -> Result<ir::Type, String> {
@@ -127,6 +127,7 @@ pub fn translate_func<M: ClModule>(
     let mut blocks = HashMap::new();
     let mut vals: HashMap<ValueId, ir::Value> = HashMap::new();
     let nan = NanFacts::of(m, body);
+    let groups = crate::lanes::groups(m, body);
     for (i, &lb) in order.iter().enumerate() {
         let cb = b.create_block();
         if i == 0 {
@@ -151,6 +152,9 @@ pub fn translate_func<M: ClModule>(
             ptr,
             vals: &mut vals,
             nan: &nan,
+            groups: &groups,
+            grouped: HashSet::new(),
+            lane_vecs: HashMap::new(),
         };
         for &op in &m.blocks[lb].ops {
             fx.op(cl, syms, op, &blocks)?;
@@ -161,17 +165,23 @@ pub fn translate_func<M: ClModule>(
     Ok(())
 }
 
-struct Fx<'a, 'b> {
-    b: &'a mut FunctionBuilder<'b>,
-    m: &'a Module,
+pub(crate) struct Fx<'a, 'b> {
+    pub(crate) b: &'a mut FunctionBuilder<'b>,
+    pub(crate) m: &'a Module,
     ptr: ir::Type,
-    vals: &'a mut HashMap<ValueId, ir::Value>,
+    pub(crate) vals: &'a mut HashMap<ValueId, ir::Value>,
     /// Which NaNs to canonicalize, which values are never NaN ([`scion_ir::lo::nan`]).
-    nan: &'a NanFacts,
+    pub(crate) nan: &'a NanFacts,
+    /// The function's lane groups ([`crate::lanes`]), keyed by their first op.
+    groups: &'a HashMap<scion_ir::OpId, Vec<scion_ir::OpId>>,
+    /// The other ops of the groups met so far in this block (translated with their first).
+    grouped: HashSet<scion_ir::OpId>,
+    /// The vector and lane of each value a group defined in this block.
+    pub(crate) lane_vecs: HashMap<ValueId, (ir::Value, u8)>,
 }
 
 impl Fx<'_, '_> {
-    fn v(&self, x: ValueId) -> Result<ir::Value, String> {
+    pub(crate) fn v(&self, x: ValueId) -> Result<ir::Value, String> {
         self.vals
             .get(&x)
             .copied()
@@ -210,6 +220,30 @@ impl Fx<'_, '_> {
     }
 
     fn op<M: ClModule>(
+        &mut self,
+        cl: &mut M,
+        syms: &Symbols,
+        op: scion_ir::OpId,
+        blocks: &HashMap<BlockId, ir::Block>,
+    ) -> Result<(), String> {
+        if self.grouped.contains(&op) {
+            return Ok(());
+        }
+        if let Some(ops) = self.groups.get(&op) {
+            self.grouped.extend(ops[1..].iter().copied());
+            if self.group(ops)? {
+                return Ok(());
+            }
+            for &o in ops {
+                self.scalar_op(cl, syms, o, blocks)?;
+            }
+            return Ok(());
+        }
+        self.scalar_op(cl, syms, op, blocks)
+    }
+
+    /// `op` translated on its own, one lane's scalar op for the ops of a lane group.
+    fn scalar_op<M: ClModule>(
         &mut self,
         cl: &mut M,
         syms: &Symbols,

@@ -13,6 +13,7 @@
 
 pub mod backend;
 pub mod directed;
+pub mod lanes;
 pub mod nan;
 pub mod ops;
 pub mod verify;

@@ -20,19 +20,8 @@
 use super::*;
 use inkwell::types::VectorType;
 use inkwell::values::VectorValue;
+use scion_ir::lo::lanes::lane_groups;
 use scion_ir::OpId;
-use std::collections::HashSet;
-
-/// The lane marks of `op`: `(group, k, n)`.
-fn lane_mark(m: &Module, op: OpId) -> Option<(i128, usize, usize)> {
-    match m.ops[op].attr("lane")? {
-        scion_ir::attr::Attr::List(l) => match l.as_slice() {
-            [g, k, n] => Some((g.as_int()?, k.as_int()? as usize, n.as_int()? as usize)),
-            _ => None,
-        },
-        _ => None,
-    }
-}
 
 /// Whether a group of `kind` can be one vector instruction (its result type `rt`).
 fn vector_kind(m: &Module, kind: L, o: &scion_ir::Operation) -> bool {
@@ -53,51 +42,13 @@ fn vector_kind(m: &Module, kind: L, o: &scion_ir::Operation) -> bool {
     }
 }
 
-/// The groups of the blocks `blocks`: each group's ops, keyed by its first op.
+/// The groups of the blocks `blocks` LLVM emits as vector instructions (all of the kinds
+/// [`vector_kind`] takes; `scion_ir::lo::lanes`), each keyed by its first op.
 pub(super) fn groups(m: &Module, blocks: &[BlockId]) -> HashMap<OpId, Vec<OpId>> {
-    let mut out = HashMap::new();
-    for &b in blocks {
-        let ops = &m.blocks[b].ops;
-        let mut i = 0;
-        while i < ops.len() {
-            let Some((g, 0, n)) = lane_mark(m, ops[i]) else {
-                i += 1;
-                continue;
-            };
-            let run = &ops[i..(i + n).min(ops.len())];
-            let first = &m.ops[ops[i]];
-            let OpKind::Lo(kind) = first.kind else {
-                i += 1;
-                continue;
-            };
-            let results: HashSet<ValueId> = run
-                .iter()
-                .flat_map(|&o| m.ops[o].results.iter().copied())
-                .collect();
-            let fits = run.len() == n
-                && first.results.len() == 1
-                && vector_kind(m, kind, first)
-                && run.iter().enumerate().all(|(k, &o)| {
-                    let x = &m.ops[o];
-                    lane_mark(m, o) == Some((g, k, n))
-                        && x.kind == first.kind
-                        && x.pred() == first.pred()
-                        && x.results.len() == 1
-                        && x.operands.len() == first.operands.len()
-                        && m.values[x.results[0]].ty == m.values[first.results[0]].ty
-                        && x.operands.iter().zip(&first.operands).all(|(&p, &q)| {
-                            m.values[p].ty == m.values[q].ty && !results.contains(&p)
-                        })
-                });
-            if fits {
-                out.insert(ops[i], run.to_vec());
-                i += n;
-            } else {
-                i += 1;
-            }
-        }
-    }
-    out
+    lane_groups(m, blocks, |m, op| match m.ops[op].kind {
+        OpKind::Lo(kind) => vector_kind(m, kind, &m.ops[op]),
+        _ => false,
+    })
 }
 
 impl<'c> Fn<'_, 'c> {
