@@ -387,11 +387,12 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
         let s = closest_hits_tree_stats(&traversed, &rays, &driver);
         let per = |x: u64| x as f64 / rays.len().max(1) as f64;
         outln!(
-            "work/ray     {:.2} box tests, {:.2} nodes visited, {:.2} skipped, {:.2} triangle tests; deepest stack {} (reference traversal{})",
+            "work/ray     {:.2} box tests, {:.2} nodes visited, {:.2} skipped, {:.2} triangle tests in {:.2} runs of up to four; deepest stack {} (reference traversal{})",
             per(s.boxes_tested),
             per(s.nodes_visited),
             per(s.nodes_pruned),
             per(s.triangles_tested),
+            per(s.leaf_runs),
             s.max_pending,
             if binary_quantized { " of the decoded boxes" } else { "" }
         );

@@ -344,7 +344,7 @@ fn empty_scene_misses() {
 #[test]
 fn a_wrong_tie_rule_is_caught() {
     use scion_host::oracle::{ClosestHit, CLOSEST_HIT};
-    let mutated = CLOSEST_HIT.replace("t.id < best[1]", "t.id > best[1]");
+    let mutated = CLOSEST_HIT.replace("h[1] < best[1]", "h[1] > best[1]");
     assert_ne!(mutated, CLOSEST_HIT, "the mutation must apply");
     let p = ClosestHit::compile_source("mutated.scion", &mutated, 1).unwrap();
     let scene = gen::duplicated(&gen::quad_grid(4, 4), 3);
@@ -364,7 +364,7 @@ fn a_wrong_tie_rule_is_caught() {
 fn interpreter_errors_name_the_ray() {
     use scion_host::oracle::{ClosestHit, CLOSEST_HIT};
     use scion_runtime::geom::Vec3;
-    let mutated = CLOSEST_HIT.replace("best = (h, t.id);", "best = (h, t.id / (t.id - t.id));");
+    let mutated = CLOSEST_HIT.replace("best = h;", "best = (h[0], h[1] / (h[1] - h[1]));");
     assert_ne!(mutated, CLOSEST_HIT, "the mutation must apply");
     let p = ClosestHit::compile_source("div0.scion", &mutated, 0).unwrap();
     let scene = gen::one_triangle();

@@ -40,6 +40,10 @@ pub struct TraversalStats {
     pub nodes_pruned: u64,
     /// Ray-triangle tests.
     pub triangles_tested: u64,
+    /// Runs of up to four of a leaf's triangles (`ceil(n / 4)` per leaf visited): the four-lane
+    /// tests of the library's closest hit (library/algorithms/closest_hit.scion), which tests
+    /// a leaf's triangles four at a time.
+    pub leaf_runs: u64,
     /// The most entries ever pending on the traversal stack (the largest over the traversals
     /// added): generated code with a stack of `n` entries overflows exactly when this exceeds
     /// `n`.
@@ -53,6 +57,7 @@ impl TraversalStats {
         self.nodes_visited += o.nodes_visited;
         self.nodes_pruned += o.nodes_pruned;
         self.triangles_tested += o.triangles_tested;
+        self.leaf_runs += o.leaf_runs;
         self.max_pending = self.max_pending.max(o.max_pending);
     }
 }
@@ -168,7 +173,9 @@ pub fn closest_hit_with<P: Primitive>(
             stats.nodes_visited += 1;
             let node = &tree.nodes[i as usize];
             if node.is_leaf() {
-                for tri in tree.leaf_primitives(node) {
+                let prims = tree.leaf_primitives(node);
+                stats.leaf_runs += prims.len().div_ceil(4) as u64;
+                for tri in prims {
                     stats.triangles_tested += 1;
                     consider(ray, tri, &mut best);
                 }

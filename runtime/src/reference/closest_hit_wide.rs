@@ -54,6 +54,7 @@ pub fn closest_hit_wide_stats<const W: usize>(
             match child {
                 WideChild::Empty => {}
                 WideChild::Leaf { offset, count } => {
+                    stats.leaf_runs += u64::from(count).div_ceil(4);
                     let start = offset as usize;
                     for tri in &primitives[start..start + count as usize] {
                         stats.triangles_tested += 1;
