@@ -17,7 +17,7 @@
 //! cannot be seen), compares with the scalar translation's condition codes. Groups of other
 //! kinds or widths (`min`/`max`, shifts, casts, eight lanes, 64-bit lanes) stay scalar.
 
-use crate::translate::Fx;
+use crate::translate::{float_cc, int_cc, Fx};
 use cranelift_codegen::ir::condcodes::{FloatCC, IntCC};
 use cranelift_codegen::ir::immediates::Ieee32;
 use cranelift_codegen::ir::{self, types, Endianness, InstBuilder, MemFlags};
@@ -25,7 +25,6 @@ use scion_ir::entity::{BlockId, OpId, ValueId};
 use scion_ir::lo::lanes::lane_groups;
 use scion_ir::lo::Op as L;
 use scion_ir::op::OpKind;
-use scion_ir::tree::CmpPred;
 use scion_ir::types::{FloatTy, Type};
 use scion_ir::Module;
 use std::collections::HashMap;
@@ -172,29 +171,9 @@ impl Fx<'_, '_> {
             L::Cmp => {
                 let pred = first.pred().ok_or("bad predicate")?;
                 if args[0].1 == Lane::F32 {
-                    let cc = match pred {
-                        CmpPred::Eq => FloatCC::Equal,
-                        CmpPred::Ne => FloatCC::NotEqual,
-                        CmpPred::Lt => FloatCC::LessThan,
-                        CmpPred::Le => FloatCC::LessThanOrEqual,
-                        CmpPred::Gt => FloatCC::GreaterThan,
-                        CmpPred::Ge => FloatCC::GreaterThanOrEqual,
-                    };
-                    b.ins().fcmp(cc, a(0), a(1))
+                    b.ins().fcmp(float_cc(pred), a(0), a(1))
                 } else {
-                    let cc = match (pred, signed) {
-                        (CmpPred::Eq, _) => IntCC::Equal,
-                        (CmpPred::Ne, _) => IntCC::NotEqual,
-                        (CmpPred::Lt, true) => IntCC::SignedLessThan,
-                        (CmpPred::Le, true) => IntCC::SignedLessThanOrEqual,
-                        (CmpPred::Gt, true) => IntCC::SignedGreaterThan,
-                        (CmpPred::Ge, true) => IntCC::SignedGreaterThanOrEqual,
-                        (CmpPred::Lt, false) => IntCC::UnsignedLessThan,
-                        (CmpPred::Le, false) => IntCC::UnsignedLessThanOrEqual,
-                        (CmpPred::Gt, false) => IntCC::UnsignedGreaterThan,
-                        (CmpPred::Ge, false) => IntCC::UnsignedGreaterThanOrEqual,
-                    };
-                    b.ins().icmp(cc, a(0), a(1))
+                    b.ins().icmp(int_cc(pred, signed), a(0), a(1))
                 }
             }
             L::Select => {

@@ -49,6 +49,34 @@ pub fn clif_type(m: &Module, ty: TypeId, ptr: ir::Type) -> Result<ir::Type, Stri
     })
 }
 
+/// The Cranelift condition of a float `lo.cmp` (ordered, but `ne`), scalar or lane by lane.
+pub(crate) fn float_cc(pred: CmpPred) -> FloatCC {
+    match pred {
+        CmpPred::Eq => FloatCC::Equal,
+        CmpPred::Ne => FloatCC::NotEqual,
+        CmpPred::Lt => FloatCC::LessThan,
+        CmpPred::Le => FloatCC::LessThanOrEqual,
+        CmpPred::Gt => FloatCC::GreaterThan,
+        CmpPred::Ge => FloatCC::GreaterThanOrEqual,
+    }
+}
+
+/// The Cranelift condition of an integer `lo.cmp` on operands of the given signedness.
+pub(crate) fn int_cc(pred: CmpPred, signed: bool) -> IntCC {
+    match (pred, signed) {
+        (CmpPred::Eq, _) => IntCC::Equal,
+        (CmpPred::Ne, _) => IntCC::NotEqual,
+        (CmpPred::Lt, true) => IntCC::SignedLessThan,
+        (CmpPred::Le, true) => IntCC::SignedLessThanOrEqual,
+        (CmpPred::Gt, true) => IntCC::SignedGreaterThan,
+        (CmpPred::Ge, true) => IntCC::SignedGreaterThanOrEqual,
+        (CmpPred::Lt, false) => IntCC::UnsignedLessThan,
+        (CmpPred::Le, false) => IntCC::UnsignedLessThanOrEqual,
+        (CmpPred::Gt, false) => IntCC::UnsignedGreaterThan,
+        (CmpPred::Ge, false) => IntCC::UnsignedGreaterThanOrEqual,
+    }
+}
+
 /// The Cranelift signature of function `f`.
 pub fn signature<M: ClModule>(cl: &M, m: &Module, f: FuncId) -> Result<Signature, String> {
     let ptr = cl.target_config().pointer_type();
@@ -361,29 +389,9 @@ impl Fx<'_, '_> {
                 let pred = o.pred().ok_or("bad predicate")?;
                 let t = self.b.func.dfg.value_type(args[0]);
                 Some(if is_float(t) {
-                    let cc = match pred {
-                        CmpPred::Eq => FloatCC::Equal,
-                        CmpPred::Ne => FloatCC::NotEqual,
-                        CmpPred::Lt => FloatCC::LessThan,
-                        CmpPred::Le => FloatCC::LessThanOrEqual,
-                        CmpPred::Gt => FloatCC::GreaterThan,
-                        CmpPred::Ge => FloatCC::GreaterThanOrEqual,
-                    };
-                    self.b.ins().fcmp(cc, args[0], args[1])
+                    self.b.ins().fcmp(float_cc(pred), args[0], args[1])
                 } else {
-                    let cc = match (pred, signed) {
-                        (CmpPred::Eq, _) => IntCC::Equal,
-                        (CmpPred::Ne, _) => IntCC::NotEqual,
-                        (CmpPred::Lt, true) => IntCC::SignedLessThan,
-                        (CmpPred::Le, true) => IntCC::SignedLessThanOrEqual,
-                        (CmpPred::Gt, true) => IntCC::SignedGreaterThan,
-                        (CmpPred::Ge, true) => IntCC::SignedGreaterThanOrEqual,
-                        (CmpPred::Lt, false) => IntCC::UnsignedLessThan,
-                        (CmpPred::Le, false) => IntCC::UnsignedLessThanOrEqual,
-                        (CmpPred::Gt, false) => IntCC::UnsignedGreaterThan,
-                        (CmpPred::Ge, false) => IntCC::UnsignedGreaterThanOrEqual,
-                    };
-                    self.b.ins().icmp(cc, args[0], args[1])
+                    self.b.ins().icmp(int_cc(pred, signed), args[0], args[1])
                 })
             }
             L::Select => Some(self.b.ins().select(args[0], args[1], args[2])),
