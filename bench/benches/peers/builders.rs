@@ -29,6 +29,14 @@ pub fn report(w: &Workload, driver: &BatchDriver) -> Result<String, String> {
             build_sah_binned(&w.triangles, &SahOptions::default()),
         ),
         (
+            "Scion binned SAH + reinsertion, leaves in runs of 2",
+            build_sah_binned(&w.triangles, &SahOptions { block: 2, ..SahOptions::default() }),
+        ),
+        (
+            "Scion binned SAH + reinsertion, leaves in runs of 4",
+            build_sah_binned(&w.triangles, &SahOptions { block: 4, ..SahOptions::default() }),
+        ),
+        (
             "tinybvh BVH::Build (binned SAH)",
             tinybvh_peer::logical_tree(&w.triangles)?,
         ),
@@ -48,9 +56,9 @@ pub fn report(w: &Workload, driver: &BatchDriver) -> Result<String, String> {
     );
     let _ = writeln!(
         s,
-        "| builder | nodes | leaves | largest leaf | depth | SAH cost | box tests/ray | nodes visited/ray | triangle tests/ray |"
+        "| builder | nodes | leaves | largest leaf | depth | SAH cost | box tests/ray | nodes visited/ray | triangle tests/ray | leaf runs/ray |"
     );
-    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     let per = |x: u64| x as f64 / w.rays.len().max(1) as f64;
     for (name, tree) in &trees {
         tree.validate_with_cap(usize::MAX)
@@ -59,7 +67,7 @@ pub fn report(w: &Workload, driver: &BatchDriver) -> Result<String, String> {
         let k = closest_hits_tree_stats(tree, &w.rays, driver);
         let _ = writeln!(
             s,
-            "| {name} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.2} |",
+            "| {name} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} |",
             st.nodes,
             st.leaves,
             st.max_leaf,
@@ -67,7 +75,8 @@ pub fn report(w: &Workload, driver: &BatchDriver) -> Result<String, String> {
             st.sah_cost,
             per(k.boxes_tested),
             per(k.nodes_visited),
-            per(k.triangles_tested)
+            per(k.triangles_tested),
+            per(k.leaf_runs)
         );
     }
     Ok(s)

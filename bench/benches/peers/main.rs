@@ -65,6 +65,7 @@ struct Args {
     tree: String,
     max_leaf: Option<usize>,
     traversal_cost: Option<f64>,
+    sah_block: Option<usize>,
 }
 
 /// The peers `--peers` can name, in the order their rows come: the hand-written kernel over
@@ -100,6 +101,7 @@ fn parse() -> Result<Args, String> {
         tree: "scion".into(),
         max_leaf: None,
         traversal_cost: None,
+        sah_block: None,
     };
     scion_bench::parse_flags(|flag, value| {
         let num = |s: String| scion_bench::flag_number(flag, &s);
@@ -142,6 +144,13 @@ fn parse() -> Result<Args, String> {
                 }
                 a.traversal_cost = Some(c);
             }
+            "--sah-block" => {
+                let n = num(value()?)? as usize;
+                if n == 0 {
+                    return Err("--sah-block: at least 1 primitive per test".into());
+                }
+                a.sah_block = Some(n);
+            }
             "--peers" => {
                 let list = value()?;
                 a.peers = list
@@ -177,11 +186,12 @@ fn run(a: &Args) -> Result<(), String> {
     // The tree the reference, the hand-written kernel and Scion's rows traverse.
     match a.tree.as_str() {
         "scion" => {
-            if a.max_leaf.is_some() || a.traversal_cost.is_some() {
+            if a.max_leaf.is_some() || a.traversal_cost.is_some() || a.sah_block.is_some() {
                 let d = scion_runtime::bvh::SahOptions::default();
                 let o = scion_runtime::bvh::SahOptions {
                     max_leaf: a.max_leaf.unwrap_or(d.max_leaf),
                     traversal_cost: a.traversal_cost.unwrap_or(d.traversal_cost),
+                    block: a.sah_block.unwrap_or(d.block),
                     ..d
                 };
                 w.tree = scion_runtime::bvh::build_sah_binned(&w.triangles, &o);

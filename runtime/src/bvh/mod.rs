@@ -11,6 +11,7 @@
 //! stack. Nodes come out in depth-first pre-order: root 0, left child = parent + 1.
 
 pub mod chain;
+pub mod collapse;
 pub mod dop14;
 pub mod fcpw;
 pub mod fill;

@@ -340,6 +340,7 @@ mod tests {
     fn plain(tris: &[crate::geom::Triangle]) -> LogicalTree {
         let o = SahOptions {
             reinsertion_passes: 0,
+            block: 1,
             ..SahOptions::default()
         };
         build_sah_binned(tris, &o)

@@ -333,7 +333,12 @@ mod tests {
     #[test]
     fn nodes_fill_up_and_come_in_pre_order() {
         let scene = gen::quad_grid(32, 32);
-        let tree = build_sah_binned(&scene.triangles, &SahOptions::default());
+        // Leaves of one triangle (costed one at a time, so not collapsed).
+        let one = SahOptions {
+            block: 1,
+            ..SahOptions::default()
+        };
+        let tree = build_sah_binned(&scene.triangles, &one);
         let w = collapse::<8>(&tree);
         let s = w.stats();
         // 1024 leaves: 1 + 8 + 64 nodes of 8 children, then 512 nodes of two leaves.
