@@ -29,7 +29,9 @@
 //! primitives, for layouts with narrower counts: the hair BVH's 3 bits hold 7),
 //! `--traversal-cost C` (Scion's tree built with the SAH's cost of an interior visit set to
 //! `C` triangle tests instead of 1: larger leaves and fewer nodes as `C` grows; for measuring
-//! the builder's constants). `tinybvh-bvh8` needs a build with the `avx2` target feature
+//! the builder's constants), `--sah-block N` (Scion's tree with its leaves collapsed for a
+//! traversal that tests them in runs of `N` primitives instead of 4, `SahOptions::block`; 1
+//! leaves the reinserted binned SAH tree as built). `tinybvh-bvh8` needs a build with the `avx2` target feature
 //! (`RUSTFLAGS="-C target-feature=+avx2,+fma"`, see `tinybvh_peer`); without it the row is left
 //! out with a note.
 

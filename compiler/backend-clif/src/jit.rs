@@ -91,10 +91,15 @@ impl JitModule {
             ctx.func.name = UserFuncName::user(0, id.as_u32());
             translate::translate_func(&mut cl, &syms, m, f, &mut ctx.func, &mut fctx)
                 .map_err(|e| ClifError(format!("@{name}: {e}")))?;
+            // For reading the Cranelift IR as translated and the machine code (docs/backends.md,
+            // "In-process execution").
+            let dump = std::env::var("SCION_CLIF_DUMP").ok();
+            if let Some(dir) = &dump {
+                let _ = std::fs::write(format!("{dir}/{name}.clif"), ctx.func.display().to_string());
+            }
             cl.define_function(id, &mut ctx)
                 .map_err(|e| ClifError(format!("@{name}: {e:?}")))?;
-            // For reading the machine code (docs/backends.md, "In-process execution").
-            if let Ok(dir) = std::env::var("SCION_CLIF_DUMP") {
+            if let Some(dir) = &dump {
                 if let Some(c) = ctx.compiled_code() {
                     let _ = std::fs::write(format!("{dir}/{name}.bin"), c.code_buffer());
                 }

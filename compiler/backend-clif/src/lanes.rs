@@ -12,6 +12,12 @@
 //! (`scalar_to_vector`, `insertlane`). The lanes are then the `lo` values (`extractlane`, a
 //! boolean lane compared with zero), which Cranelift drops where nothing reads them.
 //!
+//! Reductions: the `and` (`or`) of the four lanes of one mask, however the scalar `and`s
+//! (`or`s) group them (the prelude's `any`, or `hit_lanes`' test that every lane misses, reach
+//! `lo` as such chains), is one `vall_true` (`vany_true`) of the mask: `ptest` or `movmsk` and a
+//! compare, not four lane extractions. The partial chains stay scalar (unused, they are
+//! dropped).
+//!
 //! Every lane computes exactly what its scalar op computes: the same IEEE operation lane by
 //! lane, a NaN made canonical where any lane's must be (harmless for the others, whose NaN
 //! cannot be seen), compares with the scalar translation's condition codes. Groups of other
@@ -91,6 +97,98 @@ pub(crate) fn groups(m: &Module, blocks: &[BlockId]) -> HashMap<OpId, Vec<OpId>>
     lane_groups(m, blocks, vector_kind)
 }
 
+/// Where a vector comes from: a group (its first op) or a run of block arguments.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Source {
+    Group(OpId),
+    Params(BlockId, usize),
+}
+
+/// The block arguments of `blocks` passed as one vector: for each block, the first argument of
+/// each run of four (`f32` or 32-bit integers) that every branch to it passes either as the
+/// lanes of one vector, in order (a group's results, or another such run), or as one value four
+/// times (a splat), at least one branch the former. A value computed in four lanes and merged
+/// at a join (`hit_lanes`' early return of `inf` in every lane, inlined) then stays in one
+/// register instead of four extractions and four insertions. The entry block keeps its
+/// parameters.
+pub(crate) fn vector_params(
+    m: &Module,
+    blocks: &[BlockId],
+    groups: &HashMap<OpId, Vec<OpId>>,
+) -> HashMap<BlockId, Vec<usize>> {
+    let mut lane_of: HashMap<ValueId, (Source, usize)> = HashMap::new();
+    for (&first, ops) in groups {
+        for (k, &o) in ops.iter().enumerate() {
+            lane_of.insert(m.ops[o].results[0], (Source::Group(first), k));
+        }
+    }
+    let mut edges: HashMap<BlockId, Vec<&[ValueId]>> = HashMap::new();
+    for &b in blocks {
+        for &op in &m.blocks[b].ops {
+            for s in &m.ops[op].successors {
+                edges.entry(s.block).or_default().push(&s.args);
+            }
+        }
+    }
+    let mut out: HashMap<BlockId, Vec<usize>> = HashMap::new();
+    // Runs feed runs (a join of joins): repeat until nothing changes.
+    loop {
+        let mut changed = false;
+        for &b in blocks.iter().skip(1) {
+            let args = &m.blocks[b].args;
+            let Some(ins) = edges.get(&b) else {
+                continue;
+            };
+            let mut i = 0;
+            while i + 4 <= args.len() {
+                let known = out.get(&b).is_some_and(|r| r.contains(&i));
+                let ty = m.values[args[i]].ty;
+                let fits = known
+                    || (matches!(lane32(m, ty), Some(Lane::F32 | Lane::I32))
+                        && args[i..i + 4].iter().all(|&a| m.values[a].ty == ty)
+                        && {
+                            let mut vector = false;
+                            ins.iter().all(|xs| {
+                                let xs = &xs[i..i + 4];
+                                if xs.iter().all(|&x| x == xs[0]) {
+                                    return true;
+                                }
+                                let Some(&(src, 0)) = lane_of.get(&xs[0]) else {
+                                    return false;
+                                };
+                                let lanes = xs
+                                    .iter()
+                                    .enumerate()
+                                    .all(|(k, x)| lane_of.get(x) == Some(&(src, k)));
+                                vector |= lanes;
+                                lanes
+                            }) && vector
+                        });
+                if !fits {
+                    i += 1;
+                    continue;
+                }
+                if !known {
+                    out.entry(b).or_default().push(i);
+                    for k in 0..4 {
+                        lane_of.insert(args[i + k], (Source::Params(b, i), k));
+                    }
+                    changed = true;
+                }
+                i += 4;
+            }
+        }
+        if !changed {
+            return out;
+        }
+    }
+}
+
+/// The vector type of a run of block arguments of type `ty` ([`vector_params`]).
+pub(crate) fn param_vector_type(m: &Module, ty: scion_ir::TypeId) -> Option<ir::Type> {
+    lane32(m, ty).map(Lane::vector)
+}
+
 /// Little-endian lanes, which a bitcast between vector types must name.
 fn lanes_flags() -> MemFlags {
     MemFlags::new().with_endianness(Endianness::Little)
@@ -128,6 +226,149 @@ impl Fx<'_, '_> {
             acc = self.b.ins().insertlane(acc, s, k as u8);
         }
         Ok(acc)
+    }
+
+    /// The block arguments `args` of `block` bound to its Cranelift parameters `params`, a run
+    /// of [`vector_params`] to the lanes of its one vector parameter.
+    pub(crate) fn bind_params(
+        &mut self,
+        args: &[ValueId],
+        runs: &[usize],
+        params: &[ir::Value],
+    ) -> Result<(), String> {
+        let mut p = params.iter();
+        let mut i = 0;
+        while i < args.len() {
+            let v = *p.next().ok_or("fewer block parameters than arguments")?;
+            if runs.contains(&i) {
+                for k in 0..4 {
+                    let lane = self.b.ins().extractlane(v, k as u8);
+                    self.vals.insert(args[i + k], lane);
+                    self.lane_vecs.insert(args[i + k], (v, k as u8));
+                }
+                i += 4;
+            } else {
+                self.vals.insert(args[i], v);
+                i += 1;
+            }
+        }
+        Ok(())
+    }
+
+    /// The Cranelift arguments of a branch passing `xs` to a block whose runs of vector
+    /// parameters start at `runs`.
+    pub(crate) fn jump_args(&mut self, xs: &[ValueId], runs: &[usize]) -> Result<Vec<ir::Value>, String> {
+        let mut out = Vec::with_capacity(xs.len());
+        let mut i = 0;
+        while i < xs.len() {
+            if runs.contains(&i) {
+                let lane = lane32(self.m, self.m.values[xs[i]].ty).ok_or("a vector run of another type")?;
+                out.push(self.lane_vector(&xs[i..i + 4], lane)?);
+                i += 4;
+            } else {
+                out.push(self.v(xs[i])?);
+                i += 1;
+            }
+        }
+        Ok(out)
+    }
+
+    /// `select(c, x, y)` of the boolean `cond` (Cranelift value `c`). A float choice is made in
+    /// the low lane of a vector register, a compare's mask and a bit select, because
+    /// Cranelift's x86-64 backend lowers a `select` of floats to a branch around a move (a
+    /// misprediction where the condition is data: a box test's hit or miss); the mask is the
+    /// compare itself when `cond` is a float compare, else `c` widened to a lane mask. Other
+    /// types use `select` (a conditional move).
+    pub(crate) fn select(
+        &mut self,
+        cond: ValueId,
+        c: ir::Value,
+        x: ir::Value,
+        y: ir::Value,
+    ) -> Result<ir::Value, String> {
+        let t = self.b.func.dfg.value_type(x);
+        let (vt, mt, wide) = match t {
+            types::F32 => (types::F32X4, types::I32X4, types::I32),
+            types::F64 => (types::F64X2, types::I64X2, types::I64),
+            _ => return Ok(self.b.ins().select(c, x, y)),
+        };
+        let m = self.m;
+        let compare = match m.values[cond].def {
+            scion_ir::module::ValueDef::Result(op, 0) => {
+                let o = &m.ops[op];
+                let float_operands = o.operands.len() == 2
+                    && matches!(m.types.get(m.values[o.operands[0]].ty), Type::Float(_))
+                    && self.b.func.dfg.value_type(self.v(o.operands[0])?) == t;
+                match (o.kind, o.pred()) {
+                    (OpKind::Lo(L::Cmp), Some(pred)) if float_operands => {
+                        Some((pred, o.operands[0], o.operands[1]))
+                    }
+                    _ => None,
+                }
+            }
+            _ => None,
+        };
+        let mask = match compare {
+            Some((pred, a, b)) => {
+                let (a, b) = (self.v(a)?, self.v(b)?);
+                let va = self.b.ins().scalar_to_vector(vt, a);
+                let vb = self.b.ins().scalar_to_vector(vt, b);
+                let mask = self.b.ins().fcmp(float_cc(pred), va, vb);
+                self.b.ins().bitcast(vt, lanes_flags(), mask)
+            }
+            None => {
+                let w = self.b.ins().uextend(wide, c);
+                let w = self.b.ins().ineg(w);
+                let mask = self.b.ins().splat(mt, w);
+                self.b.ins().bitcast(vt, lanes_flags(), mask)
+            }
+        };
+        let vx = self.b.ins().scalar_to_vector(vt, x);
+        let vy = self.b.ins().scalar_to_vector(vt, y);
+        let r = self.b.ins().bitselect(mask, vx, vy);
+        Ok(self.b.ins().extractlane(r, 0))
+    }
+
+    /// The boolean `op` (an `and` or an `or` of two booleans) when it completes the reduction of
+    /// the four lanes of one mask (see the module documentation); `None` otherwise, after noting
+    /// which lanes it covers.
+    pub(crate) fn lane_reduction(&mut self, op: OpId) -> Result<Option<ir::Value>, String> {
+        let m = self.m;
+        let o = &m.ops[op];
+        let is_and = match o.kind {
+            OpKind::Lo(L::And) => true,
+            OpKind::Lo(L::Or) => false,
+            _ => return Ok(None),
+        };
+        let r = o.results[0];
+        if o.operands.len() != 2 || lane32(m, m.values[r].ty) != Some(Lane::Bool) {
+            return Ok(None);
+        }
+        // (mask, lanes, and/or if already a reduction) of an operand.
+        let set = |x: ValueId| {
+            if let Some(&(v, k)) = self.lane_vecs.get(&x) {
+                Some((v, 1u8 << k, None))
+            } else {
+                self.lane_sets.get(&x).map(|&(v, bits, and)| (v, bits, Some(and)))
+            }
+        };
+        let (Some(a), Some(b)) = (set(o.operands[0]), set(o.operands[1])) else {
+            return Ok(None);
+        };
+        let same_kind = |k: Option<bool>| k.is_none_or(|k| k == is_and);
+        if a.0 != b.0 || a.1 & b.1 != 0 || !same_kind(a.2) || !same_kind(b.2) {
+            return Ok(None);
+        }
+        let bits = a.1 | b.1;
+        self.lane_sets.insert(r, (a.0, bits, is_and));
+        if bits != 0b1111 {
+            return Ok(None);
+        }
+        Ok(Some(if is_and {
+            self.b.ins().vall_true(a.0)
+        } else {
+            self.b.ins().vany_true(a.0)
+        }))
     }
 
     /// Translates the group `ops` as one vector instruction and binds its lanes; `false` when

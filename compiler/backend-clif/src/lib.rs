@@ -23,6 +23,7 @@
 //! ```
 
 pub mod flatten;
+mod ifconv;
 pub mod jit;
 mod lanes;
 pub mod translate;

@@ -156,24 +156,45 @@ pub fn translate_func<M: ClModule>(
     let mut vals: HashMap<ValueId, ir::Value> = HashMap::new();
     let nan = NanFacts::of(m, body);
     let groups = crate::lanes::groups(m, body);
+    // The groups' vectors, kept across blocks: a lane used in another block is defined in one
+    // that dominates it (translated first, in reverse post-order), and so is its vector.
+    let mut lane_vecs = HashMap::new();
+    let mut lane_sets = HashMap::new();
+    let vector_params = crate::lanes::vector_params(m, body, &groups);
+    let no_runs: Vec<usize> = Vec::new();
+    let preds = crate::ifconv::predecessors(m, body);
+    // Blocks an if-conversion computed inline: unreachable, so not translated (their values
+    // are the inline ones).
+    let mut converted = HashSet::new();
     for (i, &lb) in order.iter().enumerate() {
         let cb = b.create_block();
         if i == 0 {
             b.append_block_params_for_function_params(cb);
         } else {
-            for &a in &m.blocks[lb].args {
-                b.append_block_param(cb, clif_type(m, m.values[a].ty, ptr)?);
+            let runs = vector_params.get(&lb).unwrap_or(&no_runs);
+            let args = &m.blocks[lb].args;
+            let mut j = 0;
+            while j < args.len() {
+                let ty = m.values[args[j]].ty;
+                if runs.contains(&j) {
+                    let vt = crate::lanes::param_vector_type(m, ty).ok_or("a vector run's type")?;
+                    b.append_block_param(cb, vt);
+                    j += 4;
+                } else {
+                    b.append_block_param(cb, clif_type(m, ty, ptr)?);
+                    j += 1;
+                }
             }
         }
         blocks.insert(lb, cb);
     }
-    for &lb in &order {
+    for (i, &lb) in order.iter().enumerate() {
+        if converted.contains(&lb) {
+            continue;
+        }
         let cb = blocks[&lb];
         b.switch_to_block(cb);
         let params = b.block_params(cb).to_vec();
-        for (&a, v) in m.blocks[lb].args.iter().zip(params) {
-            vals.insert(a, v);
-        }
         let mut fx = Fx {
             b: &mut b,
             m,
@@ -182,8 +203,17 @@ pub fn translate_func<M: ClModule>(
             nan: &nan,
             groups: &groups,
             grouped: HashSet::new(),
-            lane_vecs: HashMap::new(),
+            lane_vecs: &mut lane_vecs,
+            lane_sets: &mut lane_sets,
+            vector_params: &vector_params,
+            preds: &preds,
+            converted: &mut converted,
         };
+        let runs = match i {
+            0 => &no_runs,
+            _ => vector_params.get(&lb).unwrap_or(&no_runs),
+        };
+        fx.bind_params(&m.blocks[lb].args, runs, &params)?;
         for &op in &m.blocks[lb].ops {
             fx.op(cl, syms, op, &blocks)?;
         }
@@ -204,11 +234,25 @@ pub(crate) struct Fx<'a, 'b> {
     groups: &'a HashMap<scion_ir::OpId, Vec<scion_ir::OpId>>,
     /// The other ops of the groups met so far in this block (translated with their first).
     grouped: HashSet<scion_ir::OpId>,
-    /// The vector and lane of each value a group defined in this block.
-    pub(crate) lane_vecs: HashMap<ValueId, (ir::Value, u8)>,
+    /// The vector and lane of each value a group defined.
+    pub(crate) lane_vecs: &'a mut HashMap<ValueId, (ir::Value, u8)>,
+    /// Booleans that are the `and` or the `or` of some lanes of one mask vector: the vector,
+    /// the lanes (bits), and whether it is an `and` ([`crate::lanes`], "reductions").
+    pub(crate) lane_sets: &'a mut HashMap<ValueId, (ir::Value, u8, bool)>,
+    /// The runs of block arguments passed as one vector ([`crate::lanes::vector_params`]).
+    vector_params: &'a HashMap<BlockId, Vec<usize>>,
+    /// The number of branch edges into each block ([`crate::ifconv`]).
+    pub(crate) preds: &'a HashMap<BlockId, usize>,
+    /// The blocks if-conversions computed inline ([`crate::ifconv`]).
+    pub(crate) converted: &'a mut HashSet<BlockId>,
 }
 
 impl Fx<'_, '_> {
+    /// Whether block `b` takes a run of its arguments as one vector.
+    pub(crate) fn has_vector_params(&self, b: BlockId) -> bool {
+        self.vector_params.get(&b).is_some_and(|r| !r.is_empty())
+    }
+
     pub(crate) fn v(&self, x: ValueId) -> Result<ir::Value, String> {
         self.vals
             .get(&x)
@@ -247,7 +291,7 @@ impl Fx<'_, '_> {
         self.b.ins().select(nan, c, v)
     }
 
-    fn op<M: ClModule>(
+    pub(crate) fn op<M: ClModule>(
         &mut self,
         cl: &mut M,
         syms: &Symbols,
@@ -283,6 +327,9 @@ impl Fx<'_, '_> {
         let OpKind::Lo(kind) = o.kind else {
             return Err(format!("`{}` is not a lo op", o.kind.name()));
         };
+        if kind == L::CondBr && self.if_convert(cl, syms, op, blocks)? {
+            return Ok(());
+        }
         let args: Vec<ir::Value> = o
             .operands
             .iter()
@@ -353,8 +400,11 @@ impl Fx<'_, '_> {
             L::Sub => Some(self.b.ins().isub(args[0], args[1])),
             L::Mul => Some(self.b.ins().imul(args[0], args[1])),
             L::Div | L::Rem => Some(self.int_div(kind == L::Div, signed, args[0], args[1])),
-            L::And => Some(self.b.ins().band(args[0], args[1])),
-            L::Or => Some(self.b.ins().bor(args[0], args[1])),
+            L::And | L::Or => Some(match self.lane_reduction(op)? {
+                Some(v) => v,
+                None if kind == L::And => self.b.ins().band(args[0], args[1]),
+                None => self.b.ins().bor(args[0], args[1]),
+            }),
             L::Xor => Some(self.b.ins().bxor(args[0], args[1])),
             L::Shl => Some(self.b.ins().ishl(args[0], args[1])),
             L::Shr if signed => Some(self.b.ins().sshr(args[0], args[1])),
@@ -394,7 +444,7 @@ impl Fx<'_, '_> {
                     self.b.ins().icmp(int_cc(pred, signed), args[0], args[1])
                 })
             }
-            L::Select => Some(self.b.ins().select(args[0], args[1], args[2])),
+            L::Select => Some(self.select(o.operands[0], args[0], args[1], args[2])?),
             L::Cast => {
                 let from = m.values[o.operands[0]].ty;
                 Some(self.cast(args[0], from, rty.ok_or("cast without result")?)?)
@@ -473,15 +523,12 @@ impl Fx<'_, '_> {
                 None
             }
             L::Br | L::CondBr => {
-                let target = |i: usize| -> Result<(ir::Block, Vec<BlockArg>), String> {
+                let mut target = |i: usize| -> Result<(ir::Block, Vec<BlockArg>), String> {
                     let s = &o.successors[i];
                     let bl = *blocks.get(&s.block).ok_or("branch to a missing block")?;
-                    let a = s
-                        .args
-                        .iter()
-                        .map(|&x| self.v(x).map(BlockArg::Value))
-                        .collect::<Result<_, _>>()?;
-                    Ok((bl, a))
+                    let runs = self.vector_params.get(&s.block).map_or(&[][..], |r| &r[..]);
+                    let a = self.jump_args(&s.args, runs)?;
+                    Ok((bl, a.into_iter().map(BlockArg::Value).collect()))
                 };
                 if kind == L::Br {
                     let (bl, a) = target(0)?;
