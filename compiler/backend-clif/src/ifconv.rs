@@ -214,10 +214,22 @@ impl Fx<'_, '_> {
         }
         let mut args = Vec::with_capacity(p.args.len());
         for arg in &p.args {
-            args.push(ir::BlockArg::Value(self.arg(arg)?));
+            args.push(self.arg(arg)?);
         }
         let join = *blocks.get(&p.join).ok_or("branch to a missing block")?;
-        self.b.ins().jump(join, &args);
+        if self.is_direct(p.join) {
+            for (k, (&param, v)) in m.blocks[p.join].args.iter().zip(args).enumerate() {
+                let x = match &p.args[k] {
+                    Arg::Val(x) => Some(*x),
+                    Arg::Sel(..) => None,
+                };
+                self.bind_direct(param, v, x);
+            }
+            self.b.ins().jump(join, &[]);
+        } else {
+            let args: Vec<ir::BlockArg> = args.into_iter().map(ir::BlockArg::Value).collect();
+            self.b.ins().jump(join, &args);
+        }
         Ok(true)
     }
 

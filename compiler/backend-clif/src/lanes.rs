@@ -97,6 +97,48 @@ pub(crate) fn groups(m: &Module, blocks: &[BlockId]) -> HashMap<OpId, Vec<OpId>>
     lane_groups(m, blocks, vector_kind)
 }
 
+/// The loads of `blocks` to emit where their value is put in a vector, not where `lo` has them:
+/// a load whose result has one use, an operand of a group Cranelift emits as a vector. A leaf's
+/// four triangles are loaded field by field and then gathered into lanes (`block_of`); loaded
+/// all first, as `lo` orders them, the 36 floats outlive the registers and are spilled and
+/// reloaded before each insertion. [`Fx::op`] emits a deferred load just before its group, or
+/// before anything else in the block that reads it, writes memory or branches, so that no load
+/// moves past a store.
+pub(crate) fn deferrable_loads(
+    m: &Module,
+    blocks: &[BlockId],
+    groups: &HashMap<OpId, Vec<OpId>>,
+) -> std::collections::HashSet<OpId> {
+    let mut uses: HashMap<ValueId, usize> = HashMap::new();
+    for &b in blocks {
+        for &op in &m.blocks[b].ops {
+            let o = &m.ops[op];
+            for &x in o.operands.iter().chain(o.successors.iter().flat_map(|s| s.args.iter())) {
+                *uses.entry(x).or_default() += 1;
+            }
+        }
+    }
+    let in_groups: std::collections::HashSet<ValueId> = groups
+        .values()
+        .flatten()
+        .flat_map(|&o| m.ops[o].operands.iter().copied())
+        .collect();
+    let mut out = std::collections::HashSet::new();
+    for &b in blocks {
+        for &op in &m.blocks[b].ops {
+            let o = &m.ops[op];
+            if o.kind == OpKind::Lo(L::Load)
+                && o.results.len() == 1
+                && uses.get(&o.results[0]) == Some(&1)
+                && in_groups.contains(&o.results[0])
+            {
+                out.insert(op);
+            }
+        }
+    }
+    out
+}
+
 /// Where a vector comes from: a group (its first op) or a run of block arguments.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 enum Source {

@@ -160,17 +160,29 @@ pub fn translate_func<M: ClModule>(
     // that dominates it (translated first, in reverse post-order), and so is its vector.
     let mut lane_vecs = HashMap::new();
     let mut lane_sets = HashMap::new();
-    let vector_params = crate::lanes::vector_params(m, body, &groups);
-    let no_runs: Vec<usize> = Vec::new();
     let preds = crate::ifconv::predecessors(m, body);
+    // Blocks entered by one branch only take their arguments as the branch's values, bound when
+    // the branch is translated (its block dominates them): no Cranelift parameters, so a value
+    // passed along but not used there (a leaf's 36 triangle floats into the inlined
+    // `nearest_lane`) is not kept alive to the jump, and lanes keep their vectors.
+    let direct: HashSet<BlockId> = order
+        .iter()
+        .skip(1)
+        .filter(|b| preds.get(b) == Some(&1))
+        .copied()
+        .collect();
+    let mut vector_params = crate::lanes::vector_params(m, body, &groups);
+    vector_params.retain(|b, _| !direct.contains(b));
+    let no_runs: Vec<usize> = Vec::new();
     // Blocks an if-conversion computed inline: unreachable, so not translated (their values
     // are the inline ones).
     let mut converted = HashSet::new();
+    let deferrable = crate::lanes::deferrable_loads(m, body, &groups);
     for (i, &lb) in order.iter().enumerate() {
         let cb = b.create_block();
         if i == 0 {
             b.append_block_params_for_function_params(cb);
-        } else {
+        } else if !direct.contains(&lb) {
             let runs = vector_params.get(&lb).unwrap_or(&no_runs);
             let args = &m.blocks[lb].args;
             let mut j = 0;
@@ -208,12 +220,17 @@ pub fn translate_func<M: ClModule>(
             vector_params: &vector_params,
             preds: &preds,
             converted: &mut converted,
+            deferrable: &deferrable,
+            deferred: Vec::new(),
+            direct: &direct,
         };
         let runs = match i {
             0 => &no_runs,
             _ => vector_params.get(&lb).unwrap_or(&no_runs),
         };
-        fx.bind_params(&m.blocks[lb].args, runs, &params)?;
+        if !direct.contains(&lb) {
+            fx.bind_params(&m.blocks[lb].args, runs, &params)?;
+        }
         for &op in &m.blocks[lb].ops {
             fx.op(cl, syms, op, &blocks)?;
         }
@@ -245,9 +262,34 @@ pub(crate) struct Fx<'a, 'b> {
     pub(crate) preds: &'a HashMap<BlockId, usize>,
     /// The blocks if-conversions computed inline ([`crate::ifconv`]).
     pub(crate) converted: &'a mut HashSet<BlockId>,
+    /// Loads whose one use is a lane of a vector group ([`crate::lanes::deferrable_loads`]).
+    deferrable: &'a HashSet<scion_ir::OpId>,
+    /// Such loads of this block not emitted yet, in order, with their results.
+    deferred: Vec<(ValueId, scion_ir::OpId)>,
+    /// Blocks whose arguments are bound at their one branch ([`translate_func`]).
+    direct: &'a HashSet<BlockId>,
 }
 
 impl Fx<'_, '_> {
+    /// Binds the argument `param` of a block entered by one branch to `v`, the value of `x`
+    /// (with its vector lane, if it has one) when the argument is a `lo` value.
+    pub(crate) fn bind_direct(&mut self, param: ValueId, v: ir::Value, x: Option<ValueId>) {
+        self.vals.insert(param, v);
+        match x.and_then(|x| self.lane_vecs.get(&x).copied()) {
+            Some(lv) => self.lane_vecs.insert(param, lv),
+            None => self.lane_vecs.remove(&param),
+        };
+        match x.and_then(|x| self.lane_sets.get(&x).copied()) {
+            Some(ls) => self.lane_sets.insert(param, ls),
+            None => self.lane_sets.remove(&param),
+        };
+    }
+
+    /// Whether block `b` is entered by one branch (its arguments bound there).
+    pub(crate) fn is_direct(&self, b: BlockId) -> bool {
+        self.direct.contains(&b)
+    }
+
     /// Whether block `b` takes a run of its arguments as one vector.
     pub(crate) fn has_vector_params(&self, b: BlockId) -> bool {
         self.vector_params.get(&b).is_some_and(|r| !r.is_empty())
@@ -301,7 +343,21 @@ impl Fx<'_, '_> {
         if self.grouped.contains(&op) {
             return Ok(());
         }
+        let m = self.m;
+        if self.deferrable.contains(&op) {
+            self.deferred.push((m.ops[op].results[0], op));
+            return Ok(());
+        }
         if let Some(ops) = self.groups.get(&op) {
+            // The group's deferred loads, just before it.
+            for &o in ops {
+                for &x in &m.ops[o].operands {
+                    if let Some(i) = self.deferred.iter().position(|d| d.0 == x) {
+                        let (_, load) = self.deferred.remove(i);
+                        self.scalar_op(cl, syms, load, blocks)?;
+                    }
+                }
+            }
             self.grouped.extend(ops[1..].iter().copied());
             if self.group(ops)? {
                 return Ok(());
@@ -310,6 +366,20 @@ impl Fx<'_, '_> {
                 self.scalar_op(cl, syms, o, blocks)?;
             }
             return Ok(());
+        }
+        // Anything else that reads a deferred load, or writes memory, or leaves the block:
+        // the deferred loads first, in their order.
+        let o = &m.ops[op];
+        let effect = matches!(
+            o.kind,
+            OpKind::Lo(L::Store | L::Call | L::Br | L::CondBr | L::Return)
+        );
+        if !self.deferred.is_empty()
+            && (effect || o.operands.iter().any(|x| self.deferred.iter().any(|d| d.0 == *x)))
+        {
+            for (_, load) in std::mem::take(&mut self.deferred) {
+                self.scalar_op(cl, syms, load, blocks)?;
+            }
         }
         self.scalar_op(cl, syms, op, blocks)
     }
@@ -526,6 +596,14 @@ impl Fx<'_, '_> {
                 let mut target = |i: usize| -> Result<(ir::Block, Vec<BlockArg>), String> {
                     let s = &o.successors[i];
                     let bl = *blocks.get(&s.block).ok_or("branch to a missing block")?;
+                    if self.direct.contains(&s.block) {
+                        let params = &m.blocks[s.block].args;
+                        for (&param, &x) in params.iter().zip(&s.args) {
+                            let v = self.v(x)?;
+                            self.bind_direct(param, v, Some(x));
+                        }
+                        return Ok((bl, Vec::new()));
+                    }
                     let runs = self.vector_params.get(&s.block).map_or(&[][..], |r| &r[..]);
                     let a = self.jump_args(&s.args, runs)?;
                     Ok((bl, a.into_iter().map(BlockArg::Value).collect()))
