@@ -36,7 +36,7 @@ mrays() {
 
 cpu=$(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //')
 echo "Date: $(date -u '+%Y-%m-%d %H:%M UTC'); machine: $(nproc) CPUs, $cpu; commit $(git rev-parse --short HEAD)."
-echo "Rays: n = $n, seed $seed; binned SAH + reinsertion, leaves <= 15; --runs 9 (mean of the middle 5 of 9 after a warm-up)."
+echo "Rays: n = $n, seed $seed; binned SAH + reinsertion + leaves collapsed for runs of four, leaves <= 15; --runs 9 (mean of the middle 5 of 9 after a warm-up)."
 echo
 echo "| scene | triangles | rays | threads | reference Mrays/s | jit pbrt Mrays/s | pbrt / ref | jit ptr Mrays/s | ptr / ref |"
 echo "|---|---:|---|---:|---:|---:|---:|---:|---:|"

@@ -265,7 +265,8 @@ impl RaysArg {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum BuilderArg {
     /// Binned SAH (32 bins), leaves of up to `--leaf-size` triangles, then insertion-based
-    /// optimization of the tree (Bittner et al. 2013; docs/runtime.md).
+    /// optimization of the tree (Bittner et al. 2013), then leaves collapsed where one leaf
+    /// tested four triangles at a time costs less than its subtree (docs/runtime.md).
     Sah,
     /// Median split of the longest axis, one triangle per leaf.
     Median,
@@ -290,7 +291,9 @@ impl BuilderArg {
     pub fn describe(self, leaf_size: Option<u32>) -> String {
         let n = self.leaf_size(leaf_size);
         match self {
-            BuilderArg::Sah => format!("binned SAH + reinsertion, leaves <= {n}"),
+            BuilderArg::Sah => format!(
+                "binned SAH + reinsertion + leaves collapsed for runs of four, leaves <= {n}"
+            ),
             BuilderArg::Fcpw => format!("FCPW's binned surface area, leaves <= {n}"),
             BuilderArg::Median => "median, one triangle per leaf".to_string(),
         }

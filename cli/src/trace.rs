@@ -310,7 +310,7 @@ pub fn run(args: &TraceArgs) -> Result<(), CliError> {
     let hit_count = hits.iter().filter(|h| h.is_hit()).count();
     let builder = match blocks && args.builder == BuilderArg::Sah {
         true => format!(
-            "binned SAH counting blocks of four + reinsertion, leaves <= {}",
+            "binned SAH + reinsertion + leaves collapsed for blocks of four, leaves <= {}",
             crate::trace_blocks::leaf_size(args)
         ),
         false => args.builder.describe(args.leaf_size),

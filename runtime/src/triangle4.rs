@@ -162,8 +162,9 @@ pub fn block_tree(tree: &LogicalTree<Triangle>) -> Result<LogicalTree<Triangle4>
 pub const BLOCK_TREE_MAX_LEAF: usize = 8;
 
 /// The binned SAH tree over `tris` with leaves of at most [`BLOCK_TREE_MAX_LEAF`] triangles,
-/// the SAH counting a leaf of `n` as `ceil(n / 4)` tests (`SahOptions::block`, as Embree's SAH
-/// for `Triangle4` leaves: fuller leaves, fewer nodes), as a tree over blocks ([`block_tree`]).
+/// its leaves collapsed counting a leaf of `n` as `ceil(n / 4)` tests (`SahOptions::block`, as
+/// Embree's SAH for `Triangle4` leaves: fuller leaves, fewer nodes), as a tree over blocks
+/// ([`block_tree`]).
 pub fn sah_block_tree(tris: &[Triangle]) -> LogicalTree<Triangle4> {
     let options = block_sah_options(BLOCK_TREE_MAX_LEAF);
     block_tree(&build_sah_binned(tris, &options)).expect("a binned SAH tree has no empty leaf")

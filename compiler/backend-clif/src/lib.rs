@@ -23,6 +23,7 @@
 //! ```
 
 pub mod flatten;
+mod arith;
 mod ifconv;
 pub mod jit;
 mod lanes;
