@@ -5,7 +5,7 @@
 
 use crate::io::outln;
 use crate::run::fnv1a;
-use crate::trace::{build_with, progress, secs, timed};
+use crate::trace::{build_for_runs, progress, secs, timed};
 use crate::{CliError, RunArgs};
 use scion_host::collide::{check_pairs, pairs_to_bytes};
 use scion_host::entries::Entries;
@@ -31,8 +31,9 @@ pub fn run(
         format!("{} rotated", scene.name),
         rotated(&scene.triangles, args.rotate),
     );
-    let tree_a = build_with(scene, args.builder, args.leaf_size);
-    let tree_b = build_with(&copy, args.builder, args.leaf_size);
+    // The leaf test takes triangle pairs one at a time: no collapse for runs of four.
+    let tree_a = build_for_runs(scene, args.builder, args.leaf_size, 1);
+    let tree_b = build_for_runs(&copy, args.builder, args.leaf_size, 1);
     progress(&format!("packing both trees into layout `{}`", p.layout));
     let pack = |t| entries.pack(t).map_err(CliError::new);
     let (pa, pb) = (pack(&tree_a)?, pack(&tree_b)?);

@@ -10,7 +10,7 @@
 //! `CHECKED_POINTS` against brute force) and a difference is an error.
 
 use crate::io::outln;
-use crate::trace::{build_with, progress, secs, significant, timed};
+use crate::trace::{build_for_runs, progress, secs, significant, timed};
 use crate::{CliError, DeviceArg, RunArgs};
 use scion_host::entries::Entries;
 use scion_host::hit_reference::Traversed;
@@ -18,6 +18,7 @@ use scion_host::jit::Codegen;
 use scion_host::library::{resolve_kind, QueryKind, Resolved};
 use scion_host::queries::{points_from_bytes, uniform_points, Expected, Queries};
 use scion_runtime::batch::BatchDriver;
+use scion_runtime::bvh::SahOptions;
 use scion_runtime::query::{axis_rays, primary_rays_n, read_rays, secondary_rays};
 use scion_runtime::scene::{load_obj, Scene};
 use scion_runtime::timing::Timing;
@@ -119,7 +120,14 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
                 .map_err(|e| CliError::new(format!("the block tree: {e}")))?;
             (tree, Some(b))
         }
-        false => (build_with(&scene, args.builder, args.leaf_size), None),
+        false => {
+            // Closest hit tests a leaf in runs of four; the other queries one at a time.
+            let runs = match kind {
+                QueryKind::ClosestHit => SahOptions::default().block,
+                _ => 1,
+            };
+            (build_for_runs(&scene, args.builder, args.leaf_size, runs), None)
+        }
     };
     let driver = BatchDriver::new(args.threads).map_err(CliError::new)?;
     let (queries, source) = make_queries(kind, &scene, args)?;

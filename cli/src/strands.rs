@@ -181,6 +181,8 @@ fn trace(args: &StrandTraceArgs) -> Result<(), CliError> {
         &scene.segments,
         &SahOptions {
             max_leaf: args.leaf_size as usize,
+            // The hair traversal tests a leaf's segments one at a time.
+            block: 1,
             ..SahOptions::default()
         },
     );

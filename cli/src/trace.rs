@@ -567,6 +567,18 @@ pub(crate) fn build_with(
     builder: BuilderArg,
     leaf_size: Option<u32>,
 ) -> LogicalTree {
+    build_for_runs(scene, builder, leaf_size, SahOptions::default().block)
+}
+
+/// [`build_with`] for an algorithm that tests a leaf's primitives in runs of `runs` (the
+/// library's closest hit: four, the runtime's default; closest point, any hit and collision
+/// test them one at a time: 1, no leaf collapse). Only the SAH builder uses it.
+pub(crate) fn build_for_runs(
+    scene: &Scene,
+    builder: BuilderArg,
+    leaf_size: Option<u32>,
+    runs: usize,
+) -> LogicalTree {
     let max_leaf = builder.leaf_size(leaf_size);
     progress(&format!(
         "building the logical tree of {} triangles",
@@ -577,6 +589,7 @@ pub(crate) fn build_with(
             &scene.triangles,
             &SahOptions {
                 max_leaf,
+                block: runs,
                 ..SahOptions::default()
             },
         ),
