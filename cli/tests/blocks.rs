@@ -111,7 +111,7 @@ fn blocks_of_four_are_traced_checked_and_hit_the_triangles() {
                 // exception separates them from the binary reference (a fixed scene and seed).
                 assert!(got == want, "{backend} {rays} {extra:?}: hits differ");
                 if extra == ["--stats"] {
-                    assert!(stdout.contains("counting blocks of four"), "{stdout}");
+                    assert!(stdout.contains("collapsed for blocks of four"), "{stdout}");
                     assert!(stdout.contains("leaves <= 8"), "{stdout}");
                     assert!(stdout.contains("block tests per ray"), "{stdout}");
                 }
