@@ -58,7 +58,7 @@ pub fn flatten(m: &mut Module) -> bool {
 }
 
 /// The edges into each block of `f`: (terminator, successor index).
-fn predecessors(m: &Module, f: FuncId) -> FxHashMap<BlockId, Vec<(OpId, usize)>> {
+pub(crate) fn predecessors(m: &Module, f: FuncId) -> FxHashMap<BlockId, Vec<(OpId, usize)>> {
     let mut preds: FxHashMap<BlockId, Vec<(OpId, usize)>> = FxHashMap::default();
     for &b in &m.regions[m.funcs[f].body].blocks {
         if let Some(&t) = m.blocks[b].ops.last() {
@@ -71,7 +71,7 @@ fn predecessors(m: &Module, f: FuncId) -> FxHashMap<BlockId, Vec<(OpId, usize)>>
 }
 
 /// Whether running `op` where its block would not have run changes nothing and cannot trap.
-fn speculatable(m: &Module, op: OpId) -> bool {
+pub(crate) fn speculatable(m: &Module, op: OpId) -> bool {
     let o = &m.ops[op];
     let OpKind::Lo(k) = o.kind else {
         return false;

@@ -23,7 +23,7 @@
 
 use crate::translate::Fx;
 use cranelift_codegen::ir::{self, InstBuilder};
-use scion_ir::entity::{BlockId, OpId, ValueId};
+use scion_ir::entity::{BlockId, FuncId, OpId, ValueId};
 use scion_ir::lo::Op as L;
 use scion_ir::op::OpKind;
 use scion_ir::Module;
@@ -54,37 +54,18 @@ struct Path {
     edges: usize,
 }
 
-/// The number of branch edges into each block of `blocks`.
-pub(crate) fn predecessors(m: &Module, blocks: &[BlockId]) -> HashMap<BlockId, usize> {
-    let mut n = HashMap::new();
-    for &b in blocks {
-        for &op in &m.blocks[b].ops {
-            for s in &m.ops[op].successors {
-                *n.entry(s.block).or_default() += 1;
-            }
-        }
-    }
-    n
+/// The number of branch edges into each block of `f` ([`crate::flatten::predecessors`]).
+pub(crate) fn predecessors(m: &Module, f: FuncId) -> HashMap<BlockId, usize> {
+    crate::flatten::predecessors(m, f)
+        .into_iter()
+        .map(|(b, edges)| (b, edges.len()))
+        .collect()
 }
 
+/// What a side may compute: what [`crate::flatten`] may run unconditionally, less divisions
+/// and remainders (their cost).
 fn pure(m: &Module, op: OpId) -> bool {
-    let OpKind::Lo(k) = m.ops[op].kind else {
-        return false;
-    };
-    !matches!(
-        k,
-        L::Div
-            | L::Rem
-            | L::Load
-            | L::Store
-            | L::PtrAdd
-            | L::StackSlot
-            | L::GlobalId
-            | L::Call
-            | L::Br
-            | L::CondBr
-            | L::Return
-    )
+    crate::flatten::speculatable(m, op) && !matches!(m.ops[op].kind, OpKind::Lo(L::Div | L::Rem))
 }
 
 impl Fx<'_, '_> {

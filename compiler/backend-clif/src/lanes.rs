@@ -106,18 +106,11 @@ pub(crate) fn groups(m: &Module, blocks: &[BlockId]) -> HashMap<OpId, Vec<OpId>>
 /// moves past a store.
 pub(crate) fn deferrable_loads(
     m: &Module,
-    blocks: &[BlockId],
+    f: scion_ir::FuncId,
     groups: &HashMap<OpId, Vec<OpId>>,
 ) -> std::collections::HashSet<OpId> {
-    let mut uses: HashMap<ValueId, usize> = HashMap::new();
-    for &b in blocks {
-        for &op in &m.blocks[b].ops {
-            let o = &m.ops[op];
-            for &x in o.operands.iter().chain(o.successors.iter().flat_map(|s| s.args.iter())) {
-                *uses.entry(x).or_default() += 1;
-            }
-        }
-    }
+    let uses = scion_ir::walk::use_counts(m, f);
+    let blocks = &m.regions[m.funcs[f].body].blocks;
     let in_groups: std::collections::HashSet<ValueId> = groups
         .values()
         .flatten()

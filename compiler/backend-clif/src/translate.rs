@@ -164,7 +164,7 @@ pub fn translate_func<M: ClModule>(
     // that dominates it (translated first, in reverse post-order), and so is its vector.
     let mut lane_vecs = HashMap::new();
     let mut lane_sets = HashMap::new();
-    let preds = crate::ifconv::predecessors(m, body);
+    let preds = crate::ifconv::predecessors(m, f);
     // Blocks entered by one branch only take their arguments as the branch's values, bound when
     // the branch is translated (its block dominates them): no Cranelift parameters, so a value
     // passed along but not used there (a leaf's 36 triangle floats into the inlined
@@ -181,7 +181,7 @@ pub fn translate_func<M: ClModule>(
     // Blocks an if-conversion computed inline: unreachable, so not translated (their values
     // are the inline ones).
     let mut converted = HashSet::new();
-    let deferrable = crate::lanes::deferrable_loads(m, body, &groups);
+    let deferrable = crate::lanes::deferrable_loads(m, f, &groups);
     for (i, &lb) in order.iter().enumerate() {
         let cb = b.create_block();
         if i == 0 {
