@@ -181,7 +181,13 @@ pub fn translate_func<M: ClModule>(
     // Blocks an if-conversion computed inline: unreachable, so not translated (their values
     // are the inline ones).
     let mut converted = HashSet::new();
-    let deferrable = crate::lanes::deferrable_loads(m, f, &groups);
+    let dead = crate::lanes::dead_direct_params(m, f, &direct);
+    let deferrable = crate::lanes::deferrable_loads(m, f, &groups, &direct, &dead);
+    let pure_loads = crate::lanes::pure_loads(m, f, &deferrable);
+    // Deferred loads still pending at a jump into a block entered by that jump alone, for that
+    // block (see `Fx::op`).
+    let mut carried: HashMap<BlockId, Vec<(ValueId, scion_ir::OpId)>> = HashMap::new();
+    let position: HashMap<BlockId, usize> = order.iter().enumerate().map(|(i, &b)| (b, i)).collect();
     for (i, &lb) in order.iter().enumerate() {
         let cb = b.create_block();
         if i == 0 {
@@ -225,7 +231,12 @@ pub fn translate_func<M: ClModule>(
             preds: &preds,
             converted: &mut converted,
             deferrable: &deferrable,
-            deferred: Vec::new(),
+            deferred: carried.remove(&lb).unwrap_or_default(),
+            carried: &mut carried,
+            carried_params: HashSet::new(),
+            dead: &dead,
+            pure_loads: &pure_loads,
+            position: &position,
             direct: &direct,
         };
         let runs = match i {
@@ -238,6 +249,9 @@ pub fn translate_func<M: ClModule>(
         for &op in &m.blocks[lb].ops {
             fx.op(cl, syms, op, &blocks)?;
         }
+    }
+    if !carried.is_empty() {
+        return Err("deferred loads carried into a block that was not translated".into());
     }
     b.seal_all_blocks();
     b.finalize();
@@ -270,6 +284,18 @@ pub(crate) struct Fx<'a, 'b> {
     deferrable: &'a HashSet<scion_ir::OpId>,
     /// Such loads of this block not emitted yet, in order, with their results.
     deferred: Vec<(ValueId, scion_ir::OpId)>,
+    /// Deferred loads passed on at a jump, by the block jumped to, each under the name it
+    /// has there (the parameter it is passed as, or its own result).
+    carried: &'a mut HashMap<BlockId, Vec<(ValueId, scion_ir::OpId)>>,
+    /// The parameters of the block this block jumps to that are carried loads (bound when the
+    /// load is emitted there, not at the jump).
+    carried_params: HashSet<ValueId>,
+    /// Parameters of direct blocks that nothing reads ([`crate::lanes::dead_direct_params`]).
+    dead: &'a HashSet<ValueId>,
+    /// Loads of layout buffers Cranelift may move ([`crate::lanes::pure_loads`]).
+    pure_loads: &'a HashSet<scion_ir::OpId>,
+    /// Each block's place in the translation order.
+    position: &'a HashMap<BlockId, usize>,
     /// Blocks whose arguments are bound at their one branch ([`translate_func`]).
     direct: &'a HashSet<BlockId>,
 }
@@ -357,8 +383,8 @@ impl Fx<'_, '_> {
             for &o in ops {
                 for &x in &m.ops[o].operands {
                     if let Some(i) = self.deferred.iter().position(|d| d.0 == x) {
-                        let (_, load) = self.deferred.remove(i);
-                        self.scalar_op(cl, syms, load, blocks)?;
+                        let (name, load) = self.deferred.remove(i);
+                        self.emit_deferred(cl, syms, name, load, blocks)?;
                     }
                 }
             }
@@ -378,14 +404,52 @@ impl Fx<'_, '_> {
             o.kind,
             OpKind::Lo(L::Store | L::Call | L::Br | L::CondBr | L::Return)
         );
+        // A jump into a block that only it enters (translated later, in reverse post-order)
+        // passes them on, renamed to the parameters they are passed as: the chain of blocks
+        // an inlined call leaves between a leaf's loads and the lanes that gather them.
+        if o.kind == OpKind::Lo(L::Br) && !self.deferred.is_empty() {
+            let s = &o.successors[0];
+            let here = o.parent.and_then(|b| self.position.get(&b));
+            if self.direct.contains(&s.block)
+                && here.is_some_and(|h| self.position.get(&s.block).is_some_and(|t| t > h))
+            {
+                let mut pending = std::mem::take(&mut self.deferred);
+                for d in &mut pending {
+                    if let Some(j) = s.args.iter().position(|&x| x == d.0) {
+                        d.0 = m.blocks[s.block].args[j];
+                        self.carried_params.insert(d.0);
+                    }
+                }
+                self.carried.insert(s.block, pending);
+            }
+        }
         if !self.deferred.is_empty()
             && (effect || o.operands.iter().any(|x| self.deferred.iter().any(|d| d.0 == *x)))
         {
-            for (_, load) in std::mem::take(&mut self.deferred) {
-                self.scalar_op(cl, syms, load, blocks)?;
+            for (name, load) in std::mem::take(&mut self.deferred) {
+                self.emit_deferred(cl, syms, name, load, blocks)?;
             }
         }
         self.scalar_op(cl, syms, op, blocks)
+    }
+
+    /// The deferred `load`, known here as `name` (its result, or the parameter of a direct
+    /// block it was passed as).
+    fn emit_deferred<M: ClModule>(
+        &mut self,
+        cl: &mut M,
+        syms: &Symbols,
+        name: ValueId,
+        load: scion_ir::OpId,
+        blocks: &HashMap<BlockId, ir::Block>,
+    ) -> Result<(), String> {
+        self.scalar_op(cl, syms, load, blocks)?;
+        let r = self.m.ops[load].results[0];
+        if name != r {
+            let v = self.v(r)?;
+            self.bind_direct(name, v, Some(r));
+        }
+        Ok(())
     }
 
     /// `op` translated on its own, one lane's scalar op for the ops of a lane group.
@@ -538,7 +602,9 @@ impl Fx<'_, '_> {
                 // which nothing writes while generated code runs and which is valid wherever
                 // the function may run: a pure value that Cranelift may share and hoist out of
                 // the traversal loop.
-                let flags = if o.attr("global") == Some(&scion_ir::attr::Attr::Bool(true)) {
+                let flags = if o.attr("global") == Some(&scion_ir::attr::Attr::Bool(true))
+                    || self.pure_loads.contains(&op)
+                {
                     MemFlags::new()
                         .with_notrap()
                         .with_readonly()
@@ -603,6 +669,9 @@ impl Fx<'_, '_> {
                     if self.direct.contains(&s.block) {
                         let params = &m.blocks[s.block].args;
                         for (&param, &x) in params.iter().zip(&s.args) {
+                            if self.carried_params.contains(&param) || self.dead.contains(&param) {
+                                continue;
+                            }
                             let v = self.v(x)?;
                             self.bind_direct(param, v, Some(x));
                         }

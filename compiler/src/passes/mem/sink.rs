@@ -22,6 +22,7 @@ use rustc_hash::{FxHashMap, FxHashSet};
 use scion_ir::module::{Module, RegionParent};
 use scion_ir::op::OpKind;
 use scion_ir::pass::{Pass, PassCx, PassError};
+use scion_ir::builder::{Builder, InsertPoint};
 use scion_ir::{mem, tree, walk, BlockId, FuncId, OpId, RegionId};
 
 /// The `mem-sink` pass.
@@ -88,6 +89,12 @@ fn sink_func(m: &mut Module, f: FuncId) -> bool {
     });
     collect_blocks(m, m.funcs[f].body, &mut blocks);
     let mut moved = false;
+    for &b in &blocks {
+        let ops = m.blocks[b].ops.clone();
+        for op in ops {
+            moved |= lazy_element(m, op, &users);
+        }
+    }
     for b in blocks {
         let ops = m.blocks[b].ops.clone();
         for &op in ops.iter().rev() {
@@ -124,6 +131,70 @@ fn sink_func(m: &mut Module, f: FuncId) -> bool {
         }
     }
     moved
+}
+
+/// A `tree.foreach` over a view whose element is used only inside one region of one
+/// `tree.if` or `tree.match` of the loop's body: the element is read there, by a `tree.index`
+/// of the view at the iteration's index, instead of at the top of every iteration (`mem-to-lo`
+/// then loads no element for the loop). A leaf's `foreach tri, k in data { if (k & 3) == 0
+/// {...} }` reads a triangle only on every fourth iteration. Needs the loop's index argument.
+fn lazy_element(
+    m: &mut Module,
+    op: OpId,
+    users: &FxHashMap<scion_ir::ValueId, Vec<OpId>>,
+) -> bool {
+    let o = &m.ops[op];
+    if o.kind != OpKind::Tree(tree::Op::Foreach) || o.operands.len() != 1 || o.regions.len() != 1
+    {
+        return false;
+    }
+    let view = o.operands[0];
+    if !matches!(m.types.get(m.values[view].ty), scion_ir::types::Type::View(_)) {
+        return false;
+    }
+    let Some(&body) = m.regions[o.regions[0]].blocks.first() else {
+        return false;
+    };
+    let [elem, index] = m.blocks[body].args[..] else {
+        return false;
+    };
+    let Some(uses) = users.get(&elem).filter(|u| !u.is_empty()) else {
+        return false;
+    };
+    let mut target: Option<(OpId, RegionId)> = None;
+    for &u in uses {
+        match anchor(m, u, body) {
+            Some((a, Some(region))) if target.is_none_or(|t| t == (a, region)) => {
+                target = Some((a, region));
+            }
+            _ => return false,
+        }
+    }
+    let Some((a, region)) = target else {
+        return false;
+    };
+    if !matches!(m.ops[a].kind, OpKind::Tree(tree::Op::If | tree::Op::Match)) {
+        return false;
+    }
+    let Some(&dest) = m.regions[region].blocks.first() else {
+        return false;
+    };
+    let ty = m.values[elem].ty;
+    let mut bd = Builder::new(m);
+    bd.set_span(bd.m.span(op));
+    bd.set_insertion_point(match bd.m.blocks[dest].ops.first() {
+        Some(&first) => InsertPoint::Before(first),
+        None => InsertPoint::End(dest),
+    });
+    let read = bd.build1(tree::Op::Index, &[view, index], ty);
+    for &u in uses {
+        for x in m.ops[u].operands.iter_mut() {
+            if *x == elem {
+                *x = read;
+            }
+        }
+    }
+    true
 }
 
 fn collect_blocks(m: &Module, r: RegionId, out: &mut Vec<BlockId>) {

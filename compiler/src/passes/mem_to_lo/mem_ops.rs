@@ -192,8 +192,18 @@ impl FnLower<'_> {
         Builder::at_end(self.dst, head).lo_cond_br(more, (body, &[]), (exit, &[]));
         let off = self.e1(body, L::Mul, &[i, stride], u64t);
         let at = self.e1(body, L::PtrAdd, &[ptr, off], ptrt);
-        let e = self.load_value(body, at, 0, elem)?;
         let tb = src.regions[o.regions[0]].blocks[0];
+        // An element nothing reads is not loaded (`mem-sink` moves a conditional use of it
+        // into a `tree.index` where it is needed).
+        let used = src.blocks[tb]
+            .args
+            .first()
+            .is_some_and(|&e| region_reads(src, o.regions[0], e));
+        let e = if used {
+            self.load_value(body, at, 0, elem)?
+        } else {
+            Vec::new()
+        };
         let mut args = vec![e];
         if src.blocks[tb].args.len() == 2 {
             let it = self.lo_ty(src.values[src.blocks[tb].args[1]].ty)?[0];
@@ -234,4 +244,14 @@ impl FnLower<'_> {
         let at = self.e1(cur, L::PtrAdd, &[ptr, off], ptrt);
         self.load_value(cur, at, 0, elem)
     }
+}
+
+/// Whether an op of `region` (at any depth) reads `v`.
+fn region_reads(m: &scion_ir::Module, region: scion_ir::RegionId, v: ValueId) -> bool {
+    let mut found = false;
+    scion_ir::walk::walk_region(m, region, scion_ir::walk::Order::Pre, &mut |op| {
+        found |= m.ops[op].operands.contains(&v)
+            || m.ops[op].successors.iter().any(|s| s.args.contains(&v));
+    });
+    found
 }
