@@ -120,7 +120,93 @@ pub fn specialize(m: &mut Module, spec: &LayoutSpec) -> Result<bool, PassError> 
     if diags.has_errors() {
         return Err(diags.into());
     }
+    slices_to_views(m)?;
     Ok(true)
+}
+
+/// A function that takes a leaf's primitives (`data: Triangle[nprims]`, an `array<? x T>`
+/// parameter) is passed the layout's `mem.view<T>` of them once the traversal that calls it
+/// is specialized: such a parameter becomes a view (`tree.index`, `tree.foreach` and `len`
+/// read either), and so on down the functions it passes it to. A function passed both a view
+/// and a tree array is reported.
+fn slices_to_views(m: &mut Module) -> Result<(), PassError> {
+    // The arms' bound values read the layout through aliases until these are resolved.
+    scion_ir::rewrite::resolve_aliases(m);
+    loop {
+        let mut retype: Vec<(FuncId, usize, TypeId)> = Vec::new();
+        for f in m.func_order.clone() {
+            if m.is_declaration(f) {
+                continue;
+            }
+            for op in func_ops(m, f, Order::Pre) {
+                let o = &m.ops[op];
+                if o.kind != OpKind::Tree(Op::Call) {
+                    continue;
+                }
+                let Some(callee) = o.callee().and_then(|c| m.func_by_name(c)) else {
+                    continue;
+                };
+                for (i, &a) in o.operands.iter().enumerate() {
+                    let Some(&p) = m.funcs[callee].params.get(i) else {
+                        continue;
+                    };
+                    let (Type::View(ve), Type::Array { elem, len: None }) =
+                        (m.types.get(m.values[a].ty), m.types.get(p))
+                    else {
+                        continue;
+                    };
+                    if ve == elem {
+                        retype.push((callee, i, m.values[a].ty));
+                    }
+                }
+            }
+        }
+        if retype.is_empty() {
+            return Ok(());
+        }
+        for (f, i, view) in retype {
+            if m.funcs[f].params[i] == view {
+                continue;
+            }
+            m.funcs[f].params[i] = view;
+            if let Some(entry) = m.entry_block(f) {
+                let arg = m.blocks[entry].args[i];
+                m.values[arg].ty = view;
+            }
+        }
+        // A call that still passes a tree array where a view is now expected.
+        for f in m.func_order.clone() {
+            if m.is_declaration(f) {
+                continue;
+            }
+            for op in func_ops(m, f, Order::Pre) {
+                let o = &m.ops[op];
+                let Some(callee) = (o.kind == OpKind::Tree(Op::Call))
+                    .then(|| o.callee().and_then(|c| m.func_by_name(c)))
+                    .flatten()
+                else {
+                    continue;
+                };
+                for (i, &a) in o.operands.iter().enumerate() {
+                    let Some(&p) = m.funcs[callee].params.get(i) else {
+                        continue;
+                    };
+                    if matches!(m.types.get(p), Type::View(_))
+                        && matches!(m.types.get(m.values[a].ty), Type::Array { len: None, .. })
+                    {
+                        return Err(unsupported(
+                            m.span(op),
+                            format!(
+                                "`@{}` is passed both a layout's primitives and a tree array",
+                                m.funcs[callee].name
+                            ),
+                        )
+                        .into());
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// The IR type of the layout's reference: its one component, or a tuple of them.
