@@ -145,7 +145,9 @@ pub(crate) fn deferrable_loads(
             if o.kind == OpKind::Lo(L::Br) && direct.contains(&o.successors[0].block) {
                 let s = &o.successors[0];
                 for (&x, &p) in s.args.iter().zip(&m.blocks[s.block].args) {
-                    forward.insert(x, p);
+                    if !dead.contains(&p) {
+                        forward.insert(x, p);
+                    }
                 }
             }
         }

@@ -414,10 +414,13 @@ impl Fx<'_, '_> {
                 && here.is_some_and(|h| self.position.get(&s.block).is_some_and(|t| t > h))
             {
                 let mut pending = std::mem::take(&mut self.deferred);
+                let params = &m.blocks[s.block].args;
                 for d in &mut pending {
-                    if let Some(j) = s.args.iter().position(|&x| x == d.0) {
-                        d.0 = m.blocks[s.block].args[j];
-                        self.carried_params.insert(d.0);
+                    // The live parameter it is passed as (a dead one binds nothing).
+                    let live = s.args.iter().zip(params).find(|(&x, p)| x == d.0 && !self.dead.contains(p));
+                    if let Some((_, &p)) = live {
+                        d.0 = p;
+                        self.carried_params.insert(p);
                     }
                 }
                 self.carried.insert(s.block, pending);
