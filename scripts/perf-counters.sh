@@ -3,12 +3,14 @@
 # one scene, one thread, the same rays: what docs/performance.md explains gaps with.
 #
 # Hardware counters (`perf stat`) are not available on the development machine (a VM without a
-# PMU), so each tracer runs under valgrind's cachegrind (instruction counts are exact; cache
-# misses come from its model of this machine's caches). The peers benchmark traces one row,
-# once (`--trace-only`), at two ray counts; everything else it does (loading, building and
-# compiling) is the same in both runs, so the difference divided by the difference in rays is
-# the per-ray cost of that row's traversal alone. Branch mispredictions come from cachegrind's
-# simple branch predictor model, so read them as relative, not as this CPU's.
+# PMU), so each tracer runs under valgrind's callgrind with its cache and branch simulation
+# (instruction counts are exact; cache misses come from its model of this machine's caches).
+# The peers benchmark traces one row, once (`--trace-only`), and callgrind counts only that call
+# (`--toggle-collect`: loading, building, compiling and the harness are left out; counted, they
+# varied by millions of instructions between runs), at two ray counts: the difference divided by
+# the difference in rays is the per-ray cost of that row's traversal, without the first rays'
+# cold caches. Branch mispredictions come from valgrind's simple branch predictor model, so read
+# them as relative, not as this CPU's.
 #
 # Usage: scripts/perf-counters.sh [SCENE_NAME [RAYS]]   (default: bunny, primary and secondary)
 #   Environment: SCION_SCENES (default: the repository's scenes/), PERF_N1 / PERF_N2 (ray counts,
@@ -65,8 +67,8 @@ if [ -n "${PERF_ROWS:-}" ]; then
   rows=("${picked[@]}")
 fi
 
-# counts FILE: "instructions D1-misses LL-misses branches mispredicts" from cachegrind's
-# summary on stderr.
+# counts FILE: "instructions D1-misses LL-misses branches mispredicts" from callgrind's
+# summary on stderr (its cache and branch simulation, cachegrind's).
 counts() {
   awk '/I *refs:/ { gsub(",", "", $4); i = $4 }
        /D1 *misses:/ { gsub(",", "", $4); d = $4 }
@@ -83,7 +85,10 @@ for kind in $kinds; do
     IFS='|' read -r name peers layouts <<<"$row"
     tag=$(echo "$name" | tr ' ' '_')-$kind
     for n in "$n1" "$n2"; do
-      valgrind --tool=cachegrind --cache-sim=yes --branch-sim=yes --cachegrind-out-file=/dev/null \
+      # Only the traced call is counted (the bench's `peers_traced_call`): setup, compiling and
+      # the harness would add their own run-to-run variation to the difference.
+      valgrind --tool=callgrind --cache-sim=yes --branch-sim=yes --callgrind-out-file=/dev/null \
+        --collect-atstart=no --toggle-collect='*peers_traced_call*' \
         "$bench" --scene "$(scene_file "$scene")" --rays "$kind" --n "$n" --threads 1 \
         --peers "$peers" --layouts "$layouts" --interp-rays 0 --trace-only "$name" \
         > "$out/$tag-$n.out" 2> "$out/$tag-$n.err"

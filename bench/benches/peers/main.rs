@@ -70,6 +70,16 @@ struct Args {
     sah_block: Option<usize>,
 }
 
+/// `c`'s trace of `rays`, the one call of `--trace-only` that scripts/perf-counters.sh counts
+/// (callgrind's `--toggle-collect=*peers_traced_call*`: not inlined, so that it has a symbol).
+#[inline(never)]
+fn peers_traced_call(
+    c: &mut Contender<'_>,
+    rays: &[scion_runtime::geom::Ray],
+) -> Result<Vec<scion_runtime::geom::Hit>, String> {
+    (c.trace)(std::hint::black_box(rays))
+}
+
 /// The peers `--peers` can name, in the order their rows come: the hand-written kernel over
 /// the `pbrt` layout's bytes, then the peer libraries.
 const PEERS: [&str; 6] = [
@@ -285,12 +295,12 @@ fn run(a: &Args) -> Result<(), String> {
     }
     if let Some(name) = &a.trace_only {
         // One untimed trace of one contender, for counting its instructions and cache misses
-        // (scripts/perf-counters.sh runs this under valgrind at two ray counts).
+        // (scripts/perf-counters.sh runs this under callgrind, collecting in `traced` only).
         let c = contenders
             .iter_mut()
             .find(|c| &c.name == name)
             .ok_or_else(|| format!("--trace-only: no contender `{name}`"))?;
-        let hits = (c.trace)(&w.rays)?;
+        let hits = peers_traced_call(c, &w.rays)?;
         println!(
             "{name}: traced {} rays, {} hits",
             hits.len(),
