@@ -101,29 +101,15 @@ fn sink_func(m: &mut Module, f: FuncId) -> bool {
             if m.ops[op].parent != Some(b) || !movable(m, op) {
                 continue;
             }
-            let mut target: Option<(OpId, RegionId)> = None;
-            let mut ok = true;
-            let mut any = false;
-            for &r in &m.ops[op].results {
-                for &u in users.get(&r).map(Vec::as_slice).unwrap_or(&[]) {
-                    any = true;
-                    match anchor(m, u, b) {
-                        Some((a, Some(region))) if target.is_none_or(|t| t == (a, region)) => {
-                            target = Some((a, region));
-                        }
-                        _ => ok = false,
-                    }
-                }
-            }
-            let Some((a, region)) = target else { continue };
-            if !ok || !any {
+            let uses: Vec<OpId> = m.ops[op]
+                .results
+                .iter()
+                .flat_map(|r| users.get(r).map(Vec::as_slice).unwrap_or(&[]))
+                .copied()
+                .collect();
+            let Some(dest) = conditional_region(m, &uses, b) else {
                 continue;
-            }
-            let conditional = matches!(m.ops[a].kind, OpKind::Tree(tree::Op::If | tree::Op::Match));
-            if !conditional {
-                continue;
-            }
-            let dest = m.regions[region].blocks[0];
+            };
             m.blocks[b].ops.retain(|&o| o != op);
             m.blocks[dest].ops.insert(0, op);
             m.ops[op].parent = Some(dest);
@@ -158,25 +144,10 @@ fn lazy_element(
     let [elem, index] = m.blocks[body].args[..] else {
         return false;
     };
-    let Some(uses) = users.get(&elem).filter(|u| !u.is_empty()) else {
+    let Some(uses) = users.get(&elem) else {
         return false;
     };
-    let mut target: Option<(OpId, RegionId)> = None;
-    for &u in uses {
-        match anchor(m, u, body) {
-            Some((a, Some(region))) if target.is_none_or(|t| t == (a, region)) => {
-                target = Some((a, region));
-            }
-            _ => return false,
-        }
-    }
-    let Some((a, region)) = target else {
-        return false;
-    };
-    if !matches!(m.ops[a].kind, OpKind::Tree(tree::Op::If | tree::Op::Match)) {
-        return false;
-    }
-    let Some(&dest) = m.regions[region].blocks.first() else {
+    let Some(dest) = conditional_region(m, uses, body) else {
         return false;
     };
     let ty = m.values[elem].ty;
@@ -195,6 +166,25 @@ fn lazy_element(
         }
     }
     true
+}
+
+/// The first block of the one region of one `tree.if` or `tree.match` of block `b` that holds
+/// every op of `uses` (at any depth), if there is such a region and `uses` is not empty.
+fn conditional_region(m: &Module, uses: &[OpId], b: BlockId) -> Option<BlockId> {
+    let mut target: Option<(OpId, RegionId)> = None;
+    for &u in uses {
+        match anchor(m, u, b) {
+            Some((a, Some(region))) if target.is_none_or(|t| t == (a, region)) => {
+                target = Some((a, region));
+            }
+            _ => return None,
+        }
+    }
+    let (a, region) = target?;
+    if !matches!(m.ops[a].kind, OpKind::Tree(tree::Op::If | tree::Op::Match)) {
+        return None;
+    }
+    m.regions[region].blocks.first().copied()
 }
 
 fn collect_blocks(m: &Module, r: RegionId, out: &mut Vec<BlockId>) {

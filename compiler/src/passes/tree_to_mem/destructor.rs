@@ -133,80 +133,69 @@ fn slices_to_views(m: &mut Module) -> Result<(), PassError> {
     // The arms' bound values read the layout through aliases until these are resolved.
     scion_ir::rewrite::resolve_aliases(m);
     loop {
-        let mut retype: Vec<(FuncId, usize, TypeId)> = Vec::new();
-        for f in m.func_order.clone() {
-            if m.is_declaration(f) {
-                continue;
-            }
-            for op in func_ops(m, f, Order::Pre) {
-                let o = &m.ops[op];
-                if o.kind != OpKind::Tree(Op::Call) {
-                    continue;
-                }
-                let Some(callee) = o.callee().and_then(|c| m.func_by_name(c)) else {
-                    continue;
-                };
-                for (i, &a) in o.operands.iter().enumerate() {
-                    let Some(&p) = m.funcs[callee].params.get(i) else {
-                        continue;
-                    };
-                    let (Type::View(ve), Type::Array { elem, len: None }) =
-                        (m.types.get(m.values[a].ty), m.types.get(p))
-                    else {
-                        continue;
-                    };
-                    if ve == elem {
-                        retype.push((callee, i, m.values[a].ty));
-                    }
-                }
-            }
+        let args = call_arguments(m);
+        let is_view = |t: TypeId| matches!(m.types.get(t), Type::View(_));
+        let slice_of = |t: TypeId| match m.types.get(t) {
+            Type::Array { elem, len: None } => Some(*elem),
+            _ => None,
+        };
+        // A tree array passed where a view is now expected.
+        if let Some(&(op, f, ..)) = args
+            .iter()
+            .find(|&&(_, f, i, a)| is_view(m.funcs[f].params[i]) && slice_of(a).is_some())
+        {
+            return Err(unsupported(
+                m.span(op),
+                format!(
+                    "`@{}` is passed both a layout's primitives and a tree array",
+                    m.funcs[f].name
+                ),
+            )
+            .into());
         }
+        let retype: Vec<(FuncId, usize, TypeId)> = args
+            .iter()
+            .filter(|&&(_, f, i, a)| {
+                matches!(m.types.get(a), Type::View(e) if slice_of(m.funcs[f].params[i]) == Some(*e))
+            })
+            .map(|&(_, f, i, a)| (f, i, a))
+            .collect();
         if retype.is_empty() {
             return Ok(());
         }
         for (f, i, view) in retype {
-            if m.funcs[f].params[i] == view {
-                continue;
-            }
             m.funcs[f].params[i] = view;
             if let Some(entry) = m.entry_block(f) {
                 let arg = m.blocks[entry].args[i];
                 m.values[arg].ty = view;
             }
         }
-        // A call that still passes a tree array where a view is now expected.
-        for f in m.func_order.clone() {
-            if m.is_declaration(f) {
+    }
+}
+
+/// Every argument of a call of a defined function: (call, callee, parameter index, the
+/// argument's type).
+fn call_arguments(m: &Module) -> Vec<(scion_ir::OpId, FuncId, usize, TypeId)> {
+    let mut out = Vec::new();
+    for &f in &m.func_order {
+        if m.is_declaration(f) {
+            continue;
+        }
+        for op in func_ops(m, f, Order::Pre) {
+            let o = &m.ops[op];
+            if o.kind != OpKind::Tree(Op::Call) {
                 continue;
             }
-            for op in func_ops(m, f, Order::Pre) {
-                let o = &m.ops[op];
-                let Some(callee) = (o.kind == OpKind::Tree(Op::Call))
-                    .then(|| o.callee().and_then(|c| m.func_by_name(c)))
-                    .flatten()
-                else {
-                    continue;
-                };
-                for (i, &a) in o.operands.iter().enumerate() {
-                    let Some(&p) = m.funcs[callee].params.get(i) else {
-                        continue;
-                    };
-                    if matches!(m.types.get(p), Type::View(_))
-                        && matches!(m.types.get(m.values[a].ty), Type::Array { len: None, .. })
-                    {
-                        return Err(unsupported(
-                            m.span(op),
-                            format!(
-                                "`@{}` is passed both a layout's primitives and a tree array",
-                                m.funcs[callee].name
-                            ),
-                        )
-                        .into());
-                    }
-                }
+            let Some(callee) = o.callee().and_then(|c| m.func_by_name(c)) else {
+                continue;
+            };
+            let n = m.funcs[callee].params.len();
+            for (i, &a) in o.operands.iter().enumerate().take(n) {
+                out.push((op, callee, i, m.values[a].ty));
             }
         }
     }
+    out
 }
 
 /// The IR type of the layout's reference: its one component, or a tuple of them.
