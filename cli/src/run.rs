@@ -126,7 +126,10 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
                 QueryKind::ClosestHit => SahOptions::default().block,
                 _ => 1,
             };
-            (build_for_runs(&scene, args.builder, args.leaf_size, runs), None)
+            (
+                build_for_runs(&scene, args.builder, args.leaf_size, runs),
+                None,
+            )
         }
     };
     let driver = BatchDriver::new(args.threads).map_err(CliError::new)?;

@@ -14,7 +14,13 @@ use scion_ir::types::{FloatTy, Type};
 impl Fx<'_, '_> {
     /// Integer division without traps: `MIN / -1` wraps to `MIN` (and `MIN % -1` is 0) as in
     /// `tree`; division by zero, undefined in the IR, divides by 1 instead of trapping.
-    pub(crate) fn int_div(&mut self, div: bool, signed: bool, x: ir::Value, y: ir::Value) -> ir::Value {
+    pub(crate) fn int_div(
+        &mut self,
+        div: bool,
+        signed: bool,
+        x: ir::Value,
+        y: ir::Value,
+    ) -> ir::Value {
         let t = self.b.func.dfg.value_type(y);
         let one = self.b.ins().iconst(t, 1);
         let zero = self.b.ins().iconst(t, 0);
@@ -129,7 +135,12 @@ impl Fx<'_, '_> {
     }
 
     /// `lo.cast`: Rust `as` semantics between scalars.
-    pub(crate) fn cast(&mut self, x: ir::Value, from: TypeId, to: TypeId) -> Result<ir::Value, String> {
+    pub(crate) fn cast(
+        &mut self,
+        x: ir::Value,
+        from: TypeId,
+        to: TypeId,
+    ) -> Result<ir::Value, String> {
         let m = self.m;
         let (ft, tt) = (m.types.get(from).clone(), m.types.get(to).clone());
         let ct = self.cty(to)?;

@@ -172,7 +172,8 @@ impl Fx<'_, '_> {
         for step in &p.emit {
             let (blk, vs) = match step {
                 Step::Side(blk, xs) => {
-                    let vs: Vec<ir::Value> = xs.iter().map(|&x| self.v(x)).collect::<Result<_, _>>()?;
+                    let vs: Vec<ir::Value> =
+                        xs.iter().map(|&x| self.v(x)).collect::<Result<_, _>>()?;
                     (*blk, vs)
                 }
                 Step::Join(blk, args) => {

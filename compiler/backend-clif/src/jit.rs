@@ -95,7 +95,8 @@ impl JitModule {
             // "In-process execution").
             let dump = std::env::var("SCION_CLIF_DUMP").ok();
             if let Some(dir) = &dump {
-                let _ = std::fs::write(format!("{dir}/{name}.clif"), ctx.func.display().to_string());
+                let _ =
+                    std::fs::write(format!("{dir}/{name}.clif"), ctx.func.display().to_string());
             }
             cl.define_function(id, &mut ctx)
                 .map_err(|e| ClifError(format!("@{name}: {e:?}")))?;

@@ -396,12 +396,17 @@ impl Fx<'_, '_> {
 
     /// The Cranelift arguments of a branch passing `xs` to a block whose runs of vector
     /// parameters start at `runs`.
-    pub(crate) fn jump_args(&mut self, xs: &[ValueId], runs: &[usize]) -> Result<Vec<ir::Value>, String> {
+    pub(crate) fn jump_args(
+        &mut self,
+        xs: &[ValueId],
+        runs: &[usize],
+    ) -> Result<Vec<ir::Value>, String> {
         let mut out = Vec::with_capacity(xs.len());
         let mut i = 0;
         while i < xs.len() {
             if runs.contains(&i) {
-                let lane = lane32(self.m, self.m.values[xs[i]].ty).ok_or("a vector run of another type")?;
+                let lane = lane32(self.m, self.m.values[xs[i]].ty)
+                    .ok_or("a vector run of another type")?;
                 out.push(self.lane_vector(&xs[i..i + 4], lane)?);
                 i += 4;
             } else {
@@ -488,7 +493,9 @@ impl Fx<'_, '_> {
             if let Some(&(v, k)) = self.lane_vecs.get(&x) {
                 Some((v, 1u8 << k, None))
             } else {
-                self.lane_sets.get(&x).map(|&(v, bits, and)| (v, bits, Some(and)))
+                self.lane_sets
+                    .get(&x)
+                    .map(|&(v, bits, and)| (v, bits, Some(and)))
             }
         };
         let (Some(a), Some(b)) = (set(o.operands[0]), set(o.operands[1])) else {

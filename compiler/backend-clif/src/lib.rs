@@ -22,8 +22,8 @@
 //! assert!(scion_clif::print_clif(&m).unwrap().contains("fadd"));
 //! ```
 
-pub mod flatten;
 mod arith;
+pub mod flatten;
 mod ifconv;
 pub mod jit;
 mod lanes;

@@ -187,7 +187,8 @@ pub fn translate_func<M: ClModule>(
     // Deferred loads still pending at a jump into a block entered by that jump alone, for that
     // block (see `Fx::op`).
     let mut carried: HashMap<BlockId, Vec<(ValueId, scion_ir::OpId)>> = HashMap::new();
-    let position: HashMap<BlockId, usize> = order.iter().enumerate().map(|(i, &b)| (b, i)).collect();
+    let position: HashMap<BlockId, usize> =
+        order.iter().enumerate().map(|(i, &b)| (b, i)).collect();
     for (i, &lb) in order.iter().enumerate() {
         let cb = b.create_block();
         if i == 0 {
@@ -417,7 +418,11 @@ impl Fx<'_, '_> {
                 let params = &m.blocks[s.block].args;
                 for d in &mut pending {
                     // The live parameter it is passed as (a dead one binds nothing).
-                    let live = s.args.iter().zip(params).find(|(&x, p)| x == d.0 && !self.dead.contains(p));
+                    let live = s
+                        .args
+                        .iter()
+                        .zip(params)
+                        .find(|(&x, p)| x == d.0 && !self.dead.contains(p));
                     if let Some((_, &p)) = live {
                         d.0 = p;
                         self.carried_params.insert(p);
@@ -427,7 +432,10 @@ impl Fx<'_, '_> {
             }
         }
         if !self.deferred.is_empty()
-            && (effect || o.operands.iter().any(|x| self.deferred.iter().any(|d| d.0 == *x)))
+            && (effect
+                || o.operands
+                    .iter()
+                    .any(|x| self.deferred.iter().any(|d| d.0 == *x)))
         {
             for (name, load) in std::mem::take(&mut self.deferred) {
                 self.emit_deferred(cl, syms, name, load, blocks)?;

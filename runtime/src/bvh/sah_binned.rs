@@ -155,8 +155,8 @@ impl Decide for Sah {
                     continue;
                 }
                 let nr = n - nl;
-                let cost = ct * area
-                    + ci * (nl as f64 * left.half_area() + nr as f64 * right_area[k + 1]);
+                let cost =
+                    ct * area + ci * (nl as f64 * left.half_area() + nr as f64 * right_area[k + 1]);
                 let plane = Plane {
                     cost,
                     imbalance: nl.abs_diff(nr),

@@ -19,10 +19,10 @@
 //! allow. Moving never makes an op run more often, and what it reads cannot change in between.
 
 use rustc_hash::{FxHashMap, FxHashSet};
+use scion_ir::builder::{Builder, InsertPoint};
 use scion_ir::module::{Module, RegionParent};
 use scion_ir::op::OpKind;
 use scion_ir::pass::{Pass, PassCx, PassError};
-use scion_ir::builder::{Builder, InsertPoint};
 use scion_ir::{mem, tree, walk, BlockId, FuncId, OpId, RegionId};
 
 /// The `mem-sink` pass.
@@ -124,18 +124,16 @@ fn sink_func(m: &mut Module, f: FuncId) -> bool {
 /// of the view at the iteration's index, instead of at the top of every iteration (`mem-to-lo`
 /// then loads no element for the loop). A leaf's `foreach tri, k in data { if (k & 3) == 0
 /// {...} }` reads a triangle only on every fourth iteration. Needs the loop's index argument.
-fn lazy_element(
-    m: &mut Module,
-    op: OpId,
-    users: &FxHashMap<scion_ir::ValueId, Vec<OpId>>,
-) -> bool {
+fn lazy_element(m: &mut Module, op: OpId, users: &FxHashMap<scion_ir::ValueId, Vec<OpId>>) -> bool {
     let o = &m.ops[op];
-    if o.kind != OpKind::Tree(tree::Op::Foreach) || o.operands.len() != 1 || o.regions.len() != 1
-    {
+    if o.kind != OpKind::Tree(tree::Op::Foreach) || o.operands.len() != 1 || o.regions.len() != 1 {
         return false;
     }
     let view = o.operands[0];
-    if !matches!(m.types.get(m.values[view].ty), scion_ir::types::Type::View(_)) {
+    if !matches!(
+        m.types.get(m.values[view].ty),
+        scion_ir::types::Type::View(_)
+    ) {
         return false;
     }
     let Some(&body) = m.regions[o.regions[0]].blocks.first() else {
