@@ -182,6 +182,10 @@ impl FnLower<'_> {
         let region = self.dst.blocks[cur]
             .parent
             .ok_or(("detached block".to_string(), None))?;
+        let tb = src.regions[o.regions[0]].blocks[0];
+        // A body that acts only every `step`-th iteration steps over the others.
+        let guard = guarded_stride(src, tb);
+        let step = guard.map_or(1, |(step, _)| step);
         let head = self.dst.add_block(region, &[u64t]);
         let body = self.dst.add_block(region, &[]);
         let exit = self.dst.add_block(region, &[]);
@@ -192,7 +196,6 @@ impl FnLower<'_> {
         Builder::at_end(self.dst, head).lo_cond_br(more, (body, &[]), (exit, &[]));
         let off = self.e1(body, L::Mul, &[i, stride], u64t);
         let at = self.e1(body, L::PtrAdd, &[ptr, off], ptrt);
-        let tb = src.regions[o.regions[0]].blocks[0];
         // An element nothing reads is not loaded (`mem-sink` moves a conditional use of it
         // into a `tree.index` where it is needed).
         let used = src.blocks[tb]
@@ -213,8 +216,27 @@ impl FnLower<'_> {
                 self.e1(body, L::Cast, &[i], it)
             }]);
         }
-        if let Some((end, _)) = self.lower_block(tb, args, body)? {
-            let one = self.int_const(end, u64t, 1);
+        let done = match guard {
+            None => self.lower_block(tb, args, body)?,
+            Some((_, guard)) => {
+                // The block's pure ops (the guard's condition among them, which holds at every
+                // iteration left), then the guarded arm in place of the `if`.
+                for (&a, l) in src.blocks[tb].args.iter().zip(args) {
+                    self.vals.insert(a, l);
+                }
+                let mut cur = body;
+                for &op in src.blocks[tb].ops.iter().take_while(|&&op| op != guard) {
+                    match self.lower_op(op, cur)? {
+                        Step::Next(b) => cur = b,
+                        _ => return self.err("a guarded loop body's pure op ended its block"),
+                    }
+                }
+                let arm = src.regions[src.ops[guard].regions[0]].blocks[0];
+                self.lower_block(arm, Vec::new(), cur)?
+            }
+        };
+        if let Some((end, _)) = done {
+            let one = self.int_const(end, u64t, step as i128);
             let next = self.e1(end, L::Add, &[i, one], u64t);
             Builder::at_end(self.dst, end).lo_br(head, &[next]);
         }
@@ -254,4 +276,82 @@ fn region_reads(m: &scion_ir::Module, region: scion_ir::RegionId, v: ValueId) ->
             || m.ops[op].successors.iter().any(|s| s.args.contains(&v));
     });
     found
+}
+
+/// The step of a `foreach` body that does something only at every `step`-th index, and the
+/// `tree.if` that says so: the body block is pure arithmetic (constants, `and`, compares, casts)
+/// and one `if (k & (step - 1)) == 0` on the loop's index `k`, with an empty else arm, no results
+/// and nothing after it. The iterations between are no-ops, so the loop can step over them:
+/// closest hit's leaves take their triangles in runs of four (`if (k & 3) == 0`, the run's
+/// triangles read in the arm), and went round the loop for every triangle.
+fn guarded_stride(m: &scion_ir::Module, body: BlockId) -> Option<(u64, OpId)> {
+    use scion_ir::op::OpKind;
+    use scion_ir::tree::Op as T;
+    let tree = |op: OpId| match m.ops[op].kind {
+        OpKind::Tree(k) => Some(k),
+        _ => None,
+    };
+    let def = |v: ValueId| m.def_op(v).filter(|&d| m.blocks[body].ops.contains(&d));
+    let constant = |v: ValueId| {
+        m.def_op(v)
+            .filter(|&d| tree(d) == Some(T::Const))
+            .and_then(|d| m.ops[d].int_attr("value"))
+    };
+    let block = &m.blocks[body];
+    let [_, k] = block.args[..] else {
+        return None;
+    };
+    let (&last, rest) = block.ops.split_last()?;
+    if tree(last) != Some(T::Yield) || !m.ops[last].operands.is_empty() {
+        return None;
+    }
+    let mut guard = None;
+    for &op in rest {
+        match tree(op)? {
+            T::Const | T::And | T::Cmp | T::Cast if m.ops[op].regions.is_empty() => {}
+            T::If if guard.is_none() => guard = Some(op),
+            _ => return None,
+        }
+    }
+    let guard = guard?;
+    let g = &m.ops[guard];
+    if !g.results.is_empty() || g.regions.len() != 2 || *rest.last()? != guard {
+        return None;
+    }
+    let else_block = m.regions[g.regions[1]].blocks.first()?;
+    if m.blocks[*else_block].ops.len() != 1 {
+        return None;
+    }
+    let cmp = def(g.operands[0]).filter(|&c| tree(c) == Some(T::Cmp))?;
+    if m.ops[cmp].pred() != Some(CmpPred::Eq) {
+        return None;
+    }
+    let [a, b] = m.ops[cmp].operands[..] else {
+        return None;
+    };
+    let masked = match (constant(a), constant(b)) {
+        (_, Some(0)) => a,
+        (Some(0), _) => b,
+        _ => return None,
+    };
+    let and = def(masked).filter(|&d| tree(d) == Some(T::And))?;
+    let [x, y] = m.ops[and].operands[..] else {
+        return None;
+    };
+    let (index, mask) = match (constant(x), constant(y)) {
+        (None, Some(c)) => (x, c),
+        (Some(c), None) => (y, c),
+        _ => return None,
+    };
+    // The index, or an integer cast of it (a cast keeps the low bits).
+    let index_ok = index == k
+        || def(index).is_some_and(|c| {
+            tree(c) == Some(T::Cast)
+                && m.ops[c].operands[0] == k
+                && matches!(m.types.get(m.values[index].ty), Type::Int(_))
+        });
+    let step = u64::try_from(mask).ok()?.checked_add(1)?;
+    let bits = m.types.bit_width(m.values[index].ty)?;
+    (index_ok && mask > 0 && step.is_power_of_two() && step.trailing_zeros() < bits.min(16))
+        .then_some((step, guard))
 }
