@@ -10,6 +10,7 @@
 # Usage: scripts/count-instructions.sh [LAYOUT_FILE [LAYOUT [ENTRY [TREE [SCENE [N]]]]]]
 #   default: pbrt LinearBVH closest_hit BVH bunny 65536 (primary rays, one thread).
 #   e.g.   scripts/count-instructions.sh bvh8 Bvh8 closest_hit8 BVH8 fzk_haus
+#          scripts/count-instructions.sh bvh8_tri4 Bvh8Tri4 closest_hit8_tri4 BVH8T4 pine
 #   Environment: CPU (scionc --cpu, default x86-64-v3: valgrind runs no AVX-512), BLOCKS=1,
 #   BRANCHES=1 (also the blocks with the most mispredicted conditional branches per ray, as
 #   valgrind's branch simulation predicts them),

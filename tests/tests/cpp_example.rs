@@ -49,9 +49,13 @@ fn cpp_example_prints_the_rust_checksum() {
     let scenes = scenes_dir().expect("the repository's scenes/ folder (or SCION_SCENES)");
     let target = build_tools(true);
     let build = std::env::temp_dir().join(format!("scion-cpp-example-{}", std::process::id()));
-    for (layout, file, scene, kind) in [
-        ("LinearBVH", "pbrt", "teapot", "primary"),
-        ("PtrBVH", "ptr", "pine", "secondary"),
+    // (layout, its file, the closest hit and its tree type, scene, rays): `Bvh8Tri4`'s tree
+    // type holds blocks of four triangles, which `scion_tree_view` cuts the tree's leaves into
+    // (its schema's `primitive`); the collision program runs on the binary layouts.
+    for (layout, file, entry, tree, scene, kind) in [
+        ("LinearBVH", "pbrt", "closest_hit", "BVH", "teapot", "primary"),
+        ("PtrBVH", "ptr", "closest_hit", "BVH", "pine", "secondary"),
+        ("Bvh8Tri4", "bvh8_tri4", "closest_hit8_tri4", "BVH8T4", "pine", "secondary"),
     ] {
         let scene = scion_runtime::scene::manifest::find(scene)
             .unwrap()
@@ -79,6 +83,8 @@ fn cpp_example_prints_the_rust_checksum() {
                 format!("SEED={SEED}"),
                 "THREADS=3".into(),
                 format!("RAYS={kind}"),
+                format!("ENTRY={entry}"),
+                format!("TREE={tree}"),
             ],
         );
         let stdout = String::from_utf8_lossy(&out.stdout);
@@ -98,6 +104,9 @@ fn cpp_example_prints_the_rust_checksum() {
             "{layout}: the C++ checksum differs from the Rust path's\n{stdout}"
         );
         assert!(stdout.contains("mismatches: 0"), "{stdout}");
+        if tree != "BVH" {
+            continue;
+        }
         // The collision program over the same layout: two trees, a sink of pairs too small at
         // first (so the entry runs twice), the pairs equal to the Rust reference.
         let out = make("run-collide", &["CAPACITY=7".into()]);

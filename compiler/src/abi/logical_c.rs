@@ -185,14 +185,37 @@ pub fn render(abi: &LogicalAbi, m: &Module) -> String {
     let sch = &abi.schema;
     let _ = writeln!(
         s,
-        "static const ScionLogicalSchema {sc} = {{{}, {}, {}, {}, {}, {}, {sc}_fields}};",
+        "static const ScionLogicalSchema {sc} = {{{}, {}, {}, {}, {}, {}, {sc}_fields, {}}};",
         sch.node_size,
         sch.node_align,
         sch.interior,
         sch.leaf,
         sch.arity,
-        sch.fields.len()
+        sch.fields.len(),
+        primitive_c_name(&sch.primitive)
     );
     let _ = writeln!(s, "#endif");
     s
+}
+
+/// The `SCION_PRIM_*` constant of the runtime's primitive type `name` (the schema's
+/// `primitive`, one of `scion_runtime::primitive::PRIMITIVE_TYPES`; a name without one, which
+/// the test below rules out, gives a value `scion_tree_view` rejects with an error).
+fn primitive_c_name(name: &str) -> &'static str {
+    match name {
+        "Triangle" => "SCION_PRIM_TRIANGLE",
+        "Segment" => "SCION_PRIM_SEGMENT",
+        "Triangle4" => "SCION_PRIM_TRIANGLE4",
+        _ => "0xFFFFFFFFu",
+    }
+}
+
+#[cfg(test)]
+mod primitive_tests {
+    #[test]
+    fn every_runtime_primitive_has_a_c_constant() {
+        for (name, _) in scion_runtime::primitive::PRIMITIVE_TYPES {
+            assert!(super::primitive_c_name(name).starts_with("SCION_PRIM_"), "{name}");
+        }
+    }
 }

@@ -85,10 +85,15 @@ typedef struct ScionTreeView {
 typedef struct ScionLogicalField {
     uint32_t role, variant, offset, slot, count, width;
 } ScionLogicalField;
+/* What a tree type's leaves hold (ScionLogicalSchema.primitive; ScionTreeView.prims). */
+#define SCION_PRIM_TRIANGLE 0  /* ScionTriangle */
+#define SCION_PRIM_SEGMENT 1   /* ScionSegment (strands) */
+#define SCION_PRIM_TRIANGLE4 2 /* ScionTriangle4 (the tree's leaves cut into blocks of four) */
 /* The shape of a tree type's logical nodes (its scion_logical_<Type> constant). */
 typedef struct ScionLogicalSchema {
     uint32_t node_size, node_align, interior, leaf, arity, field_count;
     const ScionLogicalField *fields;
+    uint32_t primitive; /* SCION_PRIM_* */
 } ScionLogicalSchema;
 SCION_STATIC_ASSERT(sizeof(ScionTriangle) == 40, "ScionTriangle is 40 bytes");
 SCION_STATIC_ASSERT(sizeof(ScionSegment) == 36, "ScionSegment is 36 bytes");
@@ -97,7 +102,8 @@ SCION_STATIC_ASSERT(sizeof(ScionTreeView) == 32, "ScionTreeView is 32 bytes");
 SCION_STATIC_ASSERT(offsetof(ScionTreeView, root) == 12, "ScionTreeView.root at 12");
 SCION_STATIC_ASSERT(offsetof(ScionTreeView, prims) == 16, "ScionTreeView.prims at 16");
 SCION_STATIC_ASSERT(sizeof(ScionLogicalField) == 24, "ScionLogicalField is 24 bytes");
-SCION_STATIC_ASSERT(sizeof(ScionLogicalSchema) == 32, "ScionLogicalSchema is 32 bytes");
+SCION_STATIC_ASSERT(sizeof(ScionLogicalSchema) == 40, "ScionLogicalSchema is 40 bytes");
+SCION_STATIC_ASSERT(offsetof(ScionLogicalSchema, primitive) == 32, "ScionLogicalSchema.primitive at 32");
 #endif
 
 /* A ray (32 bytes): hits have tmin < t < tmax. The same bytes as the query record

@@ -31,6 +31,7 @@ pub use queries::{
 pub use scene::{
     scion_scene_free, scion_scene_load, scion_scene_triangle_count, scion_tree_build,
     scion_tree_free, scion_tree_view, ScionLogicalSchema, ScionScene, ScionTree, ScionTreeView,
+    SCION_PRIM_SEGMENT, SCION_PRIM_TRIANGLE, SCION_PRIM_TRIANGLE4,
 };
 
 #[cfg(test)]

@@ -5,8 +5,9 @@ use rt::bvh::schema::{LogicalBytes, Schema, SchemaField};
 use rt::bvh::{build_sah_binned, LogicalTree, SahOptions};
 use rt::geom::Triangle;
 use rt::scene::{load_obj, Scene};
+use rt::triangle4::{block_tree, Triangle4};
 use std::ffi::{c_char, CStr};
-use std::sync::Mutex;
+use std::sync::{Mutex, OnceLock};
 
 /// A loaded scene (opaque to C).
 pub struct ScionScene {
@@ -14,13 +15,22 @@ pub struct ScionScene {
 }
 
 /// A logical tree over a scene's triangles (opaque to C), with its nodes in every schema a
-/// view was asked for (kept as long as the tree, so views stay valid).
+/// view was asked for (kept as long as the tree, so views stay valid), and, once a schema over
+/// blocks of four triangles asked for it, the same tree over blocks (`blocks`).
 pub struct ScionTree {
     pub(crate) tree: LogicalTree,
+    pub(crate) blocks: OnceLock<Result<LogicalTree<Triangle4>, String>>,
     pub(crate) filled: Mutex<Vec<(Schema, Box<LogicalBytes>)>>,
 }
 
-/// A tree type's logical-node shape as C passes it (`ScionLogicalSchema`, 32 bytes).
+/// `ScionLogicalSchema.primitive`: the leaves hold `ScionTriangle`s.
+pub const SCION_PRIM_TRIANGLE: u32 = 0;
+/// The leaves hold `ScionSegment`s (strands; not what a scene from `scion_scene_load` holds).
+pub const SCION_PRIM_SEGMENT: u32 = 1;
+/// The leaves hold `ScionTriangle4`s, blocks of four triangles.
+pub const SCION_PRIM_TRIANGLE4: u32 = 2;
+
+/// A tree type's logical-node shape as C passes it (`ScionLogicalSchema`, 40 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct ScionLogicalSchema {
@@ -38,6 +48,9 @@ pub struct ScionLogicalSchema {
     pub field_count: u32,
     /// The fields (`ScionLogicalField`, 24 bytes each).
     pub fields: *const SchemaField,
+    /// What the leaves hold: `SCION_PRIM_TRIANGLE` (0), `SCION_PRIM_SEGMENT` (1) or
+    /// `SCION_PRIM_TRIANGLE4` (2).
+    pub primitive: u32,
 }
 
 /// The logical tree as generated code reads it (`ScionTreeView`, 32 bytes).
@@ -50,14 +63,15 @@ pub struct ScionTreeView {
     pub node_count: u32,
     /// The root's index, `u32::MAX` for the empty tree.
     pub root: u32,
-    /// The triangles (40-byte `ScionTriangle`s).
-    pub prims: *const Triangle,
+    /// The leaves' primitives: 40-byte `ScionTriangle`s, or 160-byte `ScionTriangle4`s for a
+    /// schema over blocks.
+    pub prims: *const u8,
     /// How many.
     pub prim_count: u32,
 }
 
 const _: () = assert!(std::mem::size_of::<ScionTreeView>() == 32);
-const _: () = assert!(std::mem::size_of::<ScionLogicalSchema>() == 32);
+const _: () = assert!(std::mem::size_of::<ScionLogicalSchema>() == 40);
 const _: () = assert!(std::mem::size_of::<SchemaField>() == 24);
 const _: () = assert!(std::mem::size_of::<Triangle>() == 40);
 
@@ -158,6 +172,7 @@ pub unsafe extern "C" fn scion_tree_build(
         let tree = build_sah_binned(&s.scene.triangles, &opts);
         let h = Box::into_raw(Box::new(ScionTree {
             tree,
+            blocks: OnceLock::new(),
             filled: Mutex::new(Vec::new()),
         }));
         // SAFETY: `out` is writable.
@@ -202,10 +217,43 @@ pub unsafe extern "C" fn scion_tree_view(
             // SAFETY: `fields` holds `field_count` fields (the caller's contract).
             unsafe { std::slice::from_raw_parts(c.fields, c.field_count as usize) }.to_vec()
         };
+        // The C API's scenes are OBJ triangle meshes: the leaves hold its triangles, or the
+        // same tree's leaves cut into blocks of four (`triangle4::block_tree`).
+        let (primitive, prims, prim_count) = match c.primitive {
+            SCION_PRIM_TRIANGLE => (
+                "Triangle",
+                t.tree.primitives.as_ptr().cast::<u8>(),
+                t.tree.primitives.len(),
+            ),
+            SCION_PRIM_TRIANGLE4 => {
+                let blocks = t
+                    .blocks
+                    .get_or_init(|| block_tree(&t.tree))
+                    .as_ref()
+                    .map_err(|e| bad_arg(format!("scion_tree_view: the tree over blocks: {e}")))?;
+                (
+                    "Triangle4",
+                    blocks.primitives.as_ptr().cast::<u8>(),
+                    blocks.primitives.len(),
+                )
+            }
+            SCION_PRIM_SEGMENT => {
+                return Err(bad_arg(
+                    "scion_tree_view: the schema's leaves hold ScionSegment strands \
+                     (SCION_PRIM_SEGMENT), and a tree of scion_tree_build holds a scene's \
+                     triangles",
+                ))
+            }
+            other => {
+                return Err(bad_arg(format!(
+                    "scion_tree_view: the schema's primitive is {other}, not SCION_PRIM_TRIANGLE \
+                     (0), SCION_PRIM_SEGMENT (1) or SCION_PRIM_TRIANGLE4 (2)"
+                )))
+            }
+        };
         let schema = Schema {
             adt: "ScionLogicalSchema".to_string(),
-            // The C API's scenes are OBJ triangle meshes.
-            primitive: "Triangle".to_string(),
+            primitive: primitive.to_string(),
             node_size: c.node_size,
             node_align: c.node_align,
             interior: c.interior,
@@ -220,8 +268,13 @@ pub unsafe extern "C" fn scion_tree_view(
         let at = match filled.iter().position(|(s, _)| *s == schema) {
             Some(at) => at,
             None => {
-                let lb = LogicalBytes::fill(&t.tree, &schema)
-                    .map_err(|e| bad_arg(format!("scion_tree_view: {e}")))?;
+                let lb = match t.blocks.get() {
+                    Some(Ok(blocks)) if primitive == "Triangle4" => {
+                        LogicalBytes::fill(blocks, &schema)
+                    }
+                    _ => LogicalBytes::fill(&t.tree, &schema),
+                }
+                .map_err(|e| bad_arg(format!("scion_tree_view: {e}")))?;
                 filled.push((schema, Box::new(lb)));
                 filled.len() - 1
             }
@@ -231,8 +284,8 @@ pub unsafe extern "C" fn scion_tree_view(
             nodes: lb.nodes().as_ptr(),
             node_count: lb.node_count as u32,
             root: lb.root,
-            prims: t.tree.primitives.as_ptr(),
-            prim_count: t.tree.primitives.len() as u32,
+            prims,
+            prim_count: prim_count as u32,
         };
         // SAFETY: `view` is writable.
         unsafe { *view = v };

@@ -76,6 +76,7 @@ fn the_c_path_matches_the_rust_path() {
         arity: binary.arity,
         field_count: binary.fields.len() as u32,
         fields: binary.fields.as_ptr(),
+        primitive: SCION_PRIM_TRIANGLE,
     };
     // SAFETY: a live handle, a schema with its fields, and an out pointer.
     let s = unsafe { scion_tree_view(tree, &schema, &mut view, err.as_mut_ptr(), err.len()) };
@@ -96,6 +97,39 @@ fn the_c_path_matches_the_rust_path() {
     let s = unsafe { scion_tree_view(tree, &bad, &mut view, err.as_mut_ptr(), err.len()) };
     assert_ne!(s, SCION_RT_OK);
     assert!(msg(&err).contains("node size 3"), "{}", msg(&err));
+
+    // The same schema over blocks of four: the tree's leaves cut into `Triangle4`s, the nodes
+    // those of `triangle4::block_tree` (a leaf's count in blocks), the triangle view unchanged.
+    let blocks = rt::triangle4::block_tree(&rust_tree).unwrap();
+    let over_blocks = ScionLogicalSchema {
+        primitive: SCION_PRIM_TRIANGLE4,
+        ..schema
+    };
+    let mut bview = view;
+    // SAFETY: as above.
+    let s = unsafe { scion_tree_view(tree, &over_blocks, &mut bview, err.as_mut_ptr(), err.len()) };
+    assert_eq!(s, SCION_RT_OK, "{}", msg(&err));
+    assert_eq!(bview.prim_count as usize, blocks.primitives.len());
+    assert!(bview.prim_count < view.prim_count);
+    let mut block_schema = binary.clone();
+    block_schema.primitive = "Triangle4".to_string();
+    let expect = rt::bvh::schema::LogicalBytes::fill(&blocks, &block_schema).unwrap();
+    // SAFETY: the view points into bytes the live tree keeps.
+    let nodes = unsafe { std::slice::from_raw_parts(bview.nodes, expect.nodes().len()) };
+    assert_eq!(nodes, expect.nodes());
+    // SAFETY: `prims` holds `prim_count` blocks of 160 bytes.
+    let prims = unsafe {
+        std::slice::from_raw_parts(bview.prims.cast::<rt::Triangle4>(), bview.prim_count as usize)
+    };
+    assert_eq!(prims, &blocks.primitives[..]);
+    // Strands, and a primitive the runtime does not know, are refused with a message.
+    for (primitive, says) in [(SCION_PRIM_SEGMENT, "ScionSegment"), (7, "primitive is 7")] {
+        let bad = ScionLogicalSchema { primitive, ..schema };
+        // SAFETY: as above.
+        let s = unsafe { scion_tree_view(tree, &bad, &mut bview, err.as_mut_ptr(), err.len()) };
+        assert_ne!(s, SCION_RT_OK);
+        assert!(msg(&err).contains(says), "{}", msg(&err));
+    }
 
     let n = 3001u64;
     let mut rays = vec![ScionRay::default(); n as usize];
