@@ -53,9 +53,23 @@ fn cpp_example_prints_the_rust_checksum() {
     // type holds blocks of four triangles, which `scion_tree_view` cuts the tree's leaves into
     // (its schema's `primitive`); the collision program runs on the binary layouts.
     for (layout, file, entry, tree, scene, kind) in [
-        ("LinearBVH", "pbrt", "closest_hit", "BVH", "teapot", "primary"),
+        (
+            "LinearBVH",
+            "pbrt",
+            "closest_hit",
+            "BVH",
+            "teapot",
+            "primary",
+        ),
         ("PtrBVH", "ptr", "closest_hit", "BVH", "pine", "secondary"),
-        ("Bvh8Tri4", "bvh8_tri4", "closest_hit8_tri4", "BVH8T4", "pine", "secondary"),
+        (
+            "Bvh8Tri4",
+            "bvh8_tri4",
+            "closest_hit8_tri4",
+            "BVH8T4",
+            "pine",
+            "secondary",
+        ),
     ] {
         let scene = scion_runtime::scene::manifest::find(scene)
             .unwrap()

@@ -215,7 +215,10 @@ mod primitive_tests {
     #[test]
     fn every_runtime_primitive_has_a_c_constant() {
         for (name, _) in scion_runtime::primitive::PRIMITIVE_TYPES {
-            assert!(super::primitive_c_name(name).starts_with("SCION_PRIM_"), "{name}");
+            assert!(
+                super::primitive_c_name(name).starts_with("SCION_PRIM_"),
+                "{name}"
+            );
         }
     }
 }

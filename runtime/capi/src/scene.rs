@@ -219,9 +219,10 @@ pub unsafe extern "C" fn scion_tree_view(
         };
         // The C API's scenes are OBJ triangle meshes: the leaves hold its triangles, or the
         // same tree's leaves cut into blocks of four (`triangle4::block_tree`).
-        let (primitive, prims, prim_count) = match c.primitive {
+        let (primitive, blocks, prims, prim_count) = match c.primitive {
             SCION_PRIM_TRIANGLE => (
                 "Triangle",
+                None,
                 t.tree.primitives.as_ptr().cast::<u8>(),
                 t.tree.primitives.len(),
             ),
@@ -233,6 +234,7 @@ pub unsafe extern "C" fn scion_tree_view(
                     .map_err(|e| bad_arg(format!("scion_tree_view: the tree over blocks: {e}")))?;
                 (
                     "Triangle4",
+                    Some(blocks),
                     blocks.primitives.as_ptr().cast::<u8>(),
                     blocks.primitives.len(),
                 )
@@ -268,11 +270,9 @@ pub unsafe extern "C" fn scion_tree_view(
         let at = match filled.iter().position(|(s, _)| *s == schema) {
             Some(at) => at,
             None => {
-                let lb = match t.blocks.get() {
-                    Some(Ok(blocks)) if primitive == "Triangle4" => {
-                        LogicalBytes::fill(blocks, &schema)
-                    }
-                    _ => LogicalBytes::fill(&t.tree, &schema),
+                let lb = match blocks {
+                    Some(blocks) => LogicalBytes::fill(blocks, &schema),
+                    None => LogicalBytes::fill(&t.tree, &schema),
                 }
                 .map_err(|e| bad_arg(format!("scion_tree_view: {e}")))?;
                 filled.push((schema, Box::new(lb)));

@@ -119,12 +119,18 @@ fn the_c_path_matches_the_rust_path() {
     assert_eq!(nodes, expect.nodes());
     // SAFETY: `prims` holds `prim_count` blocks of 160 bytes.
     let prims = unsafe {
-        std::slice::from_raw_parts(bview.prims.cast::<rt::Triangle4>(), bview.prim_count as usize)
+        std::slice::from_raw_parts(
+            bview.prims.cast::<rt::Triangle4>(),
+            bview.prim_count as usize,
+        )
     };
     assert_eq!(prims, &blocks.primitives[..]);
     // Strands, and a primitive the runtime does not know, are refused with a message.
     for (primitive, says) in [(SCION_PRIM_SEGMENT, "ScionSegment"), (7, "primitive is 7")] {
-        let bad = ScionLogicalSchema { primitive, ..schema };
+        let bad = ScionLogicalSchema {
+            primitive,
+            ..schema
+        };
         // SAFETY: as above.
         let s = unsafe { scion_tree_view(tree, &bad, &mut bview, err.as_mut_ptr(), err.len()) };
         assert_ne!(s, SCION_RT_OK);
