@@ -44,6 +44,11 @@ pub trait Backend: Sync {
     fn max_triangles(&self) -> Option<usize> {
         None
     }
+    /// The most rays of one test row worth giving this backend (an interpreter runs every
+    /// ray's traversal op by op); `None` for all of them.
+    fn max_rays(&self) -> Option<usize> {
+        None
+    }
 }
 
 /// The backends the harness knows.

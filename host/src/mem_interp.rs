@@ -388,4 +388,7 @@ impl Backend for MemInterpBackend {
     fn max_triangles(&self) -> Option<usize> {
         Some(2_000)
     }
+    fn max_rays(&self) -> Option<usize> {
+        Some(32)
+    }
 }
