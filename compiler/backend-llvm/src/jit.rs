@@ -2,10 +2,14 @@
 //! functions in this process. Input: a verified `lo` module and an `-O` level; output: the
 //! machine-code address of each function.
 //!
-//! As in `scion-clif`, every function `@f` gets a companion trampoline
+//! As in `scion-clif`, every function `@f` the module exposes gets a companion trampoline
 //! `f$entry(args: ptr, results: ptr)` (in LLVM IR) that loads parameter `i` from `args[8*i]` and
 //! stores result `i` to `results[8*i]` (the low bytes of a `u64` slot), so [`JitModule::call`]
-//! runs any signature from [`Val`]s. Every address is resolved when the module is compiled;
+//! runs any signature from [`Val`]s. A module with entry points (functions marked `export`, the
+//! C ABI's) exposes only those, as its object file does: the others are internal, so that LLVM
+//! inlines them where it would in `scionc --emit=obj` (a traversal into the batch loop that calls
+//! it once per query: a real call per ray otherwise, docs/performance.md "Twenty-second
+//! session"). A module without entry points exposes every function. Every address is resolved when the module is compiled;
 //! afterwards the execution engine is never touched again until it is dropped, which is what
 //! makes a `JitModule` shareable between threads. All `unsafe` of the JIT is in this file.
 
@@ -82,7 +86,7 @@ impl JitModule {
         // that borrows it.
         let cx: &'static Context = unsafe { &*(&*context as *const Context) };
         let (lm, funcs) =
-            translate::translate(cx, m, "scion_jit", host, false).map_err(LlvmError)?;
+            translate::translate(cx, m, "scion_jit", host, true).map_err(LlvmError)?;
         lm.set_triple(&tm.get_triple());
         lm.set_data_layout(&tm.get_target_data().get_data_layout());
         let mut trampolines = HashMap::new();
@@ -94,6 +98,10 @@ impl JitModule {
             }
             let name = &m.funcs[f].name;
             let callee = funcs[name];
+            if callee.get_linkage() == Linkage::Internal {
+                // Not an entry point: callable from the module only (and inlined there).
+                continue;
+            }
             let ft = cx.void_type().fn_type(&[ptr.into(), ptr.into()], false);
             let tr = lm.add_function(&format!("{name}$entry"), ft, Some(Linkage::External));
             let bb = cx.append_basic_block(tr, "entry");
@@ -196,6 +204,9 @@ impl JitModule {
                 continue;
             }
             let name = &m.funcs[f].name;
+            if !trampolines.contains_key(name) {
+                continue;
+            }
             let addr = |sym: &str| {
                 engine
                     .get_function_address(sym)
@@ -222,7 +233,8 @@ impl JitModule {
         })
     }
 
-    /// The machine-code address of `@name` (C calling convention of the host), if defined.
+    /// The machine-code address of `@name` (C calling convention of the host), if the module
+    /// defines and exposes it (in a module with entry points, only those).
     /// A function with two results returns them as a struct of two (in two registers); one
     /// with more takes the address of a struct of them (C layout) as a hidden first parameter
     /// and returns nothing.
@@ -238,10 +250,11 @@ impl JitModule {
     /// Calls `@name` on scalar arguments (`ptr` as a `u64` integer) and returns its results.
     /// The types of `args` must match the parameters (checked).
     pub fn call(&self, name: &str, args: &[Val]) -> Result<Vec<Val>, LlvmError> {
-        let e = self
-            .entries
-            .get(name)
-            .ok_or_else(|| LlvmError(format!("no function `@{name}`")))?;
+        let e = self.entries.get(name).ok_or_else(|| {
+            LlvmError(format!(
+                "no function `@{name}` (a module with entry points exposes only those)"
+            ))
+        })?;
         // SAFETY: `e.entry` is the address of the trampoline `name$entry`, compiled with the
         // signature `void (ptr, ptr)` in the host's C calling convention. It reads exactly
         // `params.len()` u64 slots from its first argument and writes `results.len()` slots

@@ -169,14 +169,26 @@ fn exports_make_every_other_function_internal() {
     let plain = parse(&EXPORTS.replace(" attributes {export}", ""));
     let ir = text(&plain, Target::X86_64, Output::LlvmIr, 0);
     assert!(ir.contains("define i32 @helper.inner("), "{ir}");
-    // The JIT reaches every function whatever the linkage.
+    // The JIT exposes what the object file does: the entry point (which runs the helper,
+    // internal and inlined into it), not the helper, and says why when asked for it.
     let jit = JitModule::compile(&m, 3).unwrap();
+    let out = jit
+        .call("scion_entry", &[Val::Int(21, IntTy::U32)])
+        .unwrap();
+    assert!(matches!(out[0], Val::Int(42, IntTy::U32)));
+    assert!(jit.get("scion_entry").is_some());
+    assert!(jit.get("helper.inner").is_none());
+    let e = jit
+        .call("helper.inner", &[Val::Int(21, IntTy::U32)])
+        .unwrap_err();
+    assert!(e.0.contains("exposes only those"), "{e}");
+    assert!(jit.get("nope").is_none());
+    // Without exports the JIT reaches every function.
+    let jit = JitModule::compile(&plain, 3).unwrap();
     let out = jit
         .call("helper.inner", &[Val::Int(21, IntTy::U32)])
         .unwrap();
     assert!(matches!(out[0], Val::Int(42, IntTy::U32)));
-    assert!(jit.get("scion_entry").is_some());
-    assert!(jit.get("nope").is_none());
 }
 
 #[test]
