@@ -31,7 +31,10 @@
 //! `C` triangle tests instead of 1: larger leaves and fewer nodes as `C` grows; for measuring
 //! the builder's constants), `--sah-block N` (Scion's tree with its leaves collapsed for a
 //! traversal that tests them in runs of `N` primitives instead of 4, `SahOptions::block`; 1
-//! leaves the reinserted binned SAH tree as built). `tinybvh-bvh8` needs a build with the `avx2` target feature
+//! leaves the reinserted binned SAH tree as built), `--root enters|misses` (trace only the rays
+//! that enter, or that miss, the root's box of the tree Scion's rows traverse, by the prelude's
+//! slab test: the time of the rays that descend apart from the time of those that stop at the
+//! root, docs/performance.md "Twenty-second session"). `tinybvh-bvh8` needs a build with the `avx2` target feature
 //! (`RUSTFLAGS="-C target-feature=+avx2,+fma"`, see `tinybvh_peer`); without it the row is left
 //! out with a note.
 
@@ -68,6 +71,8 @@ struct Args {
     max_leaf: Option<usize>,
     traversal_cost: Option<f64>,
     sah_block: Option<usize>,
+    /// `--root`: keep only the rays that enter (`true`) or miss (`false`) the root's box.
+    root: Option<bool>,
 }
 
 /// `c`'s trace of `rays`, the one call of `--trace-only` that scripts/perf-counters.sh counts
@@ -114,6 +119,7 @@ fn parse() -> Result<Args, String> {
         max_leaf: None,
         traversal_cost: None,
         sah_block: None,
+        root: None,
     };
     scion_bench::parse_flags(|flag, value| {
         let num = |s: String| scion_bench::flag_number(flag, &s);
@@ -163,6 +169,13 @@ fn parse() -> Result<Args, String> {
                 }
                 a.sah_block = Some(n);
             }
+            "--root" => {
+                a.root = Some(match value()?.as_str() {
+                    "enters" => true,
+                    "misses" => false,
+                    v => return Err(format!("--root: `{v}` is neither `enters` nor `misses`")),
+                })
+            }
             "--peers" => {
                 let list = value()?;
                 a.peers = list
@@ -190,6 +203,31 @@ fn parse() -> Result<Args, String> {
 
 fn progress(s: &str) {
     eprintln!("peers: {s}");
+}
+
+/// Keeps the rays of `w` that enter the root's box of its tree (`enters`), or those that miss
+/// it, by the prelude's slab test (`slab_interval`); an empty selection is an error.
+fn keep_by_root(w: &mut Workload, enters: bool) -> Result<(), String> {
+    let Some(root) = w.tree.nodes.get(w.tree.root as usize) else {
+        return Err("--root: the scene's tree is empty".into());
+    };
+    let b = root.aabb();
+    let before = w.rays.len();
+    w.rays.retain(|r| {
+        let (t0, t1) = scion_runtime::reference::prelude::slab_interval(r, &b);
+        (t0 <= t1) == enters
+    });
+    let what = if enters { "enter" } else { "miss" };
+    if w.rays.is_empty() {
+        return Err(format!(
+            "--root: not one of the {before} rays would {what} the root's box"
+        ));
+    }
+    progress(&format!(
+        "{} of {before} rays {what} the root's box",
+        w.rays.len()
+    ));
+    Ok(())
 }
 
 fn run(a: &Args) -> Result<(), String> {
@@ -228,6 +266,9 @@ fn run(a: &Args) -> Result<(), String> {
                 "--tree: unknown builder `{t}` (scion, tinybvh, obvhs or embree)"
             ))
         }
+    }
+    if let Some(enters) = a.root {
+        keep_by_root(&mut w, enters)?;
     }
     let driver = BatchDriver::new(a.threads)?;
     let tree_bytes = std::mem::size_of_val(w.tree.nodes.as_slice())
