@@ -89,7 +89,8 @@ const BACKENDS: &[BackendKind] = &[
 /// hand-written `flat32` of `common`, and closest hit specialized to each library layout that
 /// (every one; the quantized `pbrt_q16` and `sg_eq` against the reference traversal of their decoded boxes,
 /// `Boxes::decoded_tree`), run by the interpreter at the mem level (scenes up to 2 k triangles,
-/// the first 32 rays of each row: `Backend::max_rays`) and compiled by the Cranelift JIT (every scene).
+/// the first 32 rays of each row: `Backend::max_rays`) and compiled by the Cranelift JIT (every
+/// scene).
 fn backends() -> Vec<Box<dyn Backend>> {
     let mut all: Vec<Box<dyn Backend>> = BACKENDS
         .iter()

@@ -9,9 +9,10 @@
 //! C ABI's) exposes only those, as its object file does: the others are internal, so that LLVM
 //! inlines them where it would in `scionc --emit=obj` (a traversal into the batch loop that calls
 //! it once per query: a real call per ray otherwise, docs/performance.md "Twenty-second
-//! session"). A module without entry points exposes every function. Every address is resolved when the module is compiled;
-//! afterwards the execution engine is never touched again until it is dropped, which is what
-//! makes a `JitModule` shareable between threads. All `unsafe` of the JIT is in this file.
+//! session"). A module without entry points exposes every function. Every address is resolved
+//! when the module is compiled; afterwards the execution engine is never touched again until it
+//! is dropped, which is what makes a `JitModule` shareable between threads. All `unsafe` of the
+//! JIT is in this file.
 
 #![allow(unsafe_code)]
 
