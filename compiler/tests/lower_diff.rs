@@ -125,6 +125,22 @@ func t_tri4(ray: Ray, x0: f32x4, y0: f32x4, z0: f32x4, x1: f32x4, y1: f32x4, z1:
                                [z2[0], z2[1], z2[2], z2[3]], [7, 3, 5, 1]);
   return (hit_lanes(ray, b), hit_block(ray, b));
 }
+// Lane-wise min and max (one `minps`/`maxps` in Cranelift where no lane can be NaN, else per
+// lane), a lane permutation (one shuffle), and the prelude's four-lane box test against the
+// three-lane one it mirrors.
+func t_v4mm(a: f32x4, b: f32x4) -> (f32x4, f32x4, f32x4, f32x4) = {
+  let c: f32x4 = max(a * b, splat4(-inf));
+  let d: f32x4 = min(b - a, splat4(inf));
+  let e: f32x4 = f32x4(d.y, d.z, d.w, d.x);
+  return (min(c, e), max(c, e), min(a, b), max(e, a));
+}
+func t_slab4(lo: f32x3, hi: f32x3, o: f32x3, dir: f32x3, tmin: f32) -> (f32, f32, f32, f32, f32) = {
+  let r: SlabRay = slab_ray(Ray(o, dir, tmin, inf));
+  let b: AABB = AABB(lo, hi);
+  let s3: (f32, f32) = slab_span(r, b);
+  let s4: (f32, f32) = slab_span(slab_lanes(r), b);
+  return (s3[0], s3[1], s4[0], s4[1], distmin(slab_lanes(r), b, 1.5));
+}
 func t_ifx(a: f32x3, k: u32) -> (f32, u32) = {
   let lo: f32 = if a.x <= a.y { a.x } elif isnan(a.y) { a.z } else { a.y };
   let which: u32 = if lo < a.z { if k > 500 { k - 500 } else { 0 } } else { 2 };
@@ -135,7 +151,7 @@ func t_ifx(a: f32x3, k: u32) -> (f32, u32) = {
 const FUNCS: &[&str] = &[
     "t_hit", "t_slab", "t_box", "t_tri", "t_cpb", "t_cpt", "t_cpc", "t_sat", "t_bb", "t_d2",
     "t_axis", "t_dir", "t_lanes", "t_bits", "t_mut", "t_ifx", "t_clamp", "t_assign", "t_pick",
-    "t_mask", "t_v4", "t_tri4",
+    "t_mask", "t_v4", "t_tri4", "t_v4mm", "t_slab4",
 ];
 
 /// The `tree` module of the prelude functions above.
@@ -245,6 +261,14 @@ fn check_funcs(
             .map_err(|e| format!("{name}: tree interpreter: {e}"))?;
         let mut want_flat = Vec::new();
         want.iter().for_each(|v| flatten(v, &mut want_flat));
+        // The four-lane box test gives the three-lane one's (enter, far) bit for bit.
+        if name == "t_slab4" && keys(&want_flat[0..2]) != keys(&want_flat[2..4]) {
+            return Err(format!(
+                "t_slab4({flat:?}): slab_span of SlabRay {:?}, of SlabLanes {:?}",
+                &want_flat[0..2],
+                &want_flat[2..4]
+            ));
+        }
         let lo_out = LoInterp::new(lo)
             .call(name, flat.clone())
             .map_err(|e| format!("{name}: lo interpreter: {e}"))?;

@@ -204,14 +204,19 @@ fn aarch64_code_matches_the_reference_under_qemu() {
             p
         })
         .collect();
-    let mut runs: Vec<(&str, &str, _, &str)> = library_layouts()
+    let mut runs: Vec<(&str, &str, Boxes, &str)> = library_layouts()
         .iter()
         .map(|&(s, n, b)| (s, n, b, "-O3"))
         .collect();
     runs.push(("pbrt", "LinearBVH", Boxes::Exact, "-O0"));
     runs.push(("ptr", "PtrBVH", Boxes::Exact, "-O0"));
-    let (mut rays, mut hits) = (0usize, 0usize);
-    for (stem, name, boxes, opt) in runs {
+    // Each layout is compiled, linked and run on its own (scionc, the cross linker and qemu are
+    // separate processes), so the layouts run side by side, one per core: this test was the
+    // suite's longest run on two cores.
+    let threads = std::thread::available_parallelism().map_or(2, |n| n.get());
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let counts = std::sync::Mutex::new((0usize, 0usize));
+    let one = |(stem, name, boxes, opt): (&str, &str, Boxes, &str)| {
         let exe = replay_binary(&scionc, &dir, stem, name, opt, Some(STACK));
         let outputs: Vec<PathBuf> = (0..cases.len())
             .map(|i| dir.join(format!("{stem}{opt}-{i}.hits")))
@@ -234,10 +239,21 @@ fn aarch64_code_matches_the_reference_under_qemu() {
                     case.rays[i]
                 );
             }
-            rays += got.len();
-            hits += got.iter().filter(|h| h.is_hit()).count();
+            let mut n = counts.lock().unwrap();
+            n.0 += got.len();
+            n.1 += got.iter().filter(|h| h.is_hit()).count();
         }
-    }
+    };
+    std::thread::scope(|scope| {
+        for _ in 0..threads.min(runs.len()) {
+            scope.spawn(|| loop {
+                let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let Some(&r) = runs.get(k) else { break };
+                one(r);
+            });
+        }
+    });
+    let (rays, hits) = *counts.lock().unwrap();
     println!(
         "aarch64: {rays} rays ({hits} hits) over {} cases, identical to the reference",
         cases.len()

@@ -6,9 +6,12 @@
 //! four times over). Here a group of four 32-bit lanes (`f32`, 32-bit integers, and booleans
 //! that are masks of such compares) becomes one 128-bit instruction (`F32X4`, `I32X4`; a
 //! boolean lane is `0` or `-1` in an `I32X4` mask): float `add sub mul div neg`, integer `add
-//! sub and or xor bitnot`, boolean `and or xor not`, `cmp`, `select` (`bitselect` on the mask)
-//! and `bitcast`. An operand is the vector of an earlier group when its lanes are exactly that
-//! group's lanes in order, a splat when the four are one value, else built from the scalars
+//! sub and or xor bitnot`, boolean `and or xor not`, `cmp`, `select` (`bitselect` on the mask),
+//! `bitcast`, and float `min`/`max` where every lane takes one select form
+//! ([`MinMaxForm`]: `minps`/`maxps`). An operand is the vector of an earlier group when its
+//! lanes are exactly that group's lanes in order, one shuffle of it when they are its lanes in
+//! another order, a splat when the four are one value, one 16-byte load when they are loads of
+//! consecutive words from one address (`Fx::vector_load`), else built from the scalars
 //! (`scalar_to_vector`, `insertlane`). The lanes are then the `lo` values (`extractlane`, a
 //! boolean lane compared with zero), which Cranelift drops where nothing reads them.
 //!
@@ -20,8 +23,9 @@
 //!
 //! Every lane computes exactly what its scalar op computes: the same IEEE operation lane by
 //! lane, a NaN made canonical where any lane's must be (harmless for the others, whose NaN
-//! cannot be seen), compares with the scalar translation's condition codes. Groups of other
-//! kinds or widths (`min`/`max`, shifts, casts, eight lanes, 64-bit lanes) stay scalar.
+//! cannot be seen), compares with the scalar translation's condition codes, `min`/`max` with its
+//! select form. Groups of other kinds or widths (`min`/`max` that may meet a NaN, shifts, casts,
+//! eight lanes, 64-bit lanes) stay scalar.
 
 use crate::translate::{float_cc, int_cc, Fx};
 use cranelift_codegen::ir::condcodes::{FloatCC, IntCC};
@@ -29,6 +33,7 @@ use cranelift_codegen::ir::immediates::Ieee32;
 use cranelift_codegen::ir::{self, types, Endianness, InstBuilder, MemFlags};
 use scion_ir::entity::{BlockId, OpId, ValueId};
 use scion_ir::lo::lanes::lane_groups;
+use scion_ir::lo::nan::MinMaxForm;
 use scion_ir::lo::Op as L;
 use scion_ir::op::OpKind;
 use scion_ir::types::{FloatTy, Type};
@@ -79,6 +84,8 @@ fn vector_kind(m: &Module, op: OpId) -> bool {
     match kind {
         L::Add | L::Sub => matches!(r, Lane::F32 | Lane::I32),
         L::Mul | L::Div | L::Neg => r == Lane::F32,
+        // `minps`/`maxps` where every lane's NaN facts allow a select ([`Fx::group`]).
+        L::Min | L::Max => r == Lane::F32,
         L::And | L::Or | L::Xor => matches!(r, Lane::I32 | Lane::Bool),
         L::BitNot => r == Lane::I32,
         L::Not => r == Lane::Bool,
@@ -334,8 +341,39 @@ fn lanes_flags() -> MemFlags {
 }
 
 impl Fx<'_, '_> {
+    /// The lanes `xs` of one vector in another order, as one shuffle of it (`pshufd` on x64):
+    /// a box's far planes loaded one lane apart from its near planes and aligned with them.
+    fn permuted(&mut self, xs: &[ValueId], vt: ir::Type) -> Option<ir::Value> {
+        let &(v, _) = self.lane_vecs.get(&xs[0])?;
+        if self.b.func.dfg.value_type(v) != vt {
+            return None;
+        }
+        let mut mask = [0u8; 16];
+        for (k, x) in xs.iter().enumerate() {
+            let &(w, lane) = self.lane_vecs.get(x)?;
+            if w != v {
+                return None;
+            }
+            for i in 0..4 {
+                mask[4 * k + i] = 4 * lane + i as u8;
+            }
+        }
+        let bytes = self.b.ins().bitcast(types::I8X16, lanes_flags(), v);
+        let imm = self
+            .b
+            .func
+            .dfg
+            .immediates
+            .push(ir::ConstantData::from(mask.to_vec()));
+        let shuffled = self.b.ins().shuffle(bytes, bytes, imm);
+        Some(self.b.ins().bitcast(vt, lanes_flags(), shuffled))
+    }
+
     /// The vector whose lanes are the values `xs`, all of lane type `lane`.
     fn lane_vector(&mut self, xs: &[ValueId], lane: Lane) -> Result<ir::Value, String> {
+        if let Some(&v) = self.loaded_vectors.get(xs) {
+            return Ok(v);
+        }
         if let Some(&(v, 0)) = self.lane_vecs.get(&xs[0]) {
             if xs
                 .iter()
@@ -346,6 +384,9 @@ impl Fx<'_, '_> {
             }
         }
         let vt = lane.vector();
+        if let Some(v) = self.permuted(xs, vt) {
+            return Ok(v);
+        }
         let mut scalars = Vec::with_capacity(xs.len());
         for &x in xs {
             let s = self.v(x)?;
@@ -528,6 +569,22 @@ impl Fx<'_, '_> {
         let Some(rl) = lane32(m, m.values[first.results[0]].ty) else {
             return Ok(false);
         };
+        // A float min/max is one instruction only when every lane takes the same select form.
+        let form = if matches!(kind, L::Min | L::Max) {
+            let forms: Vec<MinMaxForm> = ops
+                .iter()
+                .map(|&o| {
+                    self.nan
+                        .min_max_form(m.ops[o].operands[0], m.ops[o].operands[1])
+                })
+                .collect();
+            if forms[0] == MinMaxForm::General || forms.iter().any(|&f| f != forms[0]) {
+                return Ok(false);
+            }
+            Some(forms[0])
+        } else {
+            None
+        };
         let mut args = Vec::with_capacity(first.operands.len());
         for j in 0..first.operands.len() {
             let xs: Vec<ValueId> = ops.iter().map(|&o| m.ops[o].operands[j]).collect();
@@ -573,6 +630,23 @@ impl Fx<'_, '_> {
                 b.ins().bitselect(mask, a(1), a(2))
             }
             L::Bitcast => b.ins().bitcast(rl.vector(), lanes_flags(), a(0)),
+            L::Min | L::Max => {
+                // The scalar forms (`Fx::min_max`) lane by lane: `select(fcmp lt x y, x, y)`
+                // (min; max with the compare swapped), with (x, y) = (q, p), or (p, q) when
+                // swapped: Cranelift's `minps`/`maxps` patterns.
+                let (x, y) = if form == Some(MinMaxForm::SelectSwapped) {
+                    (a(0), a(1))
+                } else {
+                    (a(1), a(0))
+                };
+                let c = if kind == L::Max {
+                    b.ins().fcmp(FloatCC::LessThan, y, x)
+                } else {
+                    b.ins().fcmp(FloatCC::LessThan, x, y)
+                };
+                let c = b.ins().bitcast(types::F32X4, lanes_flags(), c);
+                b.ins().bitselect(c, x, y)
+            }
             _ => return Ok(false),
         };
         // A NaN made canonical where some lane's can be seen, lane by lane.

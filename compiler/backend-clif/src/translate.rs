@@ -184,6 +184,7 @@ pub fn translate_func<M: ClModule>(
     let dead = crate::lanes::dead_direct_params(m, f, &direct);
     let deferrable = crate::lanes::deferrable_loads(m, f, &groups, &direct, &dead);
     let pure_loads = crate::lanes::pure_loads(m, f, &deferrable);
+    let mut load_of: HashMap<ValueId, scion_ir::OpId> = HashMap::new();
     // Deferred loads still pending at a jump into a block entered by that jump alone, for that
     // block (see `Fx::op`).
     let mut carried: HashMap<BlockId, Vec<(ValueId, scion_ir::OpId)>> = HashMap::new();
@@ -237,6 +238,8 @@ pub fn translate_func<M: ClModule>(
             carried_params: HashSet::new(),
             dead: &dead,
             pure_loads: &pure_loads,
+            loaded_vectors: HashMap::new(),
+            load_of: &mut load_of,
             position: &position,
             direct: &direct,
         };
@@ -299,6 +302,12 @@ pub(crate) struct Fx<'a, 'b> {
     position: &'a HashMap<BlockId, usize>,
     /// Blocks whose arguments are bound at their one branch ([`translate_func`]).
     direct: &'a HashSet<BlockId>,
+    /// The vector loads of the lane group being translated, by the lanes they load
+    /// ([`Fx::vector_load`]).
+    pub(crate) loaded_vectors: HashMap<Vec<ValueId>, ir::Value>,
+    /// The load each emitted deferred load's name (its result, or the parameter it was carried
+    /// as) stands for.
+    load_of: &'a mut HashMap<ValueId, scion_ir::OpId>,
 }
 
 impl Fx<'_, '_> {
@@ -380,7 +389,12 @@ impl Fx<'_, '_> {
             return Ok(());
         }
         if let Some(ops) = self.groups.get(&op) {
-            // The group's deferred loads, just before it.
+            // The group's deferred loads, just before it: four lanes that read consecutive
+            // words from one address as one vector load.
+            for j in 0..m.ops[op].operands.len() {
+                let xs: Vec<ValueId> = ops.iter().map(|&o| m.ops[o].operands[j]).collect();
+                self.vector_load(&xs)?;
+            }
             for &o in ops {
                 for &x in &m.ops[o].operands {
                     if let Some(i) = self.deferred.iter().position(|d| d.0 == x) {
@@ -390,7 +404,9 @@ impl Fx<'_, '_> {
                 }
             }
             self.grouped.extend(ops[1..].iter().copied());
-            if self.group(ops)? {
+            let vectorized = self.group(ops)?;
+            self.loaded_vectors.clear();
+            if vectorized {
                 return Ok(());
             }
             for &o in ops {
@@ -455,11 +471,99 @@ impl Fx<'_, '_> {
         blocks: &HashMap<BlockId, ir::Block>,
     ) -> Result<(), String> {
         self.scalar_op(cl, syms, load, blocks)?;
+        self.load_of.insert(name, load);
         let r = self.m.ops[load].results[0];
         if name != r {
             let v = self.v(r)?;
             self.bind_direct(name, v, Some(r));
         }
+        Ok(())
+    }
+
+    /// When the four lanes `xs` are loads of 32-bit words at consecutive offsets from one
+    /// address (a box's low corner and the high corner's x, in a layout that stores them
+    /// together), one 16-byte load of them all, its lanes bound to them. Each load is either
+    /// deferred (not emitted yet: this is its place) or pure (a layout buffer that nothing
+    /// writes while the function runs, [`crate::lanes::pure_loads`], so reading it again gives
+    /// the same word); the loads keep their flags (all four must agree) and the vector reads
+    /// only the words they name.
+    fn vector_load(&mut self, xs: &[ValueId]) -> Result<(), String> {
+        let m = self.m;
+        if xs.len() != 4 {
+            return Ok(());
+        }
+        // Each lane's load op, and its place among the deferred loads if it is one.
+        let mut lanes: Vec<(scion_ir::OpId, Option<usize>)> = Vec::with_capacity(4);
+        for x in xs {
+            if let Some(i) = self.deferred.iter().position(|d| d.0 == *x) {
+                lanes.push((self.deferred[i].1, Some(i)));
+                continue;
+            }
+            let Some(op) = m.def_op(*x).or_else(|| self.load_of.get(x).copied()) else {
+                return Ok(());
+            };
+            if !(self.pure_loads.contains(&op) && self.vals.contains_key(x)) {
+                return Ok(());
+            }
+            lanes.push((op, None));
+        }
+        if lanes.iter().all(|l| l.1.is_none()) {
+            return Ok(());
+        }
+        let load = |k: usize| &m.ops[lanes[k].0];
+        let ty = m.values[load(0).results[0]].ty;
+        let vt = match m.types.get(ty) {
+            scion_ir::types::Type::Float(scion_ir::types::FloatTy::F32) => types::F32X4,
+            scion_ir::types::Type::Int(t) if t.bits() == 32 => types::I32X4,
+            _ => return Ok(()),
+        };
+        let addr = load(0).operands[0];
+        let off0 = load(0).int_attr("offset").unwrap_or(0);
+        let pure = self.pure_loads.contains(&lanes[0].0);
+        for k in 0..4 {
+            let o = load(k);
+            if o.kind != OpKind::Lo(L::Load)
+                || o.operands[0] != addr
+                || m.values[o.results[0]].ty != ty
+                || o.int_attr("offset").unwrap_or(0) != off0 + 4 * k as i128
+                || o.attr("global").is_some()
+                || self.pure_loads.contains(&lanes[k].0) != pure
+            {
+                return Ok(());
+            }
+        }
+        let flags = if pure {
+            MemFlags::new()
+                .with_notrap()
+                .with_readonly()
+                .with_can_move()
+        } else {
+            MemFlags::new()
+        };
+        let base = self.v(addr)?;
+        let v = self.b.ins().load(vt, flags, base, off0 as i32);
+        // The deferred lanes are emitted now, as lanes of `v`; a pure lane already emitted
+        // keeps its value (the same word) for its other uses, and this operand takes `v`.
+        let mut idx: Vec<usize> = lanes.iter().filter_map(|l| l.1).collect();
+        idx.sort_unstable();
+        let taken: Vec<(usize, ValueId, scion_ir::OpId)> = lanes
+            .iter()
+            .enumerate()
+            .filter_map(|(k, l)| l.1.map(|i| (k, self.deferred[i].0, self.deferred[i].1)))
+            .collect();
+        for i in idx.into_iter().rev() {
+            self.deferred.remove(i);
+        }
+        for (k, name, op) in taken {
+            self.load_of.insert(name, op);
+            let lane = self.b.ins().extractlane(v, k as u8);
+            for r in [name, m.ops[op].results[0]] {
+                self.vals.insert(r, lane);
+                self.lane_vecs.insert(r, (v, k as u8));
+                self.lane_sets.remove(&r);
+            }
+        }
+        self.loaded_vectors.insert(xs.to_vec(), v);
         Ok(())
     }
 
