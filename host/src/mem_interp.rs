@@ -271,9 +271,8 @@ impl MemClosestHit {
 
     /// The work profile of the specialized program: how often each function was called while
     /// tracing `rays` through `tree` (packing not counted), by function name. For closest hit,
-    /// the calls of `closest_hit_node` are the nodes reached, of `distmin` over a `SlabRay` (the
-    /// root's) and over `SlabLanes` (a child's, `distmin.2`) the box tests, of `hit_lanes` the
-    /// runs of up to four triangles.
+    /// the calls of `closest_hit_node` are the nodes reached, of `distmin` over `SlabLanes`
+    /// (`distmin.2`) the box tests, of `hit_lanes` the runs of up to four triangles.
     pub fn call_profile(
         &self,
         tree: &LogicalTree,

@@ -1,7 +1,7 @@
 //! The generated program does the work the reference counts: closest hit specialized to a
 //! library layout, run by the `mem` interpreter with its calls counted, calls
-//! `closest_hit_node` once per node it reaches, `distmin` (the slab test over the prepared ray,
-//! the root's, or its four-lane overload, a child's) once per box test and `hit_lanes` (four triangles at once) once per run of up to four of a
+//! `closest_hit_node` once per node it reaches, `distmin` (the four-lane slab test over the
+//! prepared ray) once per box test and `hit_lanes` (four triangles at once) once per run of up to four of a
 //! leaf's triangles, exactly as often as `scion_runtime::reference::closest_hit_tree_stats`
 //! counts nodes visited and skipped, box tests and leaf runs on the tree the layout traverses (decoded boxes for a quantized
 //! layout). So `scion trace --stats`, which reports the reference's counters, reports what the
@@ -41,8 +41,8 @@ fn generated_code_visits_what_the_reference_counts() {
             want.nodes_visited + want.nodes_pruned,
             "{stem}: nodes reached ({calls:?})"
         );
-        // The root's test is `distmin` of the prepared ray, a child's its four-lane overload
-        // (`distmin` of `SlabLanes`, numbered `distmin.2`).
+        // The box test is `distmin` of `SlabLanes` (numbered `distmin.2` among the prelude's
+        // overloads); any `distmin` counts.
         let box_tests: u64 = calls
             .iter()
             .filter(|c| c.0 == "distmin" || c.0.starts_with("distmin."))
