@@ -104,129 +104,6 @@ pub(crate) fn groups(m: &Module, blocks: &[BlockId]) -> HashMap<OpId, Vec<OpId>>
     lane_groups(m, blocks, vector_kind)
 }
 
-/// The loads of `blocks` to emit where their value is put in a vector, not where `lo` has them:
-/// a load whose every use is an operand of a group Cranelift emits as a vector. A leaf's
-/// four triangles are loaded field by field and then gathered into lanes (`block_of`); loaded
-/// all first, as `lo` orders them, the 36 floats outlive the registers and are spilled and
-/// reloaded before each insertion. [`Fx::op`] emits a deferred load just before its group, or
-/// before anything else in the block that reads it, writes memory or branches, so that no load
-/// moves past a store. The load's one use may also be an argument of a jump into a block that
-/// only that jump enters (`direct`), whose parameter is used so, and so on: the loads of an
-/// inlined call's arguments (`block_of`'s triangles) reach its lanes through such blocks, and
-/// `Fx::op` carries them over the jumps.
-pub(crate) fn deferrable_loads(
-    m: &Module,
-    f: scion_ir::FuncId,
-    groups: &HashMap<OpId, Vec<OpId>>,
-    direct: &HashSet<BlockId>,
-    dead: &HashSet<ValueId>,
-) -> std::collections::HashSet<OpId> {
-    // Uses, less those that pass a value to a dead parameter (never materialized).
-    let mut uses = scion_ir::walk::use_counts(m, f);
-    let blocks = &m.regions[m.funcs[f].body].blocks;
-    for &b in blocks {
-        for &op in &m.blocks[b].ops {
-            for s in &m.ops[op].successors {
-                for (x, p) in s.args.iter().zip(&m.blocks[s.block].args) {
-                    if dead.contains(p) {
-                        if let Some(n) = uses.get_mut(x) {
-                            *n -= 1;
-                        }
-                    }
-                }
-            }
-        }
-    }
-    // How often each value is an operand of a group's op.
-    let mut in_groups: HashMap<ValueId, u32> = HashMap::new();
-    for &o in groups.values().flatten() {
-        for &x in &m.ops[o].operands {
-            *in_groups.entry(x).or_insert(0) += 1;
-        }
-    }
-    // The parameter each argument of a jump into a direct block becomes.
-    let mut forward: HashMap<ValueId, ValueId> = HashMap::new();
-    for &b in blocks {
-        for &op in &m.blocks[b].ops {
-            let o = &m.ops[op];
-            if o.kind == OpKind::Lo(L::Br) && direct.contains(&o.successors[0].block) {
-                let s = &o.successors[0];
-                for (&x, &p) in s.args.iter().zip(&m.blocks[s.block].args) {
-                    if !dead.contains(&p) {
-                        forward.insert(x, p);
-                    }
-                }
-            }
-        }
-    }
-    let once = |v: &ValueId| uses.get(v) == Some(&1);
-    let mut out = std::collections::HashSet::new();
-    for &b in blocks {
-        for &op in &m.blocks[b].ops {
-            let o = &m.ops[op];
-            if o.kind != OpKind::Lo(L::Load) || o.results.len() != 1 {
-                continue;
-            }
-            let mut v = o.results[0];
-            for _ in 0..blocks.len() {
-                match forward.get(&v) {
-                    Some(p) if !in_groups.contains_key(&v) && once(&v) => v = *p,
-                    _ => break,
-                }
-            }
-            // Every use (at the end of the chain) a group's operand.
-            if in_groups.get(&v).is_some_and(|n| uses.get(&v) == Some(n)) {
-                out.insert(op);
-            }
-        }
-    }
-    out
-}
-
-/// Whether the address `v` points into a layout buffer: a `ptr_add` chain from a buffer's
-/// address (a `global` load of the buffer table).
-fn layout_rooted(m: &Module, mut v: ValueId) -> bool {
-    for _ in 0..64 {
-        let Some(op) = m.def_op(v) else { return false };
-        let o = &m.ops[op];
-        match o.kind {
-            OpKind::Lo(L::PtrAdd) => v = o.operands[0],
-            OpKind::Lo(L::Load) => {
-                return o.attr("global") == Some(&scion_ir::attr::Attr::Bool(true));
-            }
-            _ => return false,
-        }
-    }
-    false
-}
-
-/// The deferrable loads Cranelift may treat as pure values (`notrap readonly can_move`): those
-/// that read a layout buffer, in a function that writes none. Cranelift's egraph places pure
-/// values where they are first needed, so each load then comes just before the lane insertion
-/// that takes it (and may fold into it); as ordinary loads they keep their place, all of them
-/// before the first insertion, and the insertions' pure values are placed after them all.
-pub(crate) fn pure_loads(
-    m: &Module,
-    f: scion_ir::FuncId,
-    deferrable: &HashSet<OpId>,
-) -> HashSet<OpId> {
-    let blocks = &m.regions[m.funcs[f].body].blocks;
-    let writes_layout = blocks.iter().any(|&b| {
-        m.blocks[b].ops.iter().any(|&op| {
-            let o = &m.ops[op];
-            o.kind == OpKind::Lo(L::Store) && layout_rooted(m, o.operands[0])
-        })
-    });
-    if writes_layout {
-        return HashSet::new();
-    }
-    deferrable
-        .iter()
-        .copied()
-        .filter(|&op| layout_rooted(m, m.ops[op].operands[0]))
-        .collect()
-}
-
 /// The parameters of the `direct` blocks (entered by one branch, their parameters bound at
 /// it) that nothing reads: the branch binds nothing for them. An inlined `nearest_lane` takes
 /// a leaf's whole block of four triangles and reads only their ids.
@@ -571,17 +448,10 @@ impl Fx<'_, '_> {
         };
         // A float min/max is one instruction only when every lane takes the same select form.
         let form = if matches!(kind, L::Min | L::Max) {
-            let forms: Vec<MinMaxForm> = ops
-                .iter()
-                .map(|&o| {
-                    self.nan
-                        .min_max_form(m.ops[o].operands[0], m.ops[o].operands[1])
-                })
-                .collect();
-            if forms[0] == MinMaxForm::General || forms.iter().any(|&f| f != forms[0]) {
-                return Ok(false);
+            match self.nan.lanes_min_max_form(m, ops) {
+                None | Some(MinMaxForm::General) => return Ok(false),
+                form => form,
             }
-            Some(forms[0])
         } else {
             None
         };

@@ -27,6 +27,7 @@ pub mod flatten;
 mod ifconv;
 pub mod jit;
 mod lanes;
+mod loads;
 pub mod translate;
 
 pub use jit::{ClifError, Cranelift, JitModule};

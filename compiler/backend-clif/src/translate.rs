@@ -182,8 +182,8 @@ pub fn translate_func<M: ClModule>(
     // are the inline ones).
     let mut converted = HashSet::new();
     let dead = crate::lanes::dead_direct_params(m, f, &direct);
-    let deferrable = crate::lanes::deferrable_loads(m, f, &groups, &direct, &dead);
-    let pure_loads = crate::lanes::pure_loads(m, f, &deferrable);
+    let deferrable = crate::loads::deferrable_loads(m, f, &groups, &direct, &dead);
+    let pure_loads = crate::loads::pure_loads(m, f, &deferrable);
     let mut load_of: HashMap<ValueId, scion_ir::OpId> = HashMap::new();
     // Deferred loads still pending at a jump into a block entered by that jump alone, for that
     // block (see `Fx::op`).
@@ -284,10 +284,10 @@ pub(crate) struct Fx<'a, 'b> {
     pub(crate) preds: &'a HashMap<BlockId, usize>,
     /// The blocks if-conversions computed inline ([`crate::ifconv`]).
     pub(crate) converted: &'a mut HashSet<BlockId>,
-    /// Loads whose one use is a lane of a vector group ([`crate::lanes::deferrable_loads`]).
+    /// Loads whose one use is a lane of a vector group ([`crate::loads::deferrable_loads`]).
     deferrable: &'a HashSet<scion_ir::OpId>,
     /// Such loads of this block not emitted yet, in order, with their results.
-    deferred: Vec<(ValueId, scion_ir::OpId)>,
+    pub(crate) deferred: Vec<(ValueId, scion_ir::OpId)>,
     /// Deferred loads passed on at a jump, by the block jumped to, each under the name it
     /// has there (the parameter it is passed as, or its own result).
     carried: &'a mut HashMap<BlockId, Vec<(ValueId, scion_ir::OpId)>>,
@@ -296,8 +296,8 @@ pub(crate) struct Fx<'a, 'b> {
     carried_params: HashSet<ValueId>,
     /// Parameters of direct blocks that nothing reads ([`crate::lanes::dead_direct_params`]).
     dead: &'a HashSet<ValueId>,
-    /// Loads of layout buffers Cranelift may move ([`crate::lanes::pure_loads`]).
-    pure_loads: &'a HashSet<scion_ir::OpId>,
+    /// Loads of layout buffers Cranelift may move ([`crate::loads::pure_loads`]).
+    pub(crate) pure_loads: &'a HashSet<scion_ir::OpId>,
     /// Each block's place in the translation order.
     position: &'a HashMap<BlockId, usize>,
     /// Blocks whose arguments are bound at their one branch ([`translate_func`]).
@@ -307,7 +307,7 @@ pub(crate) struct Fx<'a, 'b> {
     pub(crate) loaded_vectors: HashMap<Vec<ValueId>, ir::Value>,
     /// The load each emitted deferred load's name (its result, or the parameter it was carried
     /// as) stands for.
-    load_of: &'a mut HashMap<ValueId, scion_ir::OpId>,
+    pub(crate) load_of: &'a mut HashMap<ValueId, scion_ir::OpId>,
 }
 
 impl Fx<'_, '_> {
@@ -460,115 +460,8 @@ impl Fx<'_, '_> {
         self.scalar_op(cl, syms, op, blocks)
     }
 
-    /// The deferred `load`, known here as `name` (its result, or the parameter of a direct
-    /// block it was passed as).
-    fn emit_deferred<M: ClModule>(
-        &mut self,
-        cl: &mut M,
-        syms: &Symbols,
-        name: ValueId,
-        load: scion_ir::OpId,
-        blocks: &HashMap<BlockId, ir::Block>,
-    ) -> Result<(), String> {
-        self.scalar_op(cl, syms, load, blocks)?;
-        self.load_of.insert(name, load);
-        let r = self.m.ops[load].results[0];
-        if name != r {
-            let v = self.v(r)?;
-            self.bind_direct(name, v, Some(r));
-        }
-        Ok(())
-    }
-
-    /// When the four lanes `xs` are loads of 32-bit words at consecutive offsets from one
-    /// address (a box's low corner and the high corner's x, in a layout that stores them
-    /// together), one 16-byte load of them all, its lanes bound to them. Each load is either
-    /// deferred (not emitted yet: this is its place) or pure (a layout buffer that nothing
-    /// writes while the function runs, [`crate::lanes::pure_loads`], so reading it again gives
-    /// the same word); the loads keep their flags (all four must agree) and the vector reads
-    /// only the words they name.
-    fn vector_load(&mut self, xs: &[ValueId]) -> Result<(), String> {
-        let m = self.m;
-        if xs.len() != 4 {
-            return Ok(());
-        }
-        // Each lane's load op, and its place among the deferred loads if it is one.
-        let mut lanes: Vec<(scion_ir::OpId, Option<usize>)> = Vec::with_capacity(4);
-        for x in xs {
-            if let Some(i) = self.deferred.iter().position(|d| d.0 == *x) {
-                lanes.push((self.deferred[i].1, Some(i)));
-                continue;
-            }
-            let Some(op) = m.def_op(*x).or_else(|| self.load_of.get(x).copied()) else {
-                return Ok(());
-            };
-            if !(self.pure_loads.contains(&op) && self.vals.contains_key(x)) {
-                return Ok(());
-            }
-            lanes.push((op, None));
-        }
-        if lanes.iter().all(|l| l.1.is_none()) {
-            return Ok(());
-        }
-        let load = |k: usize| &m.ops[lanes[k].0];
-        let ty = m.values[load(0).results[0]].ty;
-        let vt = match m.types.get(ty) {
-            scion_ir::types::Type::Float(scion_ir::types::FloatTy::F32) => types::F32X4,
-            scion_ir::types::Type::Int(t) if t.bits() == 32 => types::I32X4,
-            _ => return Ok(()),
-        };
-        let addr = load(0).operands[0];
-        let off0 = load(0).int_attr("offset").unwrap_or(0);
-        let pure = self.pure_loads.contains(&lanes[0].0);
-        for k in 0..4 {
-            let o = load(k);
-            if o.kind != OpKind::Lo(L::Load)
-                || o.operands[0] != addr
-                || m.values[o.results[0]].ty != ty
-                || o.int_attr("offset").unwrap_or(0) != off0 + 4 * k as i128
-                || o.attr("global").is_some()
-                || self.pure_loads.contains(&lanes[k].0) != pure
-            {
-                return Ok(());
-            }
-        }
-        let flags = if pure {
-            MemFlags::new()
-                .with_notrap()
-                .with_readonly()
-                .with_can_move()
-        } else {
-            MemFlags::new()
-        };
-        let base = self.v(addr)?;
-        let v = self.b.ins().load(vt, flags, base, off0 as i32);
-        // The deferred lanes are emitted now, as lanes of `v`; a pure lane already emitted
-        // keeps its value (the same word) for its other uses, and this operand takes `v`.
-        let mut idx: Vec<usize> = lanes.iter().filter_map(|l| l.1).collect();
-        idx.sort_unstable();
-        let taken: Vec<(usize, ValueId, scion_ir::OpId)> = lanes
-            .iter()
-            .enumerate()
-            .filter_map(|(k, l)| l.1.map(|i| (k, self.deferred[i].0, self.deferred[i].1)))
-            .collect();
-        for i in idx.into_iter().rev() {
-            self.deferred.remove(i);
-        }
-        for (k, name, op) in taken {
-            self.load_of.insert(name, op);
-            let lane = self.b.ins().extractlane(v, k as u8);
-            for r in [name, m.ops[op].results[0]] {
-                self.vals.insert(r, lane);
-                self.lane_vecs.insert(r, (v, k as u8));
-                self.lane_sets.remove(&r);
-            }
-        }
-        self.loaded_vectors.insert(xs.to_vec(), v);
-        Ok(())
-    }
-
     /// `op` translated on its own, one lane's scalar op for the ops of a lane group.
-    fn scalar_op<M: ClModule>(
+    pub(crate) fn scalar_op<M: ClModule>(
         &mut self,
         cl: &mut M,
         syms: &Symbols,
@@ -717,16 +610,10 @@ impl Fx<'_, '_> {
                 // which nothing writes while generated code runs and which is valid wherever
                 // the function may run: a pure value that Cranelift may share and hoist out of
                 // the traversal loop.
-                let flags = if o.attr("global") == Some(&scion_ir::attr::Attr::Bool(true))
-                    || self.pure_loads.contains(&op)
-                {
-                    MemFlags::new()
-                        .with_notrap()
-                        .with_readonly()
-                        .with_can_move()
-                } else {
-                    MemFlags::new()
-                };
+                let flags = crate::loads::flags(
+                    o.attr("global") == Some(&scion_ir::attr::Attr::Bool(true))
+                        || self.pure_loads.contains(&op),
+                );
                 Some(self.b.ins().load(ct()?, flags, args[0], off))
             }
             L::Store => {

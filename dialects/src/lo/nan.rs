@@ -96,6 +96,16 @@ impl NanFacts {
         self.canonicalize.contains(&v)
     }
 
+    /// The form every op of a lane group of `min`s or `max`s `ops` allows when they agree (one
+    /// vector instruction lowers them all), or `None`.
+    pub fn lanes_min_max_form(&self, m: &Module, ops: &[OpId]) -> Option<MinMaxForm> {
+        let mut forms = ops
+            .iter()
+            .map(|&o| self.min_max_form(m.ops[o].operands[0], m.ops[o].operands[1]));
+        let first = forms.next()?;
+        forms.all(|f| f == first).then_some(first)
+    }
+
     /// How to lower a float `min(p, q)` or `max(p, q)`.
     pub fn min_max_form(&self, p: ValueId, q: ValueId) -> MinMaxForm {
         if self.never_nan(p) {

@@ -110,19 +110,10 @@ impl<'c> Fn<'_, 'c> {
                 .call_intr(name, &[t], &[p.into(), q.into()])?
                 .into_vector_value());
         }
-        let m = self.m;
-        let forms: Vec<MinMaxForm> = ops
-            .iter()
-            .map(|&o| {
-                self.nan
-                    .min_max_form(m.ops[o].operands[0], m.ops[o].operands[1])
-            })
-            .collect();
-        let form = if forms.iter().all(|&f| f == forms[0]) {
-            forms[0]
-        } else {
-            MinMaxForm::General
-        };
+        let form = self
+            .nan
+            .lanes_min_max_form(self.m, ops)
+            .unwrap_or(MinMaxForm::General);
         let pred = if max {
             FloatPredicate::OGT
         } else {
