@@ -613,13 +613,14 @@ fn generated_hits_are_checked_against_the_reference() {
     // Closest hit choosing the near and far child as values (`tree.if` on tree values: a
     // select of node references) visits the same nodes in the same order.
     let source = std::fs::read_to_string(library).unwrap();
-    let start = source.find("        let dl: f32").unwrap();
+    let start = source.find("        let d: (f32, f32)").unwrap();
     let end = source.find("      | Leaf(").unwrap();
     let selects = format!(
         "{}{}{}",
         &source[..start],
-        "        let dl: f32 = distmin(r, left.bounds, best[0]);
-        let dr: f32 = distmin(r, right.bounds, best[0]);
+        "        let d: (f32, f32) = distmin_pair(r, left.bounds, right.bounds, best[0]);
+        let dl: f32 = d[0];
+        let dr: f32 = d[1];
         let swap: bool = dr < dl;
         let near: BVH = if swap { right } else { left };
         let far: BVH = if swap { left } else { right };

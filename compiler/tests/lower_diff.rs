@@ -141,6 +141,13 @@ func t_slab4(lo: f32x3, hi: f32x3, o: f32x3, dir: f32x3, tmin: f32) -> (f32, f32
   let s4: (f32, f32) = slab_span(slab_lanes(r), b);
   return (s3[0], s3[1], s4[0], s4[1], distmin(slab_lanes(r), b, 1.5));
 }
+// Two boxes on eight lanes (`distmin_pair`) against the four-lane test of each.
+func t_pair(lo: f32x3, hi: f32x3, lo2: f32x3, hi2: f32x3, o: f32x3, dir: f32x3, tmin: f32,
+            tmax: f32) -> (f32, f32, f32, f32) = {
+  let r: SlabLanes = slab_lanes(slab_ray(Ray(o, dir, tmin, inf)));
+  let p: (f32, f32) = distmin_pair(slab_pair(r), AABB(lo, hi), AABB(lo2, hi2), tmax);
+  return (distmin(r, AABB(lo, hi), tmax), distmin(r, AABB(lo2, hi2), tmax), p[0], p[1]);
+}
 func t_ifx(a: f32x3, k: u32) -> (f32, u32) = {
   let lo: f32 = if a.x <= a.y { a.x } elif isnan(a.y) { a.z } else { a.y };
   let which: u32 = if lo < a.z { if k > 500 { k - 500 } else { 0 } } else { 2 };
@@ -151,7 +158,7 @@ func t_ifx(a: f32x3, k: u32) -> (f32, u32) = {
 const FUNCS: &[&str] = &[
     "t_hit", "t_slab", "t_box", "t_tri", "t_cpb", "t_cpt", "t_cpc", "t_sat", "t_bb", "t_d2",
     "t_axis", "t_dir", "t_lanes", "t_bits", "t_mut", "t_ifx", "t_clamp", "t_assign", "t_pick",
-    "t_mask", "t_v4", "t_tri4", "t_v4mm", "t_slab4",
+    "t_mask", "t_v4", "t_tri4", "t_v4mm", "t_slab4", "t_pair",
 ];
 
 /// The `tree` module of the prelude functions above.
@@ -265,6 +272,14 @@ fn check_funcs(
         if name == "t_slab4" && keys(&want_flat[0..2]) != keys(&want_flat[2..4]) {
             return Err(format!(
                 "t_slab4({flat:?}): slab_span of SlabRay {:?}, of SlabLanes {:?}",
+                &want_flat[0..2],
+                &want_flat[2..4]
+            ));
+        }
+        // The eight-lane test of two boxes gives each box's four-lane `distmin` bit for bit.
+        if name == "t_pair" && keys(&want_flat[0..2]) != keys(&want_flat[2..4]) {
+            return Err(format!(
+                "t_pair({flat:?}): distmin of SlabLanes {:?}, distmin_pair {:?}",
                 &want_flat[0..2],
                 &want_flat[2..4]
             ));

@@ -272,7 +272,8 @@ impl MemClosestHit {
     /// The work profile of the specialized program: how often each function was called while
     /// tracing `rays` through `tree` (packing not counted), by function name. For closest hit,
     /// the calls of `closest_hit_node` are the nodes reached, of `distmin` over `SlabLanes`
-    /// (`distmin.2`) the box tests, of `hit_lanes` the runs of up to four triangles.
+    /// (`distmin.2`) the root's box tests and of `distmin_pair` two box tests each (a node's
+    /// children), of `hit_lanes` the runs of up to four triangles.
     pub fn call_profile(
         &self,
         tree: &LogicalTree,

@@ -1,7 +1,8 @@
 //! The generated program does the work the reference counts: closest hit specialized to a
 //! library layout, run by the `mem` interpreter with its calls counted, calls
 //! `closest_hit_node` once per node it reaches, `distmin` (the four-lane slab test over the
-//! prepared ray) once per box test and `hit_lanes` (four triangles at once) once per run of up to four of a
+//! prepared ray) once per root box test and `distmin_pair` (a node's two children on eight
+//! lanes) once per two box tests, and `hit_lanes` (four triangles at once) once per run of up to four of a
 //! leaf's triangles, exactly as often as `scion_runtime::reference::closest_hit_tree_stats`
 //! counts nodes visited and skipped, box tests and leaf runs on the tree the layout traverses (decoded boxes for a quantized
 //! layout). So `scion trace --stats`, which reports the reference's counters, reports what the
@@ -41,13 +42,15 @@ fn generated_code_visits_what_the_reference_counts() {
             want.nodes_visited + want.nodes_pruned,
             "{stem}: nodes reached ({calls:?})"
         );
-        // The box test is `distmin` of `SlabLanes` (numbered `distmin.2` among the prelude's
-        // overloads); any `distmin` counts.
+        // The root's box test is `distmin` of `SlabLanes` (numbered `distmin.2` among the
+        // prelude's overloads; any `distmin` counts), a node's two children's one
+        // `distmin_pair`.
         let box_tests: u64 = calls
             .iter()
             .filter(|c| c.0 == "distmin" || c.0.starts_with("distmin."))
             .map(|c| c.1)
-            .sum();
+            .sum::<u64>()
+            + 2 * count("distmin_pair");
         assert_eq!(box_tests, want.boxes_tested, "{stem}: box tests");
         assert_eq!(count("hit_lanes"), want.leaf_runs, "{stem}: leaf runs");
     }

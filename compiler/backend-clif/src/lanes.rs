@@ -4,7 +4,8 @@
 //! per lane and marks the run (`scion_ir::lo::lanes`). Cranelift has no SLP vectorizer, so
 //! without this every lane is its own instruction (the prelude's four-triangle test, `hit_lanes`,
 //! four times over). Here a group of four 32-bit lanes (`f32`, 32-bit integers, and booleans
-//! that are masks of such compares) becomes one 128-bit instruction (`F32X4`, `I32X4`; a
+//! that are masks of such compares; an eight-lane group is two of four, its lanes 0-3 and 4-7)
+//! becomes one 128-bit instruction (`F32X4`, `I32X4`; a
 //! boolean lane is `0` or `-1` in an `I32X4` mask): float `add sub mul div neg`, integer `add
 //! sub and or xor bitnot`, boolean `and or xor not`, `cmp`, `select` (`bitselect` on the mask),
 //! `bitcast`, and float `min`/`max` where every lane takes one select form
@@ -25,7 +26,7 @@
 //! lane, a NaN made canonical where any lane's must be (harmless for the others, whose NaN
 //! cannot be seen), compares with the scalar translation's condition codes, `min`/`max` with its
 //! select form. Groups of other kinds or widths (`min`/`max` that may meet a NaN, shifts, casts,
-//! eight lanes, 64-bit lanes) stay scalar.
+//! 64-bit lanes) stay scalar.
 
 use crate::translate::{float_cc, int_cc, Fx};
 use cranelift_codegen::ir::condcodes::{FloatCC, IntCC};
@@ -74,7 +75,7 @@ fn vector_kind(m: &Module, op: OpId) -> bool {
         return false;
     };
     let lanes = scion_ir::lo::lanes::lane_mark(m, op).map(|(_, _, n)| n);
-    if lanes != Some(4) {
+    if !matches!(lanes, Some(4 | 8)) {
         return false;
     }
     let Some(r) = lane32(m, m.values[o.results[0]].ty) else {
@@ -99,9 +100,20 @@ fn vector_kind(m: &Module, op: OpId) -> bool {
     }
 }
 
-/// The groups of the blocks `blocks` Cranelift emits as vector instructions.
+/// The groups of the blocks `blocks` Cranelift emits as vector instructions, each of four
+/// lanes: an eight-lane group is two, its lanes 0-3 and 4-7 (Cranelift's x86-64 and AArch64
+/// vectors are 128 bits), each translated as its own group and keyed by its first op.
 pub(crate) fn groups(m: &Module, blocks: &[BlockId]) -> HashMap<OpId, Vec<OpId>> {
-    lane_groups(m, blocks, vector_kind)
+    let mut out = HashMap::new();
+    for (first, ops) in lane_groups(m, blocks, vector_kind) {
+        if ops.len() == 8 {
+            out.insert(ops[4], ops[4..].to_vec());
+            out.insert(first, ops[..4].to_vec());
+        } else {
+            out.insert(first, ops);
+        }
+    }
+    out
 }
 
 /// The parameters of the `direct` blocks (entered by one branch, their parameters bound at
