@@ -199,4 +199,7 @@ impl Backend for Interpreter {
     fn trace(&self, _: &[Triangle], tree: &LogicalTree, rays: &[Ray]) -> Result<Vec<Hit>, String> {
         self.program.trace_all(tree, rays, self.threads)
     }
+    fn max_rays(&self) -> Option<usize> {
+        Some(64)
+    }
 }

@@ -16,7 +16,9 @@
 //! ([`crate::jit`]) and the GPU path of `scion trace` compile too.
 
 use crate::backend::Backend;
-use crate::oracle::{closest_hits_in, in_threads, tree_depth, CLOSEST_HIT, CLOSEST_HIT_NAME};
+use crate::oracle::{
+    closest_hits_in, in_threads, on_interp_stack, tree_depth, CLOSEST_HIT, CLOSEST_HIT_NAME,
+};
 use crate::quantized::Boxes;
 use scion_compiler::abi::EntrySig;
 use scion_compiler::driver::cli::Emit;
@@ -30,6 +32,7 @@ use scion_ir::Module;
 use scion_runtime::bvh::schema::{LogicalBytes, Schema};
 use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Hit, Ray, Triangle};
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 /// The library's layouts that the prelude's `closest_hit` traverses (those realizing `BVH`):
@@ -74,6 +77,79 @@ pub struct MemClosestHit {
     layout: String,
     buffers: usize,
     schema: Schema,
+    /// The last tree packed for tracing, kept for the next traces of the same tree: packing
+    /// runs the generated builder op by op, and in the differential test it took more time than
+    /// the traversals (every ray kind of a scene traces one tree, in two threads).
+    packed: Mutex<Option<Packed>>,
+}
+
+/// A tree packed in an interpreter's memory, as plain data that other threads can copy.
+struct Packed {
+    /// [`fingerprint`] of the tree.
+    key: u64,
+    /// The interpreter's byte memory after packing.
+    memory: Vec<u8>,
+    /// The buffer table `%B`.
+    b: u64,
+    /// The root's reference.
+    root: Plain,
+}
+
+/// A value without shared parts ([`Val`] holds `Rc`s, which stay in one thread): what a
+/// layout's reference is made of.
+enum Plain {
+    Bool(bool),
+    Int(i128, IntTy),
+    F32(f32),
+    F64(f64),
+    Vector(Vec<Plain>),
+    Tuple(Vec<Plain>),
+}
+
+impl Plain {
+    /// `v` as plain data; `None` when it has shared parts (arrays, ADT values, references).
+    fn of(v: &Val) -> Option<Plain> {
+        let all = |xs: &[Val]| xs.iter().map(Plain::of).collect::<Option<Vec<_>>>();
+        Some(match v {
+            Val::Bool(b) => Plain::Bool(*b),
+            Val::Int(i, t) => Plain::Int(*i, *t),
+            Val::F32(x) => Plain::F32(*x),
+            Val::F64(x) => Plain::F64(*x),
+            Val::Vector(xs) => Plain::Vector(all(xs)?),
+            Val::Tuple(xs) => Plain::Tuple(all(xs)?),
+            _ => return None,
+        })
+    }
+
+    fn val(&self) -> Val {
+        match self {
+            Plain::Bool(b) => Val::Bool(*b),
+            Plain::Int(i, t) => Val::Int(*i, *t),
+            Plain::F32(x) => Val::F32(*x),
+            Plain::F64(x) => Val::F64(*x),
+            Plain::Vector(xs) => Val::Vector(xs.iter().map(Plain::val).collect()),
+            Plain::Tuple(xs) => Val::Tuple(xs.iter().map(Plain::val).collect()),
+        }
+    }
+}
+
+/// A hash of everything packing reads of `tree` (its nodes' fields and bits, its root, its
+/// primitives' corners' bits and ids).
+fn fingerprint(tree: &LogicalTree) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    tree.root.hash(&mut h);
+    for n in &tree.nodes {
+        (n.kind, n.child, n.prim_offset, n.prim_count).hash(&mut h);
+        n.bounds.map(f32::to_bits).hash(&mut h);
+    }
+    for t in &tree.primitives {
+        for p in [t.p0, t.p1, t.p2] {
+            [p.x, p.y, p.z].map(f32::to_bits).hash(&mut h);
+        }
+        t.id.hash(&mut h);
+    }
+    h.finish()
 }
 
 /// What the host compiles: Scion files after the prelude (name, text), one of their layouts and
@@ -189,6 +265,7 @@ impl MemClosestHit {
             layout: layout.to_string(),
             buffers,
             schema,
+            packed: Mutex::new(None),
         })
     }
 
@@ -301,9 +378,42 @@ impl MemClosestHit {
             return Ok(vec![Hit::MISS; rays.len()]);
         }
         let mut it = self.interp(tree);
-        let Packing { b, root, .. } = self.pack(&mut it, tree)?;
+        let (b, root) = self.packed_in(&mut it, tree)?;
         let table = Val::Int(i128::from(b), IntTy::U64);
         closest_hits_in(&mut it, &[table], rays, &root, first)
+    }
+
+    /// `tree` packed in `it`'s memory: a copy of the packing kept from an earlier trace of the
+    /// same tree, or packed now (and kept, when its root is plain data). Returns the buffer
+    /// table and the root.
+    fn packed_in(&self, it: &mut Interp<'_>, tree: &LogicalTree) -> Result<(u64, Val), String> {
+        let key = fingerprint(tree);
+        let lock = || self.packed.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(p) = lock().as_ref().filter(|p| p.key == key) {
+            it.set_memory(p.memory.clone());
+            return Ok((p.b, p.root.val()));
+        }
+        let Packing { b, root, .. } = self.pack(it, tree)?;
+        if let Some(plain) = Plain::of(&root) {
+            *lock() = Some(Packed {
+                key,
+                memory: it.memory().to_vec(),
+                b,
+                root: plain,
+            });
+        }
+        Ok((b, root))
+    }
+
+    /// Packs `tree` for the traces that follow ([`Self::packed_in`]), once for all threads.
+    fn prepare(&self, tree: &LogicalTree) -> Result<(), String> {
+        if tree.is_empty() {
+            return Ok(());
+        }
+        on_interp_stack(tree, || {
+            let mut it = self.interp(tree);
+            self.packed_in(&mut it, tree).map(|_| ())
+        })
     }
 }
 
@@ -382,6 +492,7 @@ impl Backend for MemInterpBackend {
         layout_boxes(&self.stem)
     }
     fn trace(&self, _: &[Triangle], tree: &LogicalTree, rays: &[Ray]) -> Result<Vec<Hit>, String> {
+        self.program.prepare(tree)?;
         in_threads(tree, rays, self.threads, |part, first| {
             self.program.trace_from(tree, part, first)
         })

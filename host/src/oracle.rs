@@ -141,6 +141,28 @@ impl ClosestHit {
     }
 }
 
+/// The native stack of a thread that interprets a recursion as deep as `tree`: twice the depth,
+/// since packing at the mem level recurses through two functions per level.
+fn interp_stack(tree: &LogicalTree) -> usize {
+    (8 << 20) + 2 * tree_depth(tree) * STACK_PER_LEVEL
+}
+
+/// Runs `f` on a thread with [`in_threads`]' native stack for `tree`.
+pub fn on_interp_stack<T: Send>(
+    tree: &LogicalTree,
+    f: impl FnOnce() -> Result<T, String> + Send,
+) -> Result<T, String> {
+    std::thread::scope(|s| {
+        std::thread::Builder::new()
+            .name("scion-interp".into())
+            .stack_size(interp_stack(tree))
+            .spawn_scoped(s, f)
+            .map_err(|e| format!("cannot start an interpreter thread: {e}"))?
+            .join()
+            .map_err(|_| "an interpreter thread panicked".to_string())?
+    })
+}
+
 /// Runs `f(chunk, first index)` on contiguous chunks of `rays` on `threads` threads (at least
 /// one), each with a native stack sized for interpreting a recursion as deep as `tree`, and
 /// concatenates the hits; the first error (in ray order) wins.
@@ -151,8 +173,7 @@ pub fn in_threads(
     f: impl Fn(&[Ray], usize) -> Result<Vec<Hit>, String> + Sync,
 ) -> Result<Vec<Hit>, String> {
     let threads = threads.max(1);
-    // Twice the depth: packing at the mem level recurses through two functions per level.
-    let stack = (8 << 20) + 2 * tree_depth(tree) * STACK_PER_LEVEL;
+    let stack = interp_stack(tree);
     let chunk = rays.len().div_ceil(threads).max(1);
     let f = &f;
     std::thread::scope(|s| {

@@ -12,9 +12,11 @@
 //! emulated on the CPU (`BackendKind::GpuEmulated`: pbrt, ptr, pbrt_q16, sg_eq). Scenes: the generated hard cases
 //! (always) and the real scenes of
 //! the repository's `scenes/` (or `SCION_SCENES`; a missing folder fails; those over 20 k
-//! triangles only in release builds). The interpreter is slow, so real scenes get few rays (release: 128
+//! triangles only in release builds). The interpreters are slow, so real scenes get few rays (release: 128
 //! primary and 64 secondary, plus 64 axis and 64 feature rays on scenes under 50 k triangles;
-//! debug builds a quarter of that).
+//! debug builds a quarter of that), and each interpreter only a row's first rays
+//! (`Backend::max_rays`: 64 for the tree-level interpreters, 32 at the mem level, every row
+//! still). The mem-level interpreter packs a tree once for all the rows that trace it.
 
 mod common;
 
@@ -385,4 +387,30 @@ fn interpreter_errors_name_the_ray() {
     let e = p.trace_all(&tree, &rays, 2).unwrap_err();
     assert!(e.starts_with("ray 5: "), "{e}");
     assert!(e.contains("division by zero"), "{e}");
+}
+
+/// The mem-level interpreter keeps the last tree it packed for the next traces (the table's
+/// rows share trees); a trace of another tree packs that one, and going back packs the first
+/// again: every trace equals the reference of its own tree.
+#[test]
+fn the_mem_interpreter_traces_the_tree_it_is_given() {
+    let b = MemInterpBackend::new("pbrt", "LinearBVH", 2).expect("compiles");
+    let driver = BatchDriver::new(1).unwrap();
+    let scenes = [gen::random_soup(200, 0.1, 3), gen::random_soup(200, 0.1, 4)];
+    let trees: Vec<LogicalTree> = scenes.iter().map(|s| TreeKind::Sah4.build(s)).collect();
+    let rays = RayKind::Secondary.rays(&scenes[0], 24, 9);
+    for k in [0, 1, 0, 0, 1] {
+        let got = b.trace(&scenes[k].triangles, &trees[k], &rays).unwrap();
+        let want = closest_hits_tree(&trees[k], &rays, &driver);
+        let same = got
+            .iter()
+            .zip(&want)
+            .all(|(g, w)| g.t.to_bits() == w.t.to_bits() && g.prim == w.prim);
+        assert!(same, "tree {k}: {got:?} against {want:?}");
+    }
+    let hits = |k: usize| closest_hits_tree(&trees[k], &rays, &driver);
+    assert!(
+        hits(0).iter().zip(hits(1)).any(|(a, b)| a.prim != b.prim),
+        "the two trees give the same hits: the test cannot tell them apart"
+    );
 }

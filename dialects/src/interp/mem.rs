@@ -36,6 +36,18 @@ impl Interp<'_> {
         start
     }
 
+    /// The whole byte memory, from its first address: what the host allocated and the program
+    /// stored.
+    pub fn memory(&self) -> &[u8] {
+        &self.memory
+    }
+
+    /// Replaces the byte memory by `memory`, a copy of [`Interp::memory`] of an interpreter
+    /// over the same module: a structure packed by one interpreter, read by others.
+    pub fn set_memory(&mut self, memory: Vec<u8>) {
+        self.memory = memory;
+    }
+
     /// `len` bytes at `addr`, if they are allocated.
     pub fn bytes(&self, addr: u64, len: u64) -> Option<&[u8]> {
         let lo = usize::try_from(addr.checked_sub(BASE)?).ok()?;
