@@ -61,12 +61,32 @@ fn every_library_layout_runs_through_the_emulated_gpu_pipeline() {
         "{} layouts over triangles",
         layouts.len()
     );
-    let pipelines: Vec<_> = layouts
-        .iter()
-        .map(|(name, r)| {
-            EmulatedGpu::compile_program(&r.program, &opts, Codegen::Llvm(3), 2)
-                .and_then(EmulatedGpu::into_pipeline)
-                .unwrap_or_else(|e| panic!("{name}: {e}"))
+    // Compiled on two threads, every other layout each (LLVM at -O3 is most of the setup).
+    let compile = |k: usize| -> Vec<(usize, EmulatedGpu)> {
+        layouts
+            .iter()
+            .enumerate()
+            .skip(k)
+            .step_by(2)
+            .map(|(i, (name, r))| {
+                let gpu = EmulatedGpu::compile_program(&r.program, &opts, Codegen::Llvm(3), 2)
+                    .unwrap_or_else(|e| panic!("{name}: {e}"));
+                (i, gpu)
+            })
+            .collect()
+    };
+    let mut compiled: Vec<(usize, EmulatedGpu)> = std::thread::scope(|s| {
+        let other = s.spawn(|| compile(1));
+        let mut mine = compile(0);
+        mine.extend(other.join().expect("a compiling thread panicked"));
+        mine
+    });
+    compiled.sort_by_key(|c| c.0);
+    let pipelines: Vec<_> = compiled
+        .into_iter()
+        .map(|(i, gpu)| {
+            gpu.into_pipeline()
+                .unwrap_or_else(|e| panic!("{}: {e}", layouts[i].0))
         })
         .collect();
     let mut scenes = scion_runtime::scene::gen::hard_cases();
