@@ -6,7 +6,7 @@
 //! the errors (a backend that does not trace blocks, `scion run` on a GPU, a stack too small)
 //! as clear messages.
 
-mod common;
+use crate::common;
 
 use common::{scion, soup, text, write};
 use std::path::PathBuf;

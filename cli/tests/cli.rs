@@ -6,7 +6,7 @@
 //! or rays, standard output that cannot be written) as clear messages with exit status 1 (2 for
 //! a bad command line), never a panic.
 
-mod common;
+use crate::common;
 
 use common::{scion, soup, text, write, CUBE};
 use scion_runtime::geom::{Ray, Vec3};

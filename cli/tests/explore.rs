@@ -4,7 +4,7 @@
 //! picks the fastest, the fastest within a memory budget and the smallest within a slowdown
 //! from the same measurements, and emits the chosen layout's header and object file.
 
-mod common;
+use crate::common;
 
 use common::{fails_with, scion, succeeds_with, text};
 use std::path::PathBuf;

@@ -5,7 +5,7 @@
 //! architecture; without a GPU, `--device gpu` is one clear error line and exit status 1; with
 //! one, the GPU's hits are the reference's for both layouts (else one `skip:` line).
 
-mod common;
+use crate::common;
 
 use common::{scion, text, CUBE};
 use scion_cuda::kit::PtxKit;

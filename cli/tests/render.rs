@@ -2,7 +2,7 @@
 //! the pointer layout, the eight-wide bvh8 and the quantized pbrt-q16, with Cranelift and LLVM;
 //! a real PNG of the size asked for, with hit and missed pixels; bad requests are usage errors.
 
-mod common;
+use crate::common;
 
 use common::{fails_with, scion, succeeds_with, text};
 use std::path::PathBuf;

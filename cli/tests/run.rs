@@ -3,7 +3,7 @@
 //! query kind `scion run` knows answers as its reference (closest hits as `scion trace`'s);
 //! requests that do not fit are usage errors that name what exists.
 
-mod common;
+use crate::common;
 
 use common::{fails_with, scion, soup, succeeds_with, text, write};
 use scion_runtime::query::read_hits;

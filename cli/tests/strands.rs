@@ -3,7 +3,7 @@
 //! checked against the reference, and the user errors (a triangle layout for strands, a strand
 //! scene for `scion trace`, a file that is not `.hair`) as clear messages.
 
-mod common;
+use crate::common;
 
 use common::{scion, text};
 

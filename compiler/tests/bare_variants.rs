@@ -4,7 +4,7 @@
 //! `tree` interpreter and give the same values as the spelled-out `Em()` forms; a bare variant
 //! with fields is E0234 with a span, never an internal error.
 
-mod common;
+use crate::common;
 
 use scion_ir::interp::{Interp, Val};
 use scion_ir::Module;

@@ -7,7 +7,7 @@
 //! signed integer keys, the smallest `i32` among them); a queue too small returns status 1 in
 //! every compiled engine.
 
-mod common;
+use crate::common;
 
 use scion_compiler::passes;
 use scion_ir::backend::{Backend, JitCode};

@@ -4,7 +4,7 @@
 //! use). A record stored in a layout and the same record loaded by generated code must have one
 //! size and alignment.
 
-mod common;
+use crate::common;
 
 use scion_compiler::layout::types::TypeEnv;
 use scion_compiler::syntax::ast::{Ident, TypeExpr, TypeExprKind};

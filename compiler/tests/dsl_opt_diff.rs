@@ -6,7 +6,7 @@
 //! `match` arms, returns from unit functions writing a `mut` parameter), with the default
 //! inlining threshold and with one large enough to inline everything that is not recursive.
 
-mod common;
+use crate::common;
 
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};

@@ -8,7 +8,7 @@
 //! `mem-to-lo`) and the JIT-compiled code (Cranelift, and LLVM at -O0 and -O3), on random inputs
 //! rich in NaN (with payloads), signed zeros, infinities and subnormals.
 
-mod common;
+use crate::common;
 
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};

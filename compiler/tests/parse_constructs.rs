@@ -2,7 +2,7 @@
 //! allowed) and shown back, expressions as fully parenthesized S-expressions so that
 //! precedence and associativity are visible, items through the canonical printer.
 
-mod common;
+use crate::common;
 
 use common::parse_str;
 use expect_test::{expect, Expect};

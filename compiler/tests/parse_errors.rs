@@ -2,7 +2,7 @@
 //! primary span on the right line; several errors in one file are all reported, and the
 //! parser keeps the items it could parse.
 
-mod common;
+use crate::common;
 
 use common::parse_str;
 use expect_test::{expect, Expect};

@@ -1,7 +1,7 @@
 //! Every library file parses with zero diagnostics, and printing is a fixed point:
 //! parse(print(parse(src))) is the same tree (up to spans and ids) and prints identically.
 
-mod common;
+use crate::common;
 
 use common::{library_files, parse_str, strip_positions};
 use scion_compiler::syntax::print::print_program;

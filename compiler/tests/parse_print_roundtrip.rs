@@ -3,7 +3,7 @@
 //! checks the printer's parentheses (precedence, non-associative comparisons, `|` in match
 //! arms, statements starting with `build`) against the parser.
 
-mod common;
+use crate::common;
 
 use common::{parse_str, strip_positions};
 use proptest::prelude::*;

@@ -2,7 +2,7 @@
 //! library files (tokens and bytes deleted, inserted, swapped) and pathological nesting.
 //! Errors are fine; a panic, a hang or a stack overflow is a bug.
 
-mod common;
+use crate::common;
 
 use common::{library_files, parse_str};
 use proptest::prelude::*;

@@ -4,7 +4,7 @@
 //! hand-packed LinearBVH buffers, must find exactly the hit the `tree` interpreter finds on the
 //! same BVH as an algebraic value (paper Figure 4 / Figure 11).
 
-mod common;
+use crate::common;
 
 use scion_clif::JitModule;
 use scion_compiler::driver::cli::Emit;

@@ -4,7 +4,7 @@
 //! the padding lanes of a short block, rays parallel to a triangle, hits at `tmin` and `tmax`,
 //! zero-area triangles, a negative `tmin`, all four lanes missing).
 
-mod common;
+use crate::common;
 
 use scion_ir::interp::{AdtVal, Interp, Val};
 use scion_ir::types::IntTy;

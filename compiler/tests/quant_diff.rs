@@ -14,7 +14,7 @@
 //!   rounding away from the original, and the step itself is the smallest that reaches the
 //!   frame's high corner, up to one ulp.
 
-mod common;
+use crate::common;
 
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};

@@ -2,7 +2,7 @@
 //! a differential property test showing `const-fold` and `dce` keep every random module's
 //! meaning bit for bit.
 
-mod common;
+use crate::common;
 
 use expect_test::expect;
 use proptest::prelude::*;

@@ -8,7 +8,7 @@ use proptest::prelude::*;
 use scion_ir::diag::FileId;
 use scion_ir::{parse_module, print_module, verify, PassCx, PassManager, PassRegistry};
 
-mod common;
+use crate::common;
 use common::random_module;
 
 proptest! {

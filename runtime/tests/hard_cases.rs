@@ -3,7 +3,7 @@
 //! force on primary, secondary and axis-parallel rays, plus hand-made rays that graze edges,
 //! hit vertices, start on surfaces and run inside box faces.
 
-mod common;
+use crate::common;
 
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::{

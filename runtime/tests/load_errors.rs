@@ -1,7 +1,7 @@
 //! Malformed OBJ files: every error names the file and, where it applies, the 1-based line.
 //! The files are written into a scratch folder.
 
-mod common;
+use crate::common;
 
 use scion_runtime::scene::{load_obj, SceneError};
 

@@ -1,7 +1,7 @@
 //! Ray and hit files (docs/formats.md): round trips through real files, bit for bit, and
 //! clear errors for truncated or missing files.
 
-mod common;
+use crate::common;
 
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::{build_sah_binned, SahOptions};

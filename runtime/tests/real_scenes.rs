@@ -4,7 +4,7 @@
 //! cruiser, dragon) run only in optimized builds (`cargo test --release`), to keep debug test
 //! time low.
 
-mod common;
+use crate::common;
 
 use std::time::Instant;
 

@@ -1,7 +1,7 @@
 //! Transforms and instancing on a real scene: a rotated copy traced with rotated rays sees the
 //! same hits (up to rounding), and instanced scenes build valid trees.
 
-mod common;
+use crate::common;
 
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::{build_sah_binned, SahOptions};

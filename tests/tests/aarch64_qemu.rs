@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use tools::{build_tools, have, repo};
 
-mod tools;
+use crate::tools;
 
 /// The traversal stack of the compiled code: the deepest hard case (depth 69) fits.
 const STACK: u32 = 256;

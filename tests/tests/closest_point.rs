@@ -8,7 +8,7 @@
 //! answers are then checked against float64 brute force: the distance within a bound relative to
 //! the scene's size, and the triangle the nearest one or one as near within that bound.
 
-mod c_entries;
+use crate::c_entries;
 
 use scion_host::jit::Codegen;
 use scion_host::library::{resolve_kind, QueryKind};

@@ -2,7 +2,7 @@
 //! per plan entry, aligned and exactly sized; a build status and a traversal stack overflow
 //! are errors naming the status and the first failing ray; the empty tree never reaches code.
 
-mod common;
+use crate::common;
 
 use common::{Flat32, STACK};
 use scion_host::contract::{

@@ -19,7 +19,7 @@ use std::path::Path;
 use std::process::Command;
 use tools::{build_tools, have, repo};
 
-mod tools;
+use crate::tools;
 
 const RAYS: u64 = 20_000;
 const SEED: u64 = 3;

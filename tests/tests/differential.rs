@@ -18,7 +18,7 @@
 //! (`Backend::max_rays`: 64 for the tree-level interpreters, 32 at the mem level, every row
 //! still). The mem-level interpreter packs a tree once for all the rows that trace it.
 
-mod common;
+use crate::common;
 
 use scion_host::backend::{Backend, BackendKind};
 use scion_host::contract::LayoutBackend;

@@ -7,7 +7,7 @@
 //! Rust) bit for bit, and the AABB traversal's hits (the diagonal test is conservative); the
 //! DOP traversal visits fewer nodes than the AABB one.
 
-mod c_entries;
+use crate::c_entries;
 
 use scion_host::jit::Codegen;
 use scion_host::mem_interp::Program;

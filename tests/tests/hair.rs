@@ -8,7 +8,7 @@
 //! they are too, except where the reference's rounding exception pruned brute force's hit and
 //! the oriented traversal, pruning by other entry distances, found it.
 
-mod c_entries;
+use crate::c_entries;
 
 use scion_host::jit::Codegen;
 use scion_host::mem_interp::Program;

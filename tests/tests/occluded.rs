@@ -4,7 +4,7 @@
 //! does. Its reference is the runtime's closest hit: a ray is occluded iff it has a closest hit
 //! (docs/howto-add-an-algorithm.md).
 
-mod c_entries;
+use crate::c_entries;
 
 use scion_host::jit::Codegen;
 use scion_host::mem_interp::{layout_source, Program};

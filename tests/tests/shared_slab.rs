@@ -9,7 +9,7 @@
 //! bit for bit, and the reference over the true boxes except where one of the two pruned the
 //! other's better hit by the documented rounding exception (`why_pruned`, `why_pruned_with`).
 
-mod c_entries;
+use crate::c_entries;
 
 use scion_host::gpu_emu::EmulatedGpu;
 use scion_host::jit::{Codegen, LoOptions};

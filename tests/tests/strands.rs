@@ -7,7 +7,7 @@
 //! collapse, bit for bit; with them too, except where the reference's rounding pruned brute
 //! force's hit and the oriented traversal found it. The reference itself is brute force's.
 
-mod c_entries;
+use crate::c_entries;
 
 use scion_host::entries;
 use scion_host::jit::Codegen;

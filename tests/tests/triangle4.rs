@@ -9,7 +9,7 @@
 //! the slab test or is entered beyond it (the rounding exceptions of docs/runtime.md, proved
 //! by `why_pruned_in`).
 
-mod c_entries;
+use crate::c_entries;
 
 use scion_host::entries;
 use scion_host::jit::Codegen;
