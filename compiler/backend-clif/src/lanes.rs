@@ -12,7 +12,9 @@
 //! ([`MinMaxForm`]: `minps`/`maxps`). An operand is the vector of an earlier group when its
 //! lanes are exactly that group's lanes in order, one shuffle of it when they are its lanes in
 //! another order, a splat when the four are one value, one 16-byte load when they are loads of
-//! consecutive words from one address (`Fx::vector_load`), else built from the scalars
+//! consecutive words from one address (`Fx::vector_load`), a column of four records' rows
+//! transposed when they are loads of one word of four records whose next words the block also
+//! reads (`Fx::transposed_load`, [`crate::transpose`]), else built from the scalars
 //! (`scalar_to_vector`, `insertlane`). The lanes are then the `lo` values (`extractlane`, a
 //! boolean lane compared with zero), which Cranelift drops where nothing reads them.
 //!
@@ -225,7 +227,7 @@ pub(crate) fn param_vector_type(m: &Module, ty: scion_ir::TypeId) -> Option<ir::
 }
 
 /// Little-endian lanes, which a bitcast between vector types must name.
-fn lanes_flags() -> MemFlags {
+pub(crate) fn lanes_flags() -> MemFlags {
     MemFlags::new().with_endianness(Endianness::Little)
 }
 

@@ -29,6 +29,7 @@ pub mod jit;
 mod lanes;
 mod loads;
 pub mod translate;
+mod transpose;
 
 pub use jit::{ClifError, Cranelift, JitModule};
 

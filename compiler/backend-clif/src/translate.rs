@@ -390,10 +390,12 @@ impl Fx<'_, '_> {
         }
         if let Some(ops) = self.groups.get(&op) {
             // The group's deferred loads, just before it: four lanes that read consecutive
-            // words from one address as one vector load.
+            // words from one address as one vector load, or one word of four records as a
+            // column of their transposed rows ([`crate::transpose`]).
             for j in 0..m.ops[op].operands.len() {
                 let xs: Vec<ValueId> = ops.iter().map(|&o| m.ops[o].operands[j]).collect();
                 self.vector_load(&xs)?;
+                self.transposed_load(&xs)?;
             }
             for &o in ops {
                 for &x in &m.ops[o].operands {

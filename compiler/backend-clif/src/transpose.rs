@@ -1,0 +1,154 @@
+//! Four records' fields gathered into lanes as four 16-byte loads and a transpose.
+//!
+//! A leaf's four triangles (`block_of`: lane `k` of each field is triangle `k`'s) are four
+//! records at four addresses, each field a 32-bit word at the same offset in every record. Lane
+//! by lane, a field's vector is four scalar loads and three insertions; Cranelift merges no load
+//! into the insertion (it merges a load only where the loaded value is used once transitively,
+//! and a triangle's lanes feed products used several times), so the nine fields of four
+//! triangles took 36 `vmovss` and 27 `vinsertps`. When the block also loads the three words
+//! after a field's word from each of the four records (`x`, `y`, `z` of a corner and the next
+//! word), the four fields are one 16-byte load per record and a 4 × 4 transpose: four loads and
+//! eight interleaving shuffles (`punpckldq`, `punpckhdq`, `punpcklqdq`, `punpckhqdq`) for four
+//! fields' lanes.
+//!
+//! Only loads not yet emitted are taken ([`Fx::deferred`]: the block reads them, and no store,
+//! call or branch has come since, so reading them here reads what the block reads); the rows
+//! read exactly the sixteen words that those loads name. Their lanes are bound as
+//! [`crate::loads`]' vector loads bind theirs, so each field's group later finds its vector.
+
+use crate::translate::Fx;
+use cranelift_codegen::ir::{self, types, InstBuilder};
+use scion_ir::entity::{OpId, ValueId};
+use scion_ir::lo::Op as L;
+use scion_ir::op::OpKind;
+use scion_ir::types::{FloatTy, Type};
+
+/// The interleaving shuffles' byte masks: 32-bit lanes low and high, 64-bit lanes low and high.
+const LO32: [u8; 16] = [0, 1, 2, 3, 16, 17, 18, 19, 4, 5, 6, 7, 20, 21, 22, 23];
+const HI32: [u8; 16] = [8, 9, 10, 11, 24, 25, 26, 27, 12, 13, 14, 15, 28, 29, 30, 31];
+const LO64: [u8; 16] = [0, 1, 2, 3, 4, 5, 6, 7, 16, 17, 18, 19, 20, 21, 22, 23];
+const HI64: [u8; 16] = [8, 9, 10, 11, 12, 13, 14, 15, 24, 25, 26, 27, 28, 29, 30, 31];
+
+impl Fx<'_, '_> {
+    /// The deferred load of a 32-bit word at `addr` + `offset`, as its name and op.
+    fn deferred_word(&self, addr: ValueId, offset: i128) -> Option<(ValueId, OpId)> {
+        let m = self.m;
+        self.deferred.iter().copied().find(|&(_, op)| {
+            let o = &m.ops[op];
+            o.operands[0] == addr
+                && o.int_attr("offset").unwrap_or(0) == offset
+                && o.attr("global").is_none()
+                && word_type(m, m.values[o.results[0]].ty).is_some()
+        })
+    }
+
+    /// When the four lanes `xs` are deferred loads of a 32-bit word at one offset from four
+    /// addresses, and the block's deferred loads also read the three words after some such
+    /// word from each (the lowest such start), the four records' sixteen words loaded as four
+    /// rows and transposed, every lane of the four columns bound to its load.
+    pub(crate) fn transposed_load(&mut self, xs: &[ValueId]) -> Result<(), String> {
+        let m = self.m;
+        if xs.len() != 4 {
+            return Ok(());
+        }
+        let mut addrs = Vec::with_capacity(4);
+        let mut offset = None;
+        for x in xs {
+            let Some(&(_, op)) = self.deferred.iter().find(|d| d.0 == *x) else {
+                return Ok(());
+            };
+            let o = &m.ops[op];
+            let off = o.int_attr("offset").unwrap_or(0);
+            if o.kind != OpKind::Lo(L::Load)
+                || o.attr("global").is_some()
+                || offset.is_some_and(|c| c != off)
+                || word_type(m, m.values[o.results[0]].ty).is_none()
+            {
+                return Ok(());
+            }
+            offset = Some(off);
+            addrs.push(o.operands[0]);
+        }
+        let Some(c) = offset else {
+            return Ok(());
+        };
+        // The lowest start whose 16 bytes the block reads from every record: rows[k][i] is
+        // record k's word i.
+        let mut found = None;
+        for start in [c - 12, c - 8, c - 4, c] {
+            let rows: Option<Vec<Vec<(ValueId, OpId)>>> = addrs
+                .iter()
+                .map(|&a| {
+                    (0..4)
+                        .map(|i| self.deferred_word(a, start + 4 * i))
+                        .collect::<Option<Vec<_>>>()
+                })
+                .collect();
+            if let Some(rows) = rows {
+                found = Some((start, rows));
+                break;
+            }
+        }
+        let Some((start, rows)) = found else {
+            return Ok(());
+        };
+        let all_pure = rows.iter().flatten().all(|(_, op)| self.pure_loads.contains(op));
+        let flags = crate::loads::flags(all_pure);
+        let mut row_vals = Vec::with_capacity(4);
+        for &a in &addrs {
+            let base = self.v(a)?;
+            row_vals.push(self.b.ins().load(types::I8X16, flags, base, start as i32));
+        }
+        let t0 = self.shuffle(row_vals[0], row_vals[1], &LO32);
+        let t1 = self.shuffle(row_vals[2], row_vals[3], &LO32);
+        let t2 = self.shuffle(row_vals[0], row_vals[1], &HI32);
+        let t3 = self.shuffle(row_vals[2], row_vals[3], &HI32);
+        let cols = [
+            self.shuffle(t0, t1, &LO64),
+            self.shuffle(t0, t1, &HI64),
+            self.shuffle(t2, t3, &LO64),
+            self.shuffle(t2, t3, &HI64),
+        ];
+        for (i, &col) in cols.iter().enumerate() {
+            let ty = m.values[m.ops[rows[0][i].1].results[0]].ty;
+            let vt = word_type(m, ty).expect("checked");
+            let v = self.b.ins().bitcast(vt, crate::lanes::lanes_flags(), col);
+            for (k, &a) in addrs.iter().enumerate() {
+                // Every deferred load of this word (a field read twice is one word).
+                let lane = self.b.ins().extractlane(v, k as u8);
+                while let Some((name, op)) = self.deferred_word(a, start + 4 * i as i128) {
+                    if let Some(p) = self.deferred.iter().position(|d| d.0 == name) {
+                        self.deferred.remove(p);
+                    }
+                    self.load_of.insert(name, op);
+                    for r in [name, m.ops[op].results[0]] {
+                        self.vals.insert(r, lane);
+                        self.lane_vecs.insert(r, (v, k as u8));
+                        self.lane_sets.remove(&r);
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// `a` and `b` (16 bytes each) shuffled by byte mask `mask`.
+    fn shuffle(&mut self, a: ir::Value, b: ir::Value, mask: &[u8; 16]) -> ir::Value {
+        let imm = self
+            .b
+            .func
+            .dfg
+            .immediates
+            .push(ir::ConstantData::from(mask.to_vec()));
+        self.b.ins().shuffle(a, b, imm)
+    }
+}
+
+/// The four-lane vector type of a 32-bit word of `lo` type `ty`: `f32` or a 32-bit integer.
+fn word_type(m: &scion_ir::Module, ty: scion_ir::TypeId) -> Option<ir::Type> {
+    match m.types.get(ty) {
+        Type::Float(FloatTy::F32) => Some(types::F32X4),
+        Type::Int(t) if t.bits() == 32 => Some(types::I32X4),
+        _ => None,
+    }
+}
