@@ -152,3 +152,92 @@ fn word_type(m: &scion_ir::Module, ty: scion_ir::TypeId) -> Option<ir::Type> {
         _ => None,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::JitModule;
+    use scion_ir::interp::lo::LoInterp;
+    use scion_ir::interp::Val;
+    use scion_ir::types::IntTy;
+
+    /// Four records of four words, word 1 an `i32`: three lane groups read words 0, 1 and 3 of
+    /// the four records (word 0 twice), and the block also reads word 2, so the groups' lanes
+    /// are the transposed rows' columns.
+    const GATHER: &str = r#"
+func @gather(%p0: ptr, %p1: ptr, %p2: ptr, %p3: ptr) -> (f32, f32, f32, f32, i32, i32, i32, i32, f32, f32, f32, f32) {
+  %a0 = "lo.load"(%p0) {offset = 0} : (ptr) -> f32
+  %a1 = "lo.load"(%p1) {offset = 0} : (ptr) -> f32
+  %a2 = "lo.load"(%p2) {offset = 0} : (ptr) -> f32
+  %a3 = "lo.load"(%p3) {offset = 0} : (ptr) -> f32
+  %b0 = "lo.load"(%p0) {offset = 4} : (ptr) -> i32
+  %b1 = "lo.load"(%p1) {offset = 4} : (ptr) -> i32
+  %b2 = "lo.load"(%p2) {offset = 4} : (ptr) -> i32
+  %b3 = "lo.load"(%p3) {offset = 4} : (ptr) -> i32
+  %c0 = "lo.load"(%p0) {offset = 8} : (ptr) -> f32
+  %c1 = "lo.load"(%p1) {offset = 8} : (ptr) -> f32
+  %c2 = "lo.load"(%p2) {offset = 8} : (ptr) -> f32
+  %c3 = "lo.load"(%p3) {offset = 8} : (ptr) -> f32
+  %d0 = "lo.load"(%p0) {offset = 12} : (ptr) -> f32
+  %d1 = "lo.load"(%p1) {offset = 12} : (ptr) -> f32
+  %d2 = "lo.load"(%p2) {offset = 12} : (ptr) -> f32
+  %d3 = "lo.load"(%p3) {offset = 12} : (ptr) -> f32
+  %s0 = "lo.sub"(%d0, %a0) {lane = [0, 0, 4]} : (f32, f32) -> f32
+  %s1 = "lo.sub"(%d1, %a1) {lane = [0, 1, 4]} : (f32, f32) -> f32
+  %s2 = "lo.sub"(%d2, %a2) {lane = [0, 2, 4]} : (f32, f32) -> f32
+  %s3 = "lo.sub"(%d3, %a3) {lane = [0, 3, 4]} : (f32, f32) -> f32
+  %t0 = "lo.add"(%b0, %b0) {lane = [1, 0, 4]} : (i32, i32) -> i32
+  %t1 = "lo.add"(%b1, %b1) {lane = [1, 1, 4]} : (i32, i32) -> i32
+  %t2 = "lo.add"(%b2, %b2) {lane = [1, 2, 4]} : (i32, i32) -> i32
+  %t3 = "lo.add"(%b3, %b3) {lane = [1, 3, 4]} : (i32, i32) -> i32
+  %u0 = "lo.mul"(%c0, %a0) {lane = [2, 0, 4]} : (f32, f32) -> f32
+  %u1 = "lo.mul"(%c1, %a1) {lane = [2, 1, 4]} : (f32, f32) -> f32
+  %u2 = "lo.mul"(%c2, %a2) {lane = [2, 2, 4]} : (f32, f32) -> f32
+  %u3 = "lo.mul"(%c3, %a3) {lane = [2, 3, 4]} : (f32, f32) -> f32
+  "lo.return"(%s0, %s1, %s2, %s3, %t0, %t1, %t2, %t3, %u0, %u1, %u2, %u3) : (f32, f32, f32, f32, i32, i32, i32, i32, f32, f32, f32, f32) -> ()
+}
+"#;
+
+    fn bits(v: &Val) -> u64 {
+        match v {
+            Val::F32(x) => u64::from(x.to_bits()),
+            Val::Int(i, _) => *i as u64,
+            other => panic!("unexpected {other:?}"),
+        }
+    }
+
+    #[test]
+    fn four_records_words_are_transposed_rows_and_give_the_interpreters_lanes() {
+        let m = scion_ir::parse_module(GATHER, scion_ir::diag::FileId(0)).expect("parses");
+        let clif = crate::print_clif(&m).expect("translates");
+        assert_eq!(clif.matches("load.i8x16").count(), 4, "{clif}");
+        assert!(!clif.contains("insertlane"), "{clif}");
+        // Records with special values: NaN payloads, signed zeros, infinities, subnormals and
+        // integers at their extremes, each in its own word and record.
+        let words: [[u32; 4]; 4] = [
+            [0x7fc0_0001, 0x8000_0000, 0x3f80_0000, 0xff80_0000],
+            [0x8000_0000, 0x7fff_ffff, 0x0000_0001, 0x7f7f_ffff],
+            [0x4049_0fdb, 0xffff_ffff, 0xffc1_2345, 0x0000_0000],
+            [0xc2f6_e979, 0x0000_0001, 0x7f80_0000, 0x807f_ffff],
+        ];
+        let bytes: Vec<Vec<u8>> = words
+            .iter()
+            .map(|r| r.iter().flat_map(|w| w.to_le_bytes()).collect())
+            .collect();
+        let mut it = LoInterp::new(&m);
+        let args: Vec<Val> = bytes
+            .iter()
+            .map(|b| Val::Int(i128::from(it.alloc(b, 16)), IntTy::U64))
+            .collect();
+        let want = it.call("gather", args).expect("interprets");
+        let jit = JitModule::compile(&m).expect("compiles");
+        let host: Vec<Val> = bytes
+            .iter()
+            .map(|b| Val::Int(i128::from(b.as_ptr() as u64), IntTy::U64))
+            .collect();
+        let got = jit.call("gather", &host).expect("runs");
+        assert_eq!(want.len(), 12);
+        for (k, (w, g)) in want.iter().zip(&got).enumerate() {
+            assert_eq!(bits(w), bits(g), "result {k}: interpreter {w:?}, Cranelift {g:?}");
+        }
+    }
+}
