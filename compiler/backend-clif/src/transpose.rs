@@ -84,7 +84,15 @@ impl Fx<'_, '_> {
                         .collect::<Option<Vec<_>>>()
                 })
                 .collect();
-            if let Some(rows) = rows {
+            // One lane type per column (a word read as `f32` in one record and as an integer
+            // in another is left to the scalar gathers).
+            let same = |rows: &Vec<Vec<(ValueId, OpId)>>| {
+                (0..4).all(|i| {
+                    let ty = |k: usize| m.values[m.ops[rows[k][i].1].results[0]].ty;
+                    (1..4).all(|k| word_type(m, ty(k)) == word_type(m, ty(0)))
+                })
+            };
+            if let Some(rows) = rows.filter(same) {
                 found = Some((start, rows));
                 break;
             }
@@ -114,9 +122,23 @@ impl Fx<'_, '_> {
             let vt = word_type(m, ty).expect("checked");
             let v = self.b.ins().bitcast(vt, crate::lanes::lanes_flags(), col);
             for (k, &a) in addrs.iter().enumerate() {
-                // Every deferred load of this word (a field read twice is one word).
+                // Every deferred load of this word as this lane type (a field read twice is one
+                // word; read as another type, it stays a scalar load).
                 let lane = self.b.ins().extractlane(v, k as u8);
-                while let Some((name, op)) = self.deferred_word(a, start + 4 * i as i128) {
+                let off = start + 4 * i as i128;
+                let same: Vec<(ValueId, OpId)> = self
+                    .deferred
+                    .iter()
+                    .copied()
+                    .filter(|&(_, op)| {
+                        let o = &m.ops[op];
+                        o.operands[0] == a
+                            && o.int_attr("offset").unwrap_or(0) == off
+                            && o.attr("global").is_none()
+                            && word_type(m, m.values[o.results[0]].ty) == Some(vt)
+                    })
+                    .collect();
+                for (name, op) in same {
                     if let Some(p) = self.deferred.iter().position(|d| d.0 == name) {
                         self.deferred.remove(p);
                     }
