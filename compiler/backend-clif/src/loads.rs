@@ -243,15 +243,31 @@ impl Fx<'_, '_> {
             self.deferred.remove(i);
         }
         for (k, name, op) in taken {
-            self.load_of.insert(name, op);
             let lane = self.b.ins().extractlane(v, k as u8);
-            for r in [name, m.ops[op].results[0]] {
-                self.vals.insert(r, lane);
-                self.lane_vecs.insert(r, (v, k as u8));
-                self.lane_sets.remove(&r);
-            }
+            self.bind_lane(name, op, v, k as u8, lane);
         }
         self.loaded_vectors.insert(xs.to_vec(), v);
         Ok(())
+    }
+
+    /// The deferred load `op`, known here as `name`, read as lane `k` of the vector `v` (the
+    /// lane's value `lane`): no longer pending, and its value that lane for every use.
+    pub(crate) fn bind_lane(
+        &mut self,
+        name: ValueId,
+        op: OpId,
+        v: ir::Value,
+        k: u8,
+        lane: ir::Value,
+    ) {
+        if let Some(p) = self.deferred.iter().position(|d| d.0 == name) {
+            self.deferred.remove(p);
+        }
+        self.load_of.insert(name, op);
+        for r in [name, self.m.ops[op].results[0]] {
+            self.vals.insert(r, lane);
+            self.lane_vecs.insert(r, (v, k));
+            self.lane_sets.remove(&r);
+        }
     }
 }

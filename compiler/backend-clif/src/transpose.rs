@@ -30,16 +30,20 @@ const LO64: [u8; 16] = [0, 1, 2, 3, 4, 5, 6, 7, 16, 17, 18, 19, 20, 21, 22, 23];
 const HI64: [u8; 16] = [8, 9, 10, 11, 12, 13, 14, 15, 24, 25, 26, 27, 28, 29, 30, 31];
 
 impl Fx<'_, '_> {
-    /// The deferred load of a 32-bit word at `addr` + `offset`, as its name and op.
-    fn deferred_word(&self, addr: ValueId, offset: i128) -> Option<(ValueId, OpId)> {
+    /// The deferred loads of the 32-bit word at `addr` + `offset`, as (name, op, lane type).
+    fn deferred_words(&self, addr: ValueId, offset: i128) -> Vec<(ValueId, OpId, ir::Type)> {
         let m = self.m;
-        self.deferred.iter().copied().find(|&(_, op)| {
-            let o = &m.ops[op];
-            o.operands[0] == addr
-                && o.int_attr("offset").unwrap_or(0) == offset
-                && o.attr("global").is_none()
-                && word_type(m, m.values[o.results[0]].ty).is_some()
-        })
+        self.deferred
+            .iter()
+            .filter_map(|&(name, op)| {
+                let o = &m.ops[op];
+                let vt = word_type(m, m.values[o.results[0]].ty)?;
+                (o.operands[0] == addr
+                    && o.int_attr("offset").unwrap_or(0) == offset
+                    && o.attr("global").is_none())
+                .then_some((name, op, vt))
+            })
+            .collect()
     }
 
     /// When the four lanes `xs` are deferred loads of a 32-bit word at one offset from four
@@ -72,35 +76,35 @@ impl Fx<'_, '_> {
         let Some(c) = offset else {
             return Ok(());
         };
-        // The lowest start whose 16 bytes the block reads from every record: rows[k][i] is
-        // record k's word i.
+        // The lowest start whose 16 bytes the block reads from every record (record k's row
+        // is its words start .. start + 16).
         let mut found = None;
         for start in [c - 12, c - 8, c - 4, c] {
-            let rows: Option<Vec<Vec<(ValueId, OpId)>>> = addrs
-                .iter()
-                .map(|&a| {
-                    (0..4)
-                        .map(|i| self.deferred_word(a, start + 4 * i))
-                        .collect::<Option<Vec<_>>>()
+            // Each column's lane type: the type the block reads the word as, the same in every
+            // record (a word read as `f32` in one and as an integer in another is left to the
+            // scalar gathers).
+            let types: Option<Vec<ir::Type>> = (0..4)
+                .map(|i| {
+                    let ty = |a: ValueId| Some(self.deferred_words(a, start + 4 * i).first()?.2);
+                    let t = ty(addrs[0])?;
+                    addrs[1..].iter().all(|&a| ty(a) == Some(t)).then_some(t)
                 })
                 .collect();
-            // One lane type per column (a word read as `f32` in one record and as an integer
-            // in another is left to the scalar gathers).
-            let same = |rows: &Vec<Vec<(ValueId, OpId)>>| {
-                (0..4).all(|i| {
-                    let ty = |k: usize| m.values[m.ops[rows[k][i].1].results[0]].ty;
-                    (1..4).all(|k| word_type(m, ty(k)) == word_type(m, ty(0)))
-                })
-            };
-            if let Some(rows) = rows.filter(same) {
-                found = Some((start, rows));
+            if let Some(types) = types {
+                found = Some((start, types));
                 break;
             }
         }
-        let Some((start, rows)) = found else {
+        let Some((start, types)) = found else {
             return Ok(());
         };
-        let all_pure = rows.iter().flatten().all(|(_, op)| self.pure_loads.contains(op));
+        let all_pure = addrs.iter().all(|&a| {
+            (0..4).all(|i| {
+                self.deferred_words(a, start + 4 * i)
+                    .iter()
+                    .all(|(_, op, _)| self.pure_loads.contains(op))
+            })
+        });
         let flags = crate::loads::flags(all_pure);
         let mut row_vals = Vec::with_capacity(4);
         for &a in &addrs {
@@ -117,36 +121,15 @@ impl Fx<'_, '_> {
             self.shuffle(t2, t3, &LO64),
             self.shuffle(t2, t3, &HI64),
         ];
-        for (i, &col) in cols.iter().enumerate() {
-            let ty = m.values[m.ops[rows[0][i].1].results[0]].ty;
-            let vt = word_type(m, ty).expect("checked");
+        for (i, (&col, &vt)) in cols.iter().zip(&types).enumerate() {
             let v = self.b.ins().bitcast(vt, crate::lanes::lanes_flags(), col);
             for (k, &a) in addrs.iter().enumerate() {
                 // Every deferred load of this word as this lane type (a field read twice is one
                 // word; read as another type, it stays a scalar load).
                 let lane = self.b.ins().extractlane(v, k as u8);
-                let off = start + 4 * i as i128;
-                let same: Vec<(ValueId, OpId)> = self
-                    .deferred
-                    .iter()
-                    .copied()
-                    .filter(|&(_, op)| {
-                        let o = &m.ops[op];
-                        o.operands[0] == a
-                            && o.int_attr("offset").unwrap_or(0) == off
-                            && o.attr("global").is_none()
-                            && word_type(m, m.values[o.results[0]].ty) == Some(vt)
-                    })
-                    .collect();
-                for (name, op) in same {
-                    if let Some(p) = self.deferred.iter().position(|d| d.0 == name) {
-                        self.deferred.remove(p);
-                    }
-                    self.load_of.insert(name, op);
-                    for r in [name, m.ops[op].results[0]] {
-                        self.vals.insert(r, lane);
-                        self.lane_vecs.insert(r, (v, k as u8));
-                        self.lane_sets.remove(&r);
+                for (name, op, t) in self.deferred_words(a, start + 4 * i as i128) {
+                    if t == vt {
+                        self.bind_lane(name, op, v, k as u8, lane);
                     }
                 }
             }
