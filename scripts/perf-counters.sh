@@ -14,8 +14,9 @@
 #
 # Usage: scripts/perf-counters.sh [SCENE_NAME [RAYS]]   (default: bunny, primary and secondary)
 #   Environment: SCION_SCENES (default: the repository's scenes/), PERF_N1 / PERF_N2 (ray counts,
-#   default 4096 and 20480), PERF_ROWS (rows to run, below; default all). Prints a
-#   markdown table.
+#   default 4096 and 20480), PERF_ROWS (rows to run, below; default all), PERF_ARGS (more
+#   options for the peers benchmark, e.g. "--root enters" to count only the rays that enter the
+#   root's box, or "--tree obvhs"). Prints a markdown table.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh >/dev/null
@@ -92,7 +93,7 @@ for kind in $kinds; do
       valgrind --tool=callgrind --cache-sim=yes --branch-sim=yes --callgrind-out-file=/dev/null \
         --collect-atstart=no --toggle-collect='*peers_traced_call*' \
         "$bench" --scene "$(scene_file "$scene")" --rays "$kind" --n "$n" --threads 1 \
-        --peers "$peers" --layouts "$layouts" --interp-rays 0 --trace-only "$name" \
+        --peers "$peers" --layouts "$layouts" --interp-rays 0 --trace-only "$name" ${PERF_ARGS:-} \
         > "$out/$tag-$n.out" 2> "$out/$tag-$n.err"
     done
     read -r i1 d1 l1 b1 m1 <<<"$(counts "$out/$tag-$n1.err")"
