@@ -15,7 +15,9 @@
 #   BRANCHES=1 (also the blocks with the most mispredicted conditional branches per ray, as
 #   valgrind's branch simulation predicts them),
 #   ALGORITHM (a .scion file instead of library/algorithms/ENTRY.scion), RAYS (primary, or
-#   secondary: `scion trace --rays secondary`'s).
+#   secondary: `scion trace --rays secondary`'s), BACKEND=jit (Cranelift's code instead of
+#   LLVM's: `scion trace --backend jit` under callgrind, its dumped code read back by address;
+#   the blocks of every JIT'd function ranked together; CPU does not apply).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh >/dev/null
@@ -29,9 +31,34 @@ scene=${5:-bunny}
 n=${6:-65536}
 cpu=${CPU:-x86-64-v3}
 algorithm=${ALGORITHM:-library/algorithms/$entry.scion}
-cargo build -q --release -p scion-compiler -p scion-runtime-c
 work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+trap '[ -n "${KEEP:-}" ] && cp -r "$work" "$KEEP"; rm -rf "$work"' EXIT
+scene_path=$(scene_file "$scene" 2>/dev/null || echo "$scene")
+branch_sim=no
+[ "${BRANCHES:-0}" = 1 ] && branch_sim=yes
+if [ "${BACKEND:-llvm}" = jit ]; then
+  # Cranelift's code, JIT-compiled by `scion trace --backend jit`, which dumps each function's
+  # bytes and address (SCION_CLIF_DUMP); every instruction inside them counts, the compiler and
+  # the harness do not (one untimed trace: --runs 1).
+  cargo build -q --release -p scion-cli
+  mkdir "$work/clif"
+  SCION_CLIF_DUMP="$work/clif" valgrind --tool=callgrind --dump-instr=yes --branch-sim=$branch_sim \
+    --toggle-collect="*contract*Packed*trace*" --callgrind-out-file="$work/cg.out" \
+    target/release/scion trace --scene "$scene_path" --n "$n" \
+    --threads 1 --runs 1 --rays "${RAYS:-primary}" --backend jit \
+    --layout "library/layouts/$layout_file.scion:$layout" --algorithm "$algorithm:$entry" \
+    > "$work/run.out" 2> "$work/run.err" || { cat "$work/run.err" "$work/run.out" >&2; exit 1; }
+  grep -q "identical to the reference" "$work/run.out" || { cat "$work/run.out" >&2; echo "count-instructions: hits differ from the reference" >&2; exit 1; }
+  report=$(python3 scripts/callgrind-blocks.py --jit "$work/clif" "$n" "$work/cg.out")
+  echo "$report" | head -1 | awk -v what="$layout_file $entry $scene ($n ${RAYS:-primary} rays, Cranelift JIT)" \
+    '{ printf "%s: %s instructions per ray\n", what, $(NF - 3) }'
+  [ "${BLOCKS:-0}" = 1 ] && echo "$report"
+  if [ "${BRANCHES:-0}" = 1 ]; then
+    EVENT=Bcm python3 scripts/callgrind-blocks.py --jit "$work/clif" "$n" "$work/cg.out"
+  fi
+  exit 0
+fi
+cargo build -q --release -p scion-compiler -p scion-runtime-c
 scionc=target/release/scionc
 # Assembly through GNU as, not `--emit=obj`: assemblers encode a register-to-register `vmovq`
 # from a high register in its store form (VEX 66 0F D6), a byte shorter, which valgrind 3.19
@@ -47,9 +74,6 @@ ${CXX:-g++} -std=c++17 -O2 -I"$work" -Iruntime/capi/include -DSCION_LAYOUT="$lay
   -DSCION_ENTRY="$entry" -DSCION_TREE="$tree" "-DSCION_HEADER=\"scion_${entry}_$layout.h\"" \
   examples/cpp/main.cpp "$work/entry.o" -Ltarget/release -lscion_runtime -lpthread -ldl -lm \
   -o "$work/trace"
-scene_path=$(scene_file "$scene" 2>/dev/null || echo "$scene")
-branch_sim=no
-[ "${BRANCHES:-0}" = 1 ] && branch_sim=yes
 valgrind --tool=callgrind --dump-instr=yes --branch-sim=$branch_sim --toggle-collect="scion_${entry}_$layout" \
   --callgrind-out-file="$work/cg.out" "$work/trace" "$scene_path" "$n" 1 1 "${RAYS:-primary}" > "$work/run.out" \
   2> "$work/run.err" || { cat "$work/run.err" "$work/run.out" >&2; exit 1; }

@@ -235,3 +235,53 @@ fn wide_layouts_match_the_wide_reference() {
         }
     }
 }
+
+/// A tree beyond a Table 1 layout's reference fields is refused with the layout's name, not
+/// packed wrong: the compressed-index layouts keep a leaf's count in 4 bits of a 32-bit
+/// reference (layout catalog §4: 28 bits of index, 4 of count), so a leaf of 16 triangles
+/// does not fit them, while `bvh8` (a 32-bit count) takes it and traces it like the reference.
+#[test]
+fn a_leaf_beyond_a_layouts_count_bits_is_refused_by_its_build() {
+    use scion_runtime::bvh::{build_sah_binned, SahOptions};
+    use scion_runtime::geom::{Ray, Triangle, Vec3};
+    // Sixteen copies of one triangle: no split separates them, so with leaves of up to 16 the
+    // SAH builder makes one leaf of 16.
+    let v = Vec3::new;
+    let tris: Vec<Triangle> = (0..16)
+        .map(|id| Triangle::new(v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0), v(0.0, 1.0, 0.0), id))
+        .collect();
+    let opts = SahOptions {
+        max_leaf: 16,
+        ..SahOptions::default()
+    };
+    let tree = build_sah_binned(&tris, &opts);
+    assert_eq!(tree.stats().max_leaf, 16);
+    let driver = BatchDriver::new(1).unwrap();
+    for (stem, fits) in [("bvh8_q8_ci", false), ("bvh8_q16_ci_align16", false), ("bvh8", true)] {
+        let r = scion_host::library::resolve(stem, None).unwrap();
+        let code = JitClosestHit::compile_program(
+            &r.program,
+            Some(512),
+            JIT_OPT_LEVEL,
+            true,
+            Codegen::Cranelift,
+        )
+        .unwrap_or_else(|e| panic!("{stem}: {e}"));
+        match Packed::new(&code, &tree) {
+            Err(e) => {
+                assert!(!fits, "{stem}: {e}");
+                assert!(
+                    e.contains(&format!("does not fit layout `{}`", r.program.layout)),
+                    "{stem}: {e}"
+                );
+            }
+            Ok(packed) => {
+                assert!(fits, "{stem} packed a leaf of 16 into a 4-bit count");
+                // The ray through the triangles' interior hits the one with the smallest id.
+                let ray = Ray::new(v(0.25, 0.25, 1.0), v(0.0, 0.0, -1.0));
+                let hits = packed.trace(&code, &[ray], &driver).unwrap();
+                assert_eq!(hits, vec![Hit { t: 1.0, prim: 0 }], "{stem}");
+            }
+        }
+    }
+}

@@ -8,6 +8,9 @@
 //! commit (by its memory monitor): vertex and index buffers, BVH and allocator blocks. The
 //! flush-to-zero and denormals-are-zero modes Embree's manual recommends for speed are not
 //! set: they would change the arithmetic of the other contenders on the same threads.
+//! `SCION_EMBREE_CONFIG` in the environment is passed to `rtcNewDevice` as its configuration
+//! string (e.g. `isa=avx2`, to measure Embree without its AVX-512 kernels on a CPU that has
+//! them; `verbose=1` prints the ISA Embree picked).
 //!
 //! Embree has no Rust bindings we depend on: this module declares the few functions and
 //! `#[repr(C)]` structs it needs by hand, from `/usr/include/embree3/*.h` of 3.13.5 (where
@@ -162,6 +165,16 @@ struct Scene {
 unsafe impl Send for Scene {}
 unsafe impl Sync for Scene {}
 
+/// The configuration string of `SCION_EMBREE_CONFIG`, if set (module comment).
+fn device_config() -> Result<Option<std::ffi::CString>, String> {
+    match std::env::var("SCION_EMBREE_CONFIG") {
+        Ok(c) => std::ffi::CString::new(c)
+            .map(Some)
+            .map_err(|_| "SCION_EMBREE_CONFIG: a NUL byte in the configuration".into()),
+        Err(_) => Ok(None),
+    }
+}
+
 impl Scene {
     /// Builds the scene over `tris`, in their order (primitive `i` is `tris[i]`).
     fn build(tris: &[Triangle]) -> Result<Scene, String> {
@@ -249,8 +262,12 @@ impl Scene {
         kind: u32,
         fill: impl FnOnce(&Scene, Handle) -> Result<(), String>,
     ) -> Result<Scene, String> {
-        // SAFETY: a null configuration string asks for the default device.
-        let device = unsafe { rtcNewDevice(std::ptr::null()) };
+        let config = device_config()?;
+        // SAFETY: `config` is null (the default device) or a NUL-terminated string that lives
+        // for the call.
+        let device = unsafe {
+            rtcNewDevice(config.as_ref().map_or(std::ptr::null(), |c| c.as_ptr()))
+        };
         if device.is_null() {
             // SAFETY: with a null device Embree reports the error of the last device creation.
             let e = unsafe { rtcGetDeviceError(std::ptr::null_mut()) };

@@ -120,6 +120,15 @@ impl JitModule {
         }
         cl.finalize_definitions()
             .map_err(|e| ClifError(format!("finalize: {e:?}")))?;
+        // Where each function's code landed, so that a profile of the process (callgrind's
+        // instruction addresses) can be read against the dumped code
+        // (scripts/count-instructions-jit.sh).
+        if let Ok(dir) = std::env::var("SCION_CLIF_DUMP") {
+            for (name, e) in &entries {
+                let addr = cl.get_finalized_function(e.func) as usize;
+                let _ = std::fs::write(format!("{dir}/{name}.addr"), format!("{addr:#x}\n"));
+            }
+        }
         Ok(JitModule {
             module: cl,
             entries,
