@@ -257,7 +257,11 @@ fn a_leaf_beyond_a_layouts_count_bits_is_refused_by_its_build() {
     let tree = build_sah_binned(&tris, &opts);
     assert_eq!(tree.stats().max_leaf, 16);
     let driver = BatchDriver::new(1).unwrap();
-    for (stem, fits) in [("bvh8_q8_ci", false), ("bvh8_q16_ci_align16", false), ("bvh8", true)] {
+    for (stem, fits) in [
+        ("bvh8_q8_ci", false),
+        ("bvh8_q16_ci_align16", false),
+        ("bvh8", true),
+    ] {
         let r = scion_host::library::resolve(stem, None).unwrap();
         let code = JitClosestHit::compile_program(
             &r.program,

@@ -265,9 +265,8 @@ impl Scene {
         let config = device_config()?;
         // SAFETY: `config` is null (the default device) or a NUL-terminated string that lives
         // for the call.
-        let device = unsafe {
-            rtcNewDevice(config.as_ref().map_or(std::ptr::null(), |c| c.as_ptr()))
-        };
+        let device =
+            unsafe { rtcNewDevice(config.as_ref().map_or(std::ptr::null(), |c| c.as_ptr())) };
         if device.is_null() {
             // SAFETY: with a null device Embree reports the error of the last device creation.
             let e = unsafe { rtcGetDeviceError(std::ptr::null_mut()) };

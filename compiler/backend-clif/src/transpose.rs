@@ -242,7 +242,11 @@ func @gather(%p0: ptr, %p1: ptr, %p2: ptr, %p3: ptr) -> (f32, f32, f32, f32, i32
         let got = jit.call("gather", &host).expect("runs");
         assert_eq!(want.len(), 12);
         for (k, (w, g)) in want.iter().zip(&got).enumerate() {
-            assert_eq!(bits(w), bits(g), "result {k}: interpreter {w:?}, Cranelift {g:?}");
+            assert_eq!(
+                bits(w),
+                bits(g),
+                "result {k}: interpreter {w:?}, Cranelift {g:?}"
+            );
         }
     }
 }
