@@ -7,8 +7,8 @@
 //!
 //! The test is a table: one row per (scene, tree, ray kind, backend). [`BACKENDS`] lists the
 //! backends; a new backend (the JIT of a layout) is one more entry there and one more
-//! `BackendKind` variant. The LLVM rows (`BackendKind::Llvm`, -O3) cover the same
-//! layouts, scenes and hard cases as the Cranelift rows, and so do the rows of the GPU pipeline
+//! `BackendKind` variant. The LLVM rows (`BackendKind::Llvm`, -O3) cover every library layout
+//! on the same scenes and hard cases as the Cranelift rows, and so do the rows of the GPU pipeline
 //! emulated on the CPU (`BackendKind::GpuEmulated`: pbrt, ptr, pbrt_q16, sg_eq). Scenes: the generated hard cases
 //! (always) and the real scenes of
 //! the repository's `scenes/` (or `SCION_SCENES`; a missing folder fails; those over 20 k
@@ -41,31 +41,6 @@ const BACKENDS: &[BackendKind] = &[
     BackendKind::Interp(1),
     // The full DSL pipeline (mem-inline, const-fold, mem-cse, dce) at the tree level.
     BackendKind::Interp(3),
-    // LLVM's JIT at -O3, on the layouts of the Cranelift rows below (the same stack).
-    BackendKind::Llvm {
-        stem: "pbrt",
-        stack: JIT_STACK,
-    },
-    BackendKind::Llvm {
-        stem: "ptr",
-        stack: JIT_STACK,
-    },
-    BackendKind::Llvm {
-        stem: "pbrt_align16",
-        stack: JIT_STACK,
-    },
-    BackendKind::Llvm {
-        stem: "pbrt_soaos",
-        stack: JIT_STACK,
-    },
-    BackendKind::Llvm {
-        stem: "pbrt_q16",
-        stack: JIT_STACK,
-    },
-    BackendKind::Llvm {
-        stem: "sg_eq",
-        stack: JIT_STACK,
-    },
     // The GPU pipeline emulated on the CPU: the kernels of `scion trace --device gpu` compiled
     // for the host, packed and traced by scion-cuda's own pipeline (the four layouts the GPU
     // check runs; docs/gpu.md).
@@ -118,6 +93,14 @@ fn backends() -> Vec<Box<dyn Backend>> {
         all.push(Box::new(
             LayoutBackend::new(Box::new(code), 2).expect("threads"),
         ));
+    }
+    // And by LLVM's JIT at -O3: every layout, the same stack.
+    for &(stem, _, _) in library_layouts() {
+        let b = BackendKind::Llvm {
+            stem,
+            stack: JIT_STACK,
+        };
+        all.push(b.instantiate(2).unwrap_or_else(|e| panic!("{b:?}: {e}")));
     }
     all
 }
