@@ -544,3 +544,67 @@ fn wide_layouts_are_checked_against_the_reference_of_their_width() {
     );
     assert!(text(&o.stdout).contains("identical to the four-wide reference on"));
 }
+
+/// `SCION_JIT_CPU` names the CPU the LLVM JIT compiles for: the baseline x86-64 (SSE2 only) or
+/// AArch64's generic CPU, which every host of its architecture runs, traces an eight-wide and a
+/// binary layout to the hits of the host CPU's code, bit for bit.
+#[test]
+fn the_llvm_jit_compiles_for_the_cpu_scion_jit_cpu_names() {
+    let dir = scratch("jit_cpu");
+    let baseline = if cfg!(target_arch = "aarch64") {
+        "generic"
+    } else {
+        "x86-64"
+    };
+    for layout in ["pbrt", "bvh8"] {
+        let mut hits = Vec::new();
+        for cpu in ["", baseline] {
+            let out = dir
+                .join(format!("{layout}-{cpu}.hits"))
+                .display()
+                .to_string();
+            let args = [
+                "trace",
+                "--scene",
+                "teapot",
+                "--rays",
+                "secondary",
+                "--n",
+                "2048",
+                "--runs",
+                "1",
+                "--backend",
+                "llvm",
+                "--layout",
+                layout,
+                "-o",
+                &out,
+            ];
+            let o = std::process::Command::new(env!("CARGO_BIN_EXE_scion"))
+                .args(args)
+                .env("SCION_JIT_CPU", cpu)
+                .output()
+                .expect("run scion");
+            succeeds_with(&o, "identical to the");
+            hits.push(read_hits(&out).unwrap());
+        }
+        assert_eq!(hits[0], hits[1], "{layout}");
+    }
+    // The name reaches LLVM: one it does not know is reported (and ignored) by LLVM itself.
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_scion"))
+        .args([
+            "trace",
+            "--scene",
+            "teapot",
+            "--n",
+            "64",
+            "--runs",
+            "1",
+            "--backend",
+            "llvm",
+        ])
+        .env("SCION_JIT_CPU", "not-a-cpu")
+        .output()
+        .expect("run scion");
+    assert!(text(&o.stderr).contains("'not-a-cpu' is not a recognized processor"));
+}

@@ -175,7 +175,7 @@ impl JitModule {
         }
         // The host CPU's name and features on every function: MCJIT's own target machine
         // would compile for the baseline CPU.
-        let (cpu, features) = target::host_cpu();
+        let (cpu, features) = target::jit_cpu();
         for f in lm.get_functions() {
             if f.count_basic_blocks() > 0 {
                 f.add_attribute(

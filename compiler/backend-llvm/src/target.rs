@@ -277,6 +277,17 @@ pub fn host_cpu() -> (String, String) {
     )
 }
 
+/// What the LLVM JIT compiles for: the host CPU, or the CPU named by `SCION_JIT_CPU` (an LLVM
+/// CPU name such as `x86-64-v3`, with the features that name implies), so that code for another
+/// level of the host's ISA can be timed on the host, e.g. without AVX-512 on a CPU that has it
+/// (docs/backends.md). A CPU the host cannot run is the caller's mistake (SIGILL).
+pub fn jit_cpu() -> (String, String) {
+    match std::env::var("SCION_JIT_CPU") {
+        Ok(cpu) if !cpu.is_empty() => (cpu, String::new()),
+        _ => host_cpu(),
+    }
+}
+
 /// Runs LLVM's `default<O{level}>` pipeline on `lm`. For a GPU (`gpu`) at `-O1` and above,
 /// address-space inference runs first: the translation loads each layout buffer's base as a
 /// global-space pointer and casts it to a generic one, so the accesses derived from a buffer
