@@ -11,7 +11,8 @@
 # Writes the table into docs/benchmarks.md between `<!-- bench-quantized:begin -->` and
 # `<!-- bench-quantized:end -->` (BENCH_NO_DOC=1: print only).
 #
-# Usage: scripts/bench-quantized.sh [SCENE_NAME...]   (default: teapot fzk_haus bunny sponza_dabrovic)
+# Usage: scripts/bench-quantized.sh [SCENE_NAME...]   (default: the ten library scenes, about
+#   17 minutes on 2 cores)
 #   Environment: BENCH_N (rays per run, default 65536).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -22,7 +23,7 @@ bin="${CARGO_TARGET_DIR:-target}/release/scion"
 n=${BENCH_N:-65536}
 out=target/bench-quantized
 mkdir -p "$out"
-if [ $# -gt 0 ]; then scenes=("$@"); else scenes=(teapot fzk_haus bunny sponza_dabrovic); fi
+if [ $# -gt 0 ]; then scenes=("$@"); else scenes=("${LIBRARY_SCENES[@]}"); fi
 # The quantized layouts of the prelude's BVH and of BVH8, as the registry finds them (boxes not
 # exact), with their twins.
 layouts=$("$bin" layouts | awk 'NR > 1 && ($3 == "BVH" || $3 == "BVH8") && $5 != "exact" { print $1 }')
