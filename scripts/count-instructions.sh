@@ -17,7 +17,8 @@
 #   ALGORITHM (a .scion file instead of library/algorithms/ENTRY.scion), RAYS (primary, or
 #   secondary: `scion trace --rays secondary`'s), BACKEND=jit (Cranelift's code instead of
 #   LLVM's: `scion trace --backend jit` under callgrind, its dumped code read back by address;
-#   the blocks of every JIT'd function ranked together; CPU does not apply).
+#   the blocks of every JIT'd function ranked together; CPU does not apply), KEEP=DIR (copy
+#   the work folder there: the object or the dumped code, the profile, the run's output).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh >/dev/null
