@@ -64,7 +64,7 @@ pub trait LayoutCode: Sync {
     /// The batch entry: traces `queries[i]` into `results[i]` (in/out, initialized by the
     /// caller) for every `i`, in order; 0, or the status of the first failing query, after
     /// which it stops.
-    fn batch(&self, buffers: &[&[u8]], queries: &[Ray], results: &mut [(f32, u32)]) -> i32;
+    fn batch(&self, buffers: &[&[u8]], queries: &[Ray], results: &mut [Best]) -> i32;
     /// The deepest tree the traversal handles without [`STATUS_STACK_OVERFLOW`], when bounded.
     fn stack_limit(&self) -> Option<usize> {
         None
@@ -120,8 +120,45 @@ impl LogicalTreeView {
     }
 }
 
-/// The result record of closest hit: `best = (t, primitive id)`.
-pub type Best = (f32, u32);
+/// The in/out record of closest hit's batch entry, `best = (t, primitive id)`: the caller
+/// sets it to `(ray.tmax, u32::MAX)` ([`Best::start`]) and the entry leaves the nearest hit in
+/// it. Laid out as the checked 8-byte result record (`t`'s bits, then the id) and as
+/// [`Hit`], so that [`Packed::trace`] lets the generated code write into the hits it returns
+/// ([`Best::of_hits`]) instead of copying records in and out for every block.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Best {
+    /// The nearest distance found so far (`tmax` to start with).
+    pub t: f32,
+    /// Its primitive's id (`u32::MAX` until a hit).
+    pub id: u32,
+}
+
+// `Best::of_hits` reads `Hit`s as `Best`s: the same two 4-byte fields in the same order.
+const _: () = {
+    assert!(std::mem::size_of::<Best>() == 8 && std::mem::size_of::<Hit>() == 8);
+    assert!(std::mem::align_of::<Best>() == std::mem::align_of::<Hit>());
+    assert!(std::mem::offset_of!(Best, t) == std::mem::offset_of!(Hit, t));
+    assert!(std::mem::offset_of!(Best, id) == std::mem::offset_of!(Hit, prim));
+};
+
+impl Best {
+    /// The record a query starts with: nothing nearer than the ray's `tmax`.
+    pub fn start(ray: &Ray) -> Best {
+        Best {
+            t: ray.tmax,
+            id: u32::MAX,
+        }
+    }
+
+    /// `hits` as batch records, in place (both `#[repr(C)]` pairs of an `f32` and a `u32`, in
+    /// that order, checked above; every bit pattern is valid for both).
+    #[allow(unsafe_code)]
+    pub fn of_hits(hits: &mut [Hit]) -> &mut [Best] {
+        // SAFETY: same size, alignment and field offsets (the assertions above), plain data.
+        unsafe { std::slice::from_raw_parts_mut(hits.as_mut_ptr().cast::<Best>(), hits.len()) }
+    }
+}
 
 /// A traversal that failed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -245,26 +282,26 @@ impl Packed {
             return Ok(vec![Hit::MISS; rays.len()]);
         }
         let buffers = self.buffers();
-        let init = |r: &Ray| (r.tmax, u32::MAX);
-        // Each block writes its own hits in place (a block is one chunk of `hits`, so its
-        // lock is never contended): no allocation per block, no results gathered under one
-        // lock and converted by the calling thread after the parallel part.
+        // Each block's records are its own chunk of `hits` (its lock is never contended), read
+        // as `Best`s: the generated code writes the hits in place, and only the misses' `t`
+        // (left at the ray's `tmax`) is set to `+inf` afterwards. No allocation or copy per
+        // block, nothing gathered under one lock by the calling thread.
         let mut hits = vec![Hit::MISS; rays.len()];
         let failed: Mutex<Option<TraceFailure>> = Mutex::new(None);
         {
             let out: Vec<Mutex<&mut [Hit]>> = hits.chunks_mut(BLOCK).map(Mutex::new).collect();
             driver.run(rays.len(), |begin, end| {
                 let queries = &rays[begin..end];
-                let mut block = [(0.0f32, 0u32); BLOCK];
-                let results = &mut block[..queries.len()];
+                let mut chunk = out[begin / BLOCK].lock().unwrap_or_else(|p| p.into_inner());
+                let results = Best::of_hits(&mut chunk);
                 for (slot, r) in results.iter_mut().zip(queries) {
-                    *slot = init(r);
+                    *slot = Best::start(r);
                 }
                 let status = code.batch(&buffers, queries, results);
                 if status != STATUS_OK {
                     let first = (begin..end)
                         .find_map(|i| {
-                            let mut one = [init(&rays[i])];
+                            let mut one = [Best::start(&rays[i])];
                             let s = code.batch(&buffers, &rays[i..i + 1], &mut one);
                             (s != STATUS_OK).then_some(TraceFailure { ray: i, status: s })
                         })
@@ -275,9 +312,10 @@ impl Packed {
                     }
                     return;
                 }
-                let mut chunk = out[begin / BLOCK].lock().unwrap_or_else(|p| p.into_inner());
-                for (h, &(t, id)) in chunk.iter_mut().zip(results.iter()) {
-                    *h = Hit::from_best(t, id);
+                for h in chunk.iter_mut() {
+                    if h.prim == u32::MAX {
+                        h.t = f32::INFINITY;
+                    }
                 }
             });
         }

@@ -20,7 +20,7 @@
 
 #![allow(unsafe_code)]
 
-use crate::contract::{BufferSpec, LayoutCode, LogicalInput, LogicalTreeView, STATUS_OK};
+use crate::contract::{Best, BufferSpec, LayoutCode, LogicalInput, LogicalTreeView, STATUS_OK};
 use crate::mem_interp::{compile_program, Program};
 use scion_compiler::abi::EntrySig;
 pub use scion_compiler::abi::EntryTarget;
@@ -33,6 +33,7 @@ use scion_ir::Module;
 use scion_runtime::bvh::schema::Schema;
 use scion_runtime::geom::Ray;
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::RwLock;
 use std::time::{Duration, Instant};
 
@@ -139,8 +140,31 @@ pub struct JitClosestHit {
     deferred: bool,
     /// Time of the whole compilation (front end to machine code).
     pub compile_time: Duration,
-    /// Root of each packed buffer set, keyed by the buffers' addresses.
-    roots: RwLock<HashMap<Vec<usize>, Root>>,
+    /// Root of each packed buffer set, keyed by the buffers' addresses (looked up once per
+    /// block of queries, so hashed by [`AddressHasher`], not SipHash).
+    roots: RwLock<HashMap<Vec<usize>, Root, BuildHasherDefault<AddressHasher>>>,
+}
+
+/// A hasher for a handful of buffer addresses: a multiply-rotate of each word (the keys come
+/// from this process's allocations, not from an adversary).
+#[derive(Default)]
+struct AddressHasher(u64);
+
+impl Hasher for AddressHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for b in bytes {
+            self.write_u64(*b as u64);
+        }
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x51_7cc1_b727_220a_95);
+    }
+    fn write_usize(&mut self, x: usize) {
+        self.write_u64(x as u64);
+    }
 }
 
 // SAFETY: the function pointers are addresses of finalized machine code owned by `_code`.
@@ -328,7 +352,7 @@ impl JitClosestHit {
             stack_size: stack_size.unwrap_or(64),
             deferred,
             compile_time: start.elapsed(),
-            roots: RwLock::new(HashMap::new()),
+            roots: RwLock::new(HashMap::default()),
         })
     }
 }
@@ -467,7 +491,7 @@ impl LayoutCode for JitClosestHit {
             .insert(key, root);
         status
     }
-    fn batch(&self, buffers: &[&[u8]], queries: &[Ray], results: &mut [(f32, u32)]) -> i32 {
+    fn batch(&self, buffers: &[&[u8]], queries: &[Ray], results: &mut [Best]) -> i32 {
         // Called once per block of 64 queries on every thread: the root is looked up under a
         // shared read lock, and the key, the buffer table and the result records of a block
         // live on the stack (a layout has a handful of buffers), so that threads neither
@@ -505,23 +529,17 @@ impl LayoutCode for JitClosestHit {
         if queries.len() != results.len() {
             return -1;
         }
-        let mut record_space = [[0u32; 2]; scion_runtime::batch::BLOCK];
-        let mut heap_records: Vec<[u32; 2]>;
-        let records: &mut [[u32; 2]] = if results.len() <= record_space.len() {
-            &mut record_space[..results.len()]
-        } else {
-            heap_records = vec![[0u32; 2]; results.len()];
-            &mut heap_records
-        };
-        for (rec, r) in records.iter_mut().zip(results.iter()) {
-            *rec = [r.0.to_bits(), r.1];
-        }
-        let (q, r, end) = (queries.as_ptr(), records.as_mut_ptr(), queries.len() as u64);
+        // `Best` is the checked result record (`t`'s bits, then the id; `#[repr(C)]`).
+        let (q, r, end) = (
+            queries.as_ptr(),
+            results.as_mut_ptr().cast::<[u32; 2]>(),
+            queries.len() as u64,
+        );
         // SAFETY: the batch entry has the checked type for the layout's reference kind;
         // `table` holds the addresses of the buffers `build` packed (alive for the call; the
         // key above matched them), `root` is what `@scion_L_root` returned for them, and it
         // reads `queries[0..end]` (32-byte `Ray`s, the checked query record) and reads and
-        // writes `records[0..end]` (the checked 8-byte result record), both exactly `end` long.
+        // writes `results[0..end]` (the checked 8-byte result record), both exactly `end` long.
         let status = unsafe {
             match (self.refs, root) {
                 (Refs::Index(_, batch), Root::Index(root)) => {
@@ -536,9 +554,6 @@ impl LayoutCode for JitClosestHit {
                 _ => return -1,
             }
         };
-        for (res, rec) in results.iter_mut().zip(records.iter()) {
-            *res = (f32::from_bits(rec[0]), rec[1]);
-        }
         status
     }
     /// A node at depth `k` (root 1) runs with at most `k - 1` pending entries and pushes one

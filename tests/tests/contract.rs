@@ -6,7 +6,7 @@ use crate::common;
 
 use common::{Flat32, STACK};
 use scion_host::contract::{
-    BufferSpec, LayoutCode, LogicalInput, Packed, TraceFailure, STATUS_STACK_OVERFLOW,
+    Best, BufferSpec, LayoutCode, LogicalInput, Packed, TraceFailure, STATUS_STACK_OVERFLOW,
 };
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::{build_sah_binned, LogicalTree, SahOptions};
@@ -96,7 +96,7 @@ impl LayoutCode for Refuses {
         assert_eq!(buffers[0].as_ptr() as usize % 64, 0);
         3
     }
-    fn batch(&self, _: &[&[u8]], _: &[Ray], _: &mut [(f32, u32)]) -> i32 {
+    fn batch(&self, _: &[&[u8]], _: &[Ray], _: &mut [Best]) -> i32 {
         panic!("never called after a failed build")
     }
 }

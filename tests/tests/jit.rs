@@ -2,7 +2,7 @@
 //! layout catalog says (pbrt 32 bytes, ptr 48), hits bit-identical to the reference, and a
 //! traversal stack smaller than the tree reported as a stack overflow naming the first ray.
 
-use scion_host::contract::{LayoutCode, Packed, TraceFailure, STATUS_STACK_OVERFLOW};
+use scion_host::contract::{Best, LayoutCode, Packed, TraceFailure, STATUS_STACK_OVERFLOW};
 use scion_host::jit::JitClosestHit;
 use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::{build_caterpillar, build_sah_binned, DeepSide, LogicalTree, SahOptions};
@@ -116,13 +116,19 @@ fn the_batch_entry_stops_at_the_first_overflow() {
     rays[3] = deep;
     let code = JitClosestHit::compile("ptr", "PtrBVH", Some(pending(&tree, &rays[3]) - 1)).unwrap();
     let packed = Packed::new(&code, &tree).unwrap();
-    let mut results = vec![(7.0f32, 9u32); 6];
+    let mut results = vec![Best { t: 7.0, id: 9 }; 6];
     let status = code.batch(&packed.buffers(), &rays, &mut results);
     assert_eq!(status, STATUS_STACK_OVERFLOW);
     // Queries 0-2 missed (their records are kept as given: nothing closer than t = 7 was
     // found), query 3 overflowed and the batch stopped there.
-    assert!(results.iter().all(|&r| r == (7.0, 9)));
-    let mut one = vec![(f32::INFINITY, u32::MAX); 3];
+    assert!(results.iter().all(|&r| r == Best { t: 7.0, id: 9 }));
+    let mut one = vec![
+        Best {
+            t: f32::INFINITY,
+            id: u32::MAX
+        };
+        3
+    ];
     assert_eq!(code.batch(&packed.buffers(), &rays[..3], &mut one), 0);
-    assert!(one.iter().all(|&r| r.1 == u32::MAX));
+    assert!(one.iter().all(|&r| r.id == u32::MAX));
 }

@@ -12,7 +12,7 @@
 #![allow(dead_code)]
 
 use scion_host::contract::{
-    BufferSpec, LayoutCode, LogicalInput, STATUS_OK, STATUS_STACK_OVERFLOW,
+    Best, BufferSpec, LayoutCode, LogicalInput, STATUS_OK, STATUS_STACK_OVERFLOW,
 };
 use scion_runtime::bvh::NO_NODE;
 use scion_runtime::geom::{Aabb, Ray, Triangle, Vec3};
@@ -112,7 +112,7 @@ impl LayoutCode for Flat32 {
         STATUS_OK
     }
 
-    fn batch(&self, buffers: &[&[u8]], queries: &[Ray], results: &mut [(f32, u32)]) -> i32 {
+    fn batch(&self, buffers: &[&[u8]], queries: &[Ray], results: &mut [Best]) -> i32 {
         let (nodes, tris) = (buffers[0], buffers[1]);
         let bounds = |i: u32| {
             let at = 32 * i as usize;
@@ -126,7 +126,7 @@ impl LayoutCode for Flat32 {
             // farther one pushed with its entry distance and skipped if `best` has passed it.
             let mut stack = [(0u32, 0f32); STACK];
             let mut top = 0;
-            let mut next = Some((0u32, distmin_of(&r, &bounds(0), best.0)))
+            let mut next = Some((0u32, distmin_of(&r, &bounds(0), best.t)))
                 .filter(|&(_, d)| d < f32::INFINITY);
             while let Some((i, d)) = next.take().or_else(|| {
                 (top > 0).then(|| {
@@ -135,7 +135,7 @@ impl LayoutCode for Flat32 {
                 })
             }) {
                 // Skipped when `best` has passed it (or is NaN, as in generated code).
-                let visit = d <= best.0;
+                let visit = d <= best.t;
                 if !visit {
                     continue;
                 }
@@ -151,14 +151,14 @@ impl LayoutCode for Flat32 {
                             id: u32_at(tris, p + 36),
                         };
                         let d = hit_distance(ray, &t);
-                        if d < f32::INFINITY && (d < best.0 || (d == best.0 && t.id < best.1)) {
-                            best = (d, t.id);
+                        if d < f32::INFINITY && (d < best.t || (d == best.t && t.id < best.id)) {
+                            best = Best { t: d, id: t.id };
                         }
                     }
                     continue;
                 }
-                let da = distmin_of(&r, &bounds(a), best.0);
-                let db = distmin_of(&r, &bounds(b), best.0);
+                let da = distmin_of(&r, &bounds(a), best.t);
+                let db = distmin_of(&r, &bounds(b), best.t);
                 next = match (da < f32::INFINITY, db < f32::INFINITY) {
                     (true, true) => {
                         let (near, far) = if db < da {
