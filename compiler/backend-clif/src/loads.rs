@@ -12,6 +12,7 @@ use crate::translate::{Fx, Symbols};
 use cranelift_codegen::ir::{self, types, InstBuilder, MemFlags};
 use cranelift_module::Module as ClModule;
 use scion_ir::entity::{BlockId, OpId, ValueId};
+use scion_ir::lo::layout_reads;
 use scion_ir::lo::Op as L;
 use scion_ir::op::OpKind;
 use scion_ir::types::{FloatTy, Type};
@@ -110,23 +111,6 @@ pub(crate) fn deferrable_loads(
     out
 }
 
-/// Whether the address `v` points into a layout buffer: a `ptr_add` chain from a buffer's
-/// address (a `global` load of the buffer table).
-fn layout_rooted(m: &Module, mut v: ValueId) -> bool {
-    for _ in 0..64 {
-        let Some(op) = m.def_op(v) else { return false };
-        let o = &m.ops[op];
-        match o.kind {
-            OpKind::Lo(L::PtrAdd) => v = o.operands[0],
-            OpKind::Lo(L::Load) => {
-                return o.attr("global") == Some(&scion_ir::attr::Attr::Bool(true));
-            }
-            _ => return false,
-        }
-    }
-    false
-}
-
 /// The deferrable loads Cranelift may treat as pure values (`notrap readonly can_move`): those
 /// that read a layout buffer, in a function that writes none. Cranelift's egraph places pure
 /// values where they are first needed, so each load then comes just before the lane insertion
@@ -137,20 +121,13 @@ pub(crate) fn pure_loads(
     f: scion_ir::FuncId,
     deferrable: &HashSet<OpId>,
 ) -> HashSet<OpId> {
-    let blocks = &m.regions[m.funcs[f].body].blocks;
-    let writes_layout = blocks.iter().any(|&b| {
-        m.blocks[b].ops.iter().any(|&op| {
-            let o = &m.ops[op];
-            o.kind == OpKind::Lo(L::Store) && layout_rooted(m, o.operands[0])
-        })
-    });
-    if writes_layout {
+    if layout_reads::writes_layout(m, f) {
         return HashSet::new();
     }
     deferrable
         .iter()
         .copied()
-        .filter(|&op| layout_rooted(m, m.ops[op].operands[0]))
+        .filter(|&op| layout_reads::in_layout(m, m.ops[op].operands[0]))
         .collect()
 }
 

@@ -14,6 +14,7 @@
 pub mod backend;
 pub mod directed;
 pub mod lanes;
+pub mod layout_reads;
 pub mod nan;
 pub mod ops;
 pub mod verify;

@@ -21,6 +21,7 @@ use super::*;
 use inkwell::types::VectorType;
 use inkwell::values::VectorValue;
 use scion_ir::lo::lanes::lane_groups;
+use scion_ir::lo::layout_reads;
 use scion_ir::OpId;
 
 /// Whether a group of `kind` can be one vector instruction (its result type `rt`).
@@ -52,6 +53,54 @@ pub(super) fn groups(m: &Module, blocks: &[BlockId]) -> HashMap<OpId, Vec<OpId>>
 }
 
 impl<'c> Fn<'_, 'c> {
+    /// The four lanes `xs` as one vector load when they are loads of consecutive 32-bit words
+    /// of a layout buffer the function does not write, so that reading them again here reads
+    /// the same words (`scion_ir::lo::layout_reads`; a lane may be an inlined call's parameter
+    /// that stands for such a load). The node's two boxes of the binary closest hit's
+    /// `distmin_pair` are then two 16-byte loads of each node; left to LLVM, the eight scalar
+    /// loads of each vector became a 8-byte and a 16-byte load and four shuffles.
+    fn quad_load(&self, xs: &[ValueId]) -> R<Option<VectorValue<'c>>> {
+        let m = self.m;
+        if xs.len() != 4 || !self.layout_readonly {
+            return Ok(None);
+        }
+        let mut ops = Vec::with_capacity(4);
+        for &x in xs {
+            match m.def_op(layout_reads::passed_value(m, x)) {
+                Some(op) if m.ops[op].kind == OpKind::Lo(L::Load) => ops.push(op),
+                _ => return Ok(None),
+            }
+        }
+        let first = &m.ops[ops[0]];
+        let addr = first.operands[0];
+        let ty = m.values[first.results[0]].ty;
+        let off0 = first.int_attr("offset").unwrap_or(0);
+        let bits32 = match m.types.get(ty) {
+            Type::Float(FloatTy::F32) => true,
+            Type::Int(t) => t.bits() == 32,
+            _ => false,
+        };
+        if !bits32 || first.attr("global").is_some() || !layout_reads::in_layout(m, addr) {
+            return Ok(None);
+        }
+        for (k, &op) in ops.iter().enumerate() {
+            let o = &m.ops[op];
+            if o.operands[0] != addr
+                || m.values[o.results[0]].ty != ty
+                || o.int_attr("offset").unwrap_or(0) != off0 + 4 * k as i128
+            {
+                return Ok(None);
+            }
+        }
+        let p = self.offset_ptr(self.v(addr)?, off0)?;
+        let vt = Self::vec_type(self.v(xs[0])?.get_type(), 4)?;
+        let v = self.b.build_load(vt, p, "").map_err(be)?;
+        if let Some(i) = v.as_instruction_value() {
+            i.set_alignment(4).map_err(be)?;
+        }
+        Ok(Some(v.into_vector_value()))
+    }
+
     /// The vector type of `n` lanes of `t`.
     fn vec_type(t: BasicTypeEnum<'c>, n: u32) -> R<VectorType<'c>> {
         Ok(match t {
@@ -75,6 +124,18 @@ impl<'c> Fn<'_, 'c> {
                 .all(|(k, x)| self.lane_vecs.get(x) == Some(&(v, k as u32)))
             {
                 return Ok(v);
+            }
+        }
+        if let Some(v) = self.quad_load(xs)? {
+            return Ok(v);
+        }
+        if xs.len() == 8 {
+            if let (Some(lo), Some(hi)) = (self.quad_load(&xs[..4])?, self.quad_load(&xs[4..])?) {
+                let mask: Vec<_> = (0..8u64)
+                    .map(|k| self.cx.i32_type().const_int(k, false))
+                    .collect();
+                let mask = VectorType::const_vector(&mask);
+                return self.b.build_shuffle_vector(lo, hi, mask, "").map_err(be);
             }
         }
         let scalars: Vec<BasicValueEnum<'c>> = xs.iter().map(|&x| self.v(x)).collect::<R<_>>()?;

@@ -239,6 +239,7 @@ pub fn translate<'c>(
             },
             grouped: Default::default(),
             lane_vecs: HashMap::new(),
+            layout_readonly: !scion_ir::lo::layout_reads::writes_layout(m, f),
         };
         t.grouped = t
             .groups
@@ -279,6 +280,9 @@ struct Fn<'a, 'c> {
     grouped: std::collections::HashSet<scion_ir::OpId>,
     /// The lane of a vector instruction each grouped value is.
     lane_vecs: HashMap<ValueId, (inkwell::values::VectorValue<'c>, u32)>,
+    /// Whether the function writes no layout buffer (so a load of one reads the same words
+    /// wherever it is placed; [`groups`]).
+    layout_readonly: bool,
 }
 
 impl<'c> Fn<'_, 'c> {
