@@ -65,6 +65,11 @@ pub trait LayoutCode: Sync {
     /// caller) for every `i`, in order; 0, or the status of the first failing query, after
     /// which it stops.
     fn batch(&self, buffers: &[&[u8]], queries: &[Ray], results: &mut [Best]) -> i32;
+    /// The batch entry bound to `buffers` for many calls (one trace's blocks): what `batch`
+    /// does on them, with whatever `batch` looks up per call (the JIT's root) looked up once.
+    fn bind<'a>(&'a self, buffers: &'a [&'a [u8]]) -> BoundBatch<'a> {
+        Box::new(move |queries, results| self.batch(buffers, queries, results))
+    }
     /// The deepest tree the traversal handles without [`STATUS_STACK_OVERFLOW`], when bounded.
     fn stack_limit(&self) -> Option<usize> {
         None
@@ -159,6 +164,9 @@ impl Best {
         unsafe { std::slice::from_raw_parts_mut(hits.as_mut_ptr().cast::<Best>(), hits.len()) }
     }
 }
+
+/// [`LayoutCode::bind`]'s result: the batch entry over one set of packed buffers.
+pub type BoundBatch<'a> = Box<dyn Fn(&[Ray], &mut [Best]) -> i32 + Sync + 'a>;
 
 /// A traversal that failed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -286,6 +294,7 @@ impl Packed {
         // as `Best`s: the generated code writes the hits in place, and only the misses' `t`
         // (left at the ray's `tmax`) is set to `+inf` afterwards. No allocation or copy per
         // block, nothing gathered under one lock by the calling thread.
+        let bound = code.bind(&buffers);
         let mut hits = vec![Hit::MISS; rays.len()];
         let failed: Mutex<Option<TraceFailure>> = Mutex::new(None);
         {
@@ -297,12 +306,12 @@ impl Packed {
                 for (slot, r) in results.iter_mut().zip(queries) {
                     *slot = Best::start(r);
                 }
-                let status = code.batch(&buffers, queries, results);
+                let status = bound(queries, results);
                 if status != STATUS_OK {
                     let first = (begin..end)
                         .find_map(|i| {
                             let mut one = [Best::start(&rays[i])];
-                            let s = code.batch(&buffers, &rays[i..i + 1], &mut one);
+                            let s = bound(&rays[i..i + 1], &mut one);
                             (s != STATUS_OK).then_some(TraceFailure { ray: i, status: s })
                         })
                         .unwrap_or(TraceFailure { ray: begin, status });

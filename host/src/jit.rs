@@ -20,7 +20,9 @@
 
 #![allow(unsafe_code)]
 
-use crate::contract::{Best, BufferSpec, LayoutCode, LogicalInput, LogicalTreeView, STATUS_OK};
+use crate::contract::{
+    Best, BoundBatch, BufferSpec, LayoutCode, LogicalInput, LogicalTreeView, STATUS_OK,
+};
 use crate::mem_interp::{compile_program, Program};
 use scion_compiler::abi::EntrySig;
 pub use scion_compiler::abi::EntryTarget;
@@ -160,7 +162,7 @@ impl Hasher for AddressHasher {
         }
     }
     fn write_u64(&mut self, x: u64) {
-        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x51_7cc1_b727_220a_95);
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x517c_c1b7_2722_0a95);
     }
     fn write_usize(&mut self, x: usize) {
         self.write_u64(x as u64);
@@ -224,6 +226,45 @@ pub fn program_lo(program: &Program, o: &LoOptions) -> Result<LibraryLo, String>
 }
 
 impl JitClosestHit {
+    /// The root `build` found for the buffers at the addresses `table`, if it packed them.
+    fn root_of(&self, table: &[usize]) -> Option<Root> {
+        self.roots
+            .read()
+            .unwrap_or_else(|p| p.into_inner())
+            .get(table)
+            .copied()
+    }
+
+    /// The batch entry over the buffers at the addresses `table`, whose root is `root`.
+    fn run(&self, table: &[usize], root: Root, queries: &[Ray], results: &mut [Best]) -> i32 {
+        if queries.len() != results.len() {
+            return -1;
+        }
+        let table = table.as_ptr().cast::<*const u8>();
+        // `Best` is the checked result record (`t`'s bits, then the id; `#[repr(C)]`).
+        let (q, r, end) = (
+            queries.as_ptr(),
+            results.as_mut_ptr().cast::<[u32; 2]>(),
+            queries.len() as u64,
+        );
+        // SAFETY: the batch entry has the checked type for the layout's reference kind;
+        // `table` holds the addresses of the buffers `build` packed (alive for the call: the
+        // caller's buffers, whose addresses found `root` in `roots`; `usize` and `*const u8`
+        // have one layout), `root` is what `@scion_L_root` returned for them, and it reads
+        // `queries[0..end]` (32-byte `Ray`s, the checked query record) and reads and writes
+        // `results[0..end]` (the checked 8-byte result record), both exactly `end` long.
+        unsafe {
+            match (self.refs, root) {
+                (Refs::Index(_, batch), Root::Index(root)) => batch(table, q, r, 0, end, root),
+                (Refs::Index64(_, batch), Root::Index64(root)) => batch(table, q, r, 0, end, root),
+                (Refs::Pointer(_, batch), Root::Pointer(root)) => {
+                    batch(table, q, r, 0, end, root as *const u8)
+                }
+                _ => -1,
+            }
+        }
+    }
+
     /// Compiles closest hit for the library layout in file `stem` (`pbrt`, `ptr`, ...) named
     /// `layout`, with a traversal stack of `stack_size` entries (`None`: the default, 64), at
     /// [`JIT_OPT_LEVEL`].
@@ -492,69 +533,21 @@ impl LayoutCode for JitClosestHit {
         status
     }
     fn batch(&self, buffers: &[&[u8]], queries: &[Ray], results: &mut [Best]) -> i32 {
-        // Called once per block of 64 queries on every thread: the root is looked up under a
-        // shared read lock, and the key, the buffer table and the result records of a block
-        // live on the stack (a layout has a handful of buffers), so that threads neither
-        // allocate nor wait for each other here.
-        const MAX_BUFFERS: usize = 16;
-        let mut addresses = [0usize; MAX_BUFFERS];
-        let mut table_space = [std::ptr::null::<u8>(); MAX_BUFFERS];
-        let mut heap_table: Vec<*const u8> = Vec::new();
-        let key: Vec<usize>;
-        let key: &[usize] = if buffers.len() <= MAX_BUFFERS {
-            for (k, b) in buffers.iter().enumerate() {
-                addresses[k] = b.as_ptr() as usize;
-                table_space[k] = b.as_ptr();
-            }
-            &addresses[..buffers.len()]
-        } else {
-            key = buffers.iter().map(|b| b.as_ptr() as usize).collect();
-            heap_table = buffers.iter().map(|b| b.as_ptr()).collect();
-            &key
-        };
-        let table: &[*const u8] = if heap_table.is_empty() {
-            &table_space[..buffers.len()]
-        } else {
-            &heap_table
-        };
-        let root = self
-            .roots
-            .read()
-            .unwrap_or_else(|p| p.into_inner())
-            .get(key)
-            .copied();
-        let Some(root) = root else {
-            return -1;
-        };
-        if queries.len() != results.len() {
-            return -1;
+        let table: Vec<usize> = buffers.iter().map(|b| b.as_ptr() as usize).collect();
+        match self.root_of(&table) {
+            Some(root) => self.run(&table, root, queries, results),
+            None => -1,
         }
-        // `Best` is the checked result record (`t`'s bits, then the id; `#[repr(C)]`).
-        let (q, r, end) = (
-            queries.as_ptr(),
-            results.as_mut_ptr().cast::<[u32; 2]>(),
-            queries.len() as u64,
-        );
-        // SAFETY: the batch entry has the checked type for the layout's reference kind;
-        // `table` holds the addresses of the buffers `build` packed (alive for the call; the
-        // key above matched them), `root` is what `@scion_L_root` returned for them, and it
-        // reads `queries[0..end]` (32-byte `Ray`s, the checked query record) and reads and
-        // writes `results[0..end]` (the checked 8-byte result record), both exactly `end` long.
-        let status = unsafe {
-            match (self.refs, root) {
-                (Refs::Index(_, batch), Root::Index(root)) => {
-                    batch(table.as_ptr(), q, r, 0, end, root)
-                }
-                (Refs::Index64(_, batch), Root::Index64(root)) => {
-                    batch(table.as_ptr(), q, r, 0, end, root)
-                }
-                (Refs::Pointer(_, batch), Root::Pointer(root)) => {
-                    batch(table.as_ptr(), q, r, 0, end, root as *const u8)
-                }
-                _ => return -1,
-            }
-        };
-        status
+    }
+    fn bind<'a>(&'a self, buffers: &'a [&'a [u8]]) -> BoundBatch<'a> {
+        // The root is looked up once for the whole trace, not under the shared lock once per
+        // block: with several threads, the lock's counter went from core to core every block.
+        let table: Vec<usize> = buffers.iter().map(|b| b.as_ptr() as usize).collect();
+        let root = self.root_of(&table);
+        Box::new(move |queries, results| match root {
+            Some(root) => self.run(&table, root, queries, results),
+            None => -1,
+        })
     }
     /// A node at depth `k` (root 1) runs with at most `k - 1` pending entries and pushes one
     /// (`recursion-to-stack` visits the first of its two children at once), so trees of depth
