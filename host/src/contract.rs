@@ -291,8 +291,8 @@ impl Packed {
         }
         let buffers = self.buffers();
         // Each block's records are its own chunk of `hits` (its lock is never contended), read
-        // as `Best`s: the generated code writes the hits in place, and only the misses' `t`
-        // (left at the ray's `tmax`) is set to `+inf` afterwards. No allocation or copy per
+        // as `Best`s: the generated code writes the hits in place, and `Hit::from_best` then
+        // sets the misses' `t` (left at the ray's `tmax`) to `+inf`. No allocation or copy per
         // block, nothing gathered under one lock by the calling thread.
         let bound = code.bind(&buffers);
         let mut hits = vec![Hit::MISS; rays.len()];
@@ -322,9 +322,7 @@ impl Packed {
                     return;
                 }
                 for h in chunk.iter_mut() {
-                    if h.prim == u32::MAX {
-                        h.t = f32::INFINITY;
-                    }
+                    *h = Hit::from_best(h.t, h.prim);
                 }
             });
         }

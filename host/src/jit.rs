@@ -35,7 +35,6 @@ use scion_ir::Module;
 use scion_runtime::bvh::schema::Schema;
 use scion_runtime::geom::Ray;
 use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::RwLock;
 use std::time::{Duration, Instant};
 
@@ -142,31 +141,8 @@ pub struct JitClosestHit {
     deferred: bool,
     /// Time of the whole compilation (front end to machine code).
     pub compile_time: Duration,
-    /// Root of each packed buffer set, keyed by the buffers' addresses (looked up once per
-    /// block of queries, so hashed by [`AddressHasher`], not SipHash).
-    roots: RwLock<HashMap<Vec<usize>, Root, BuildHasherDefault<AddressHasher>>>,
-}
-
-/// A hasher for a handful of buffer addresses: a multiply-rotate of each word (the keys come
-/// from this process's allocations, not from an adversary).
-#[derive(Default)]
-struct AddressHasher(u64);
-
-impl Hasher for AddressHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for b in bytes {
-            self.write_u64(*b as u64);
-        }
-    }
-    fn write_u64(&mut self, x: u64) {
-        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x517c_c1b7_2722_0a95);
-    }
-    fn write_usize(&mut self, x: usize) {
-        self.write_u64(x as u64);
-    }
+    /// Root of each packed buffer set, keyed by the buffers' addresses.
+    roots: RwLock<HashMap<Vec<usize>, Root>>,
 }
 
 // SAFETY: the function pointers are addresses of finalized machine code owned by `_code`.
@@ -393,7 +369,7 @@ impl JitClosestHit {
             stack_size: stack_size.unwrap_or(64),
             deferred,
             compile_time: start.elapsed(),
-            roots: RwLock::new(HashMap::default()),
+            roots: RwLock::new(HashMap::new()),
         })
     }
 }
