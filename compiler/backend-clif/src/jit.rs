@@ -69,10 +69,18 @@ impl JitModule {
                 )));
             }
         }
-        let mut builder = JITBuilder::with_isa(
-            crate::host_isa()?,
-            cranelift_module::default_libcall_names(),
-        );
+        // Cranelift optimizes each function with `opt` (the egraph: GVN, loop-invariant code
+        // motion); `crate::remat` then gives the vectors a loop reads but does not change their
+        // frame homes, and the module generates code with the egraph off, so that nothing is
+        // hoisted again. `SCION_CLIF_REMAT=0` leaves the homes out (for measuring them).
+        let homes = std::env::var("SCION_CLIF_REMAT").map_or(true, |v| v.trim() != "0");
+        let opt = crate::isa_with("speed")?;
+        let code_isa = if homes {
+            crate::isa_with("none")?
+        } else {
+            opt.clone()
+        };
+        let mut builder = JITBuilder::with_isa(code_isa, cranelift_module::default_libcall_names());
         for &(name, addr) in symbols {
             builder.symbol(name, addr);
         }
@@ -97,6 +105,11 @@ impl JitModule {
             if let Some(dir) = &dump {
                 let _ =
                     std::fs::write(format!("{dir}/{name}.clif"), ctx.func.display().to_string());
+            }
+            if homes {
+                ctx.optimize(&*opt, &mut Default::default())
+                    .map_err(|e| ClifError(format!("@{name}: {e:?}")))?;
+                crate::remat::rematerialize(&mut ctx.func);
             }
             cl.define_function(id, &mut ctx)
                 .map_err(|e| ClifError(format!("@{name}: {e:?}")))?;

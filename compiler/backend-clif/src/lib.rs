@@ -28,6 +28,7 @@ mod ifconv;
 pub mod jit;
 mod lanes;
 mod loads;
+pub mod remat;
 pub mod translate;
 mod transpose;
 
@@ -40,12 +41,20 @@ use cranelift_module::Module as _;
 /// The target ISA of this machine, with Scion's settings: optimizing, verifier on, and several
 /// return values allowed (through a hidden return area when they exceed the registers).
 pub fn host_isa() -> Result<std::sync::Arc<dyn cranelift_codegen::isa::TargetIsa>, ClifError> {
+    isa_with("speed")
+}
+
+/// The host's ISA at `opt_level`: `speed`, or `none` for the JIT's code generation after its
+/// own optimization ([`remat`] between the two).
+pub(crate) fn isa_with(
+    opt_level: &str,
+) -> Result<std::sync::Arc<dyn cranelift_codegen::isa::TargetIsa>, ClifError> {
     let mut flags = settings::builder();
     let set = |f: &mut settings::Builder, k: &str, v: &str| {
         f.set(k, v)
             .map_err(|e| ClifError(format!("setting {k}={v}: {e}")))
     };
-    set(&mut flags, "opt_level", "speed")?;
+    set(&mut flags, "opt_level", opt_level)?;
     set(&mut flags, "enable_verifier", "true")?;
     set(&mut flags, "enable_multi_ret_implicit_sret", "true")?;
     set(&mut flags, "use_colocated_libcalls", "false")?;
