@@ -11,7 +11,7 @@
 //! code: every ray misses.
 
 use crate::backend::Backend;
-use scion_runtime::batch::{BatchDriver, BLOCK};
+use scion_runtime::batch::BatchDriver;
 use scion_runtime::bvh::schema::{LogicalBytes, Schema};
 use scion_runtime::bvh::LogicalTree;
 use scion_runtime::geom::{Hit, Ray, Triangle};
@@ -290,42 +290,39 @@ impl Packed {
             return Ok(vec![Hit::MISS; rays.len()]);
         }
         let buffers = self.buffers();
-        // Each block's records are its own chunk of `hits` (its lock is never contended), read
+        // Each block writes its own chunk of `hits` (the driver hands them out, no lock), read
         // as `Best`s: the generated code writes the hits in place, and `Hit::from_best` then
         // sets the misses' `t` (left at the ray's `tmax`) to `+inf`. No allocation or copy per
-        // block, nothing gathered under one lock by the calling thread.
+        // block, nothing gathered by the calling thread.
         let bound = code.bind(&buffers);
         let mut hits = vec![Hit::MISS; rays.len()];
         let failed: Mutex<Option<TraceFailure>> = Mutex::new(None);
-        {
-            let out: Vec<Mutex<&mut [Hit]>> = hits.chunks_mut(BLOCK).map(Mutex::new).collect();
-            driver.run(rays.len(), |begin, end| {
-                let queries = &rays[begin..end];
-                let mut chunk = out[begin / BLOCK].lock().unwrap_or_else(|p| p.into_inner());
-                let results = Best::of_hits(&mut chunk);
-                for (slot, r) in results.iter_mut().zip(queries) {
-                    *slot = Best::start(r);
+        driver.run_chunks(&mut hits, 1, |begin, chunk| {
+            let end = begin + chunk.len();
+            let queries = &rays[begin..end];
+            let results = Best::of_hits(chunk);
+            for (slot, r) in results.iter_mut().zip(queries) {
+                *slot = Best::start(r);
+            }
+            let status = bound(queries, results);
+            if status != STATUS_OK {
+                let first = (begin..end)
+                    .find_map(|i| {
+                        let mut one = [Best::start(&rays[i])];
+                        let s = bound(&rays[i..i + 1], &mut one);
+                        (s != STATUS_OK).then_some(TraceFailure { ray: i, status: s })
+                    })
+                    .unwrap_or(TraceFailure { ray: begin, status });
+                let mut f = failed.lock().unwrap_or_else(|p| p.into_inner());
+                if f.is_none_or(|old| first.ray < old.ray) {
+                    *f = Some(first);
                 }
-                let status = bound(queries, results);
-                if status != STATUS_OK {
-                    let first = (begin..end)
-                        .find_map(|i| {
-                            let mut one = [Best::start(&rays[i])];
-                            let s = bound(&rays[i..i + 1], &mut one);
-                            (s != STATUS_OK).then_some(TraceFailure { ray: i, status: s })
-                        })
-                        .unwrap_or(TraceFailure { ray: begin, status });
-                    let mut f = failed.lock().unwrap_or_else(|p| p.into_inner());
-                    if f.is_none_or(|old| first.ray < old.ray) {
-                        *f = Some(first);
-                    }
-                    return;
-                }
-                for h in chunk.iter_mut() {
-                    *h = Hit::from_best(h.t, h.prim);
-                }
-            });
-        }
+                return;
+            }
+            for h in chunk.iter_mut() {
+                *h = Hit::from_best(h.t, h.prim);
+            }
+        });
         if let Some(f) = failed.into_inner().unwrap_or_else(|p| p.into_inner()) {
             return Err(f);
         }

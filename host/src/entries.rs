@@ -402,21 +402,18 @@ pub fn run(
     if !packed.nonempty {
         return Ok(());
     }
-    let n = queries.len() / qs;
     let shared = Shared {
         batch: function(code, &sig.batch_fn()).map_err(RunError::Setup)?,
         table: packed.table(),
     };
     let call = |q: &[u8], r: &mut [u8]| shared.call(packed, qs, q, r);
-    let block = scion_runtime::batch::BLOCK;
-    let out: Vec<Mutex<&mut [u8]>> = results.chunks_mut(rs * block).map(Mutex::new).collect();
     let failed: Mutex<Option<BatchFailure>> = Mutex::new(None);
-    driver.run(n, |begin, end| {
-        // Blocks are the driver's 64 queries, so a block is one chunk of `out`.
-        let mut r = out[begin / block].lock().unwrap_or_else(|p| p.into_inner());
+    // Each block of the driver's queries writes its own chunk of `results`.
+    driver.run_chunks(results, rs, |begin, r| {
+        let end = begin + r.len() / rs;
         let q = &queries[begin * qs..end * qs];
         let before = r.to_vec();
-        let status = call(q, &mut r);
+        let status = call(q, r);
         if status == 0 {
             return;
         }

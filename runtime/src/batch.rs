@@ -74,6 +74,30 @@ impl BatchDriver {
         }
     }
 
+    /// Calls `f(begin, chunk)` for every block of `items.len() / per_query` queries (blocks of
+    /// [`BLOCK`] queries starting at 0, the last one shorter), `chunk` being the block's part
+    /// of `items`, `per_query` items per query: [`run`](Self::run)'s blocks, each with its own
+    /// results to write, so that nothing is locked per block. `per_query` 0 counts as 1.
+    pub fn run_chunks<T: Send>(
+        &self,
+        items: &mut [T],
+        per_query: usize,
+        f: impl Fn(usize, &mut [T]) + Sync,
+    ) {
+        let per_block = per_query.max(1) * BLOCK;
+        let each = |(b, chunk): (usize, &mut [T])| f(b * BLOCK, chunk);
+        match &self.pool {
+            None => items.chunks_mut(per_block).enumerate().for_each(each),
+            Some(pool) => pool.install(|| {
+                items
+                    .par_chunks_mut(per_block)
+                    .enumerate()
+                    .with_max_len(1)
+                    .for_each(each)
+            }),
+        }
+    }
+
     /// `items.map(f)` in blocks of [`BLOCK`] over the driver's threads (work stealing over
     /// blocks); the result is in item order whatever the thread count.
     pub fn map<T: Sync, R: Send + Clone + Default>(
@@ -126,6 +150,17 @@ mod tests {
             let mut seen = seen.into_inner().unwrap();
             seen.sort();
             assert_eq!(seen, vec![(100, 164), (164, 228), (228, 230)]);
+            for per_query in [1, 3] {
+                let mut items = vec![0u32; 130 * per_query];
+                d.run_chunks(&mut items, per_query, |b, chunk| {
+                    assert_eq!(b % BLOCK, 0);
+                    assert_eq!(chunk.len(), per_query * BLOCK.min(130 - b));
+                    for (k, x) in chunk.iter_mut().enumerate() {
+                        *x += (b * per_query + k) as u32 + 1;
+                    }
+                });
+                assert!(items.iter().enumerate().all(|(i, &x)| x == i as u32 + 1));
+            }
             let v: Vec<u32> = (0..1000).collect();
             let m = d.map(&v, |x| x * 2);
             assert_eq!(m, v.iter().map(|x| x * 2).collect::<Vec<_>>());
