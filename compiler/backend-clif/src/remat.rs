@@ -128,8 +128,9 @@ pub fn rematerialize(func: &mut ir::Function) -> usize {
         }
         pos.ins().stack_store(v, slot, off);
     }
-    // Each reloading block: the values loaded (or the constants made again) before the first
-    // instruction that uses any of them, from one address of the slot.
+    // Each reloading block: each value loaded (or the constant made again) just before the
+    // block's first instruction that uses it, from one address of the slot taken before the
+    // first of them.
     let mut by_block: BTreeMap<ir::Block, Vec<ir::Value>> = BTreeMap::new();
     for (&v, bs) in &reloads {
         if offset.contains_key(&v) || is_const(func, v) {
