@@ -200,13 +200,18 @@ mod tests {
     use cranelift_codegen::isa::CallConv;
     use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
 
-    /// `f(v: f32x4) -> f32x4`: ten times `acc += v` in a loop, `v` (a parameter) and a vector
-    /// constant read by the loop and defined outside it.
-    fn looped() -> Function {
+    /// An empty function `name(f32x4) -> f32x4`.
+    fn vector_function(name: &str) -> Function {
         let mut sig = Signature::new(CallConv::SystemV);
         sig.params.push(AbiParam::new(types::F32X4));
         sig.returns.push(AbiParam::new(types::F32X4));
-        let mut func = Function::with_name_signature(UserFuncName::testcase("looped"), sig);
+        Function::with_name_signature(UserFuncName::testcase(name), sig)
+    }
+
+    /// `f(v: f32x4) -> f32x4`: ten times `acc += v` in a loop, `v` (a parameter) and a vector
+    /// constant read by the loop and defined outside it.
+    fn looped() -> Function {
+        let mut func = vector_function("looped");
         let mut fctx = FunctionBuilderContext::new();
         let mut b = FunctionBuilder::new(&mut func, &mut fctx);
         let (entry, head, exit) = (b.create_block(), b.create_block(), b.create_block());
@@ -260,10 +265,7 @@ mod tests {
 
     #[test]
     fn functions_without_loops_are_left_alone() {
-        let mut sig = Signature::new(CallConv::SystemV);
-        sig.params.push(AbiParam::new(types::F32X4));
-        sig.returns.push(AbiParam::new(types::F32X4));
-        let mut func = Function::with_name_signature(UserFuncName::testcase("flat"), sig);
+        let mut func = vector_function("flat");
         let mut fctx = FunctionBuilderContext::new();
         let mut b = FunctionBuilder::new(&mut func, &mut fctx);
         let entry = b.create_block();
